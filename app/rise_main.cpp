@@ -1,0 +1,188 @@
+// rise: the front door. `rise demo` starts the whole chain as separate
+// processes — console emulator → socketcand (TCP loopback) → rise-hild →
+// LCM multicast → rise-sim — plays a scripted drive and reports what the
+// safety rules did.
+
+#include <CLI/CLI.hpp>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <thread>
+
+#include "app/chain_monitor.hpp"
+#include "app/child_process.hpp"
+#include "panels/data_path.hpp"
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+uint16_t free_tcp_port() {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t len = sizeof a;
+  uint16_t port = 29536;
+  if (::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0 &&
+      ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) == 0)
+    port = ntohs(a.sin_port);
+  ::close(fd);
+  return port;
+}
+
+struct DemoOptions {
+  std::string id = "demo";
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string script = "panels/scripts/demo_drive.txt";
+  std::string panel = "panels/definitions/rise_console.yaml";
+  std::string robot = "sim/robots/skid4.yaml";
+  std::string log_dir;
+  uint16_t port = 0;
+  double timeout_s = 45.0;
+};
+
+int run_demo(const DemoOptions& o) {
+  using rise::app::ChildProcess;
+  const std::string bin = rise::app::executable_dir();
+  const std::string log_dir =
+      o.log_dir.empty() ? "/tmp/rise-demo-" + std::to_string(::getpid()) : o.log_dir;
+  std::filesystem::create_directories(log_dir);
+  const uint16_t port = o.port ? o.port : free_tcp_port();
+  const std::string bus = "127.0.0.1:" + std::to_string(port) + "/can0";
+
+  rise::app::ChainMonitor monitor(o.lcm_url, o.id);
+  if (!monitor.good()) {
+    std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
+    return 2;
+  }
+  std::printf("rise demo: station '%s', LCM %s, console on socketcand://%s, logs in %s\n",
+              o.id.c_str(), o.lcm_url.c_str(), bus.c_str(), log_dir.c_str());
+
+  std::vector<ChildProcess> children;
+  try {
+    children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url,
+                                                   "--robot", rise::panels::find_data_file(o.robot)},
+                          log_dir + "/rise-sim.log");
+    children.emplace_back(
+        std::vector<std::string>{bin + "/rise-hild", "--panel", rise::panels::find_data_file(o.panel),
+                                 "--can", "socketcand://" + bus, "--id", o.id, "--lcm", o.lcm_url},
+        log_dir + "/rise-hild.log");
+    children.emplace_back(
+        std::vector<std::string>{bin + "/rise-panel", "emulate", "--panel",
+                                 rise::panels::find_data_file(o.panel), "--can",
+                                 "socketcand+listen://" + bus, "--script",
+                                 rise::panels::find_data_file(o.script), "--hold", "--start-on-feedback"},
+        log_dir + "/rise-panel.log");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rise demo: %s\n", e.what());
+    return 2;
+  }
+  for (const auto& c : children) std::printf("  started %-10s pid %d\n", c.name().c_str(), c.pid());
+
+  const bool ready = monitor.wait_until(
+      [](const rise::app::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; },
+      15000);
+  if (!ready) {
+    std::fprintf(stderr, "rise demo: the chain did not come up within 15 s: %s\n",
+                 monitor.live_line().c_str());
+    return 1;
+  }
+  std::printf("rise demo: chain up, playing %s\n", o.script.c_str());
+
+  const auto start = std::chrono::steady_clock::now();
+  auto next_line = start;
+  int rc = 0;
+  while (true) {
+    if (g_stop) {
+      std::printf("\nrise demo: interrupted, stopping every child\n");
+      rc = 130;
+      break;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    const double t = std::chrono::duration<double>(now - start).count();
+    if (now >= next_line) {
+      std::printf("t=%5.1fs %s\n", t, monitor.live_line().c_str());
+      std::fflush(stdout);
+      next_line += std::chrono::milliseconds(500);
+    }
+    const auto v = monitor.view();
+    if (v.loss_stop.stopped && v.deadman_stop.stopped) break;
+    bool died = false;
+    for (auto& c : children)
+      if (!c.running()) {
+        std::fprintf(stderr, "rise demo: %s exited unexpectedly, see %s/%s.log\n", c.name().c_str(),
+                     log_dir.c_str(), c.name().c_str());
+        died = true;
+      }
+    if (died) {
+      rc = 1;
+      break;
+    }
+    if (t > o.timeout_s) {
+      std::fprintf(stderr, "rise demo: timed out after %.0f s\n", o.timeout_s);
+      rc = 1;
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  for (auto& c : children) c.stop(2000);
+  if (rc == 130) return rc;
+
+  const auto v = monitor.view();
+  const double yaw =
+      std::atan2(2.0 * (v.robot.orientation_wxyz[0] * v.robot.orientation_wxyz[3] +
+                        v.robot.orientation_wxyz[1] * v.robot.orientation_wxyz[2]),
+                 1.0 - 2.0 * (v.robot.orientation_wxyz[2] * v.robot.orientation_wxyz[2] +
+                              v.robot.orientation_wxyz[3] * v.robot.orientation_wxyz[3])) *
+      180.0 / M_PI;
+  std::printf("\n=== rise demo summary ===\n");
+  std::printf("messages              %lld PanelState, %lld RobotState on rise/%s/*\n",
+              static_cast<long long>(v.panel_count), static_cast<long long>(v.robot_count), o.id.c_str());
+  std::printf("distance driven       %.2f m\n", v.distance_m);
+  std::printf("final pose            x=%.2f m y=%.2f m yaw=%.1f deg (sim time %.1f s)\n",
+              v.robot.position_m[0], v.robot.position_m[1], yaw, v.robot.sim_time_s);
+  auto report = [](const char* what, const rise::app::StopMeasurement& s) {
+    if (s.stopped)
+      std::printf("%-21s %.0f ms to standstill from %.2f m/s\n", what, s.seconds() * 1e3,
+                  s.speed_at_trigger_mps);
+    else
+      std::printf("%-21s not measured (%s)\n", what, s.triggered ? "robot never stopped" : "no event seen");
+  };
+  report("dead-man release", v.deadman_stop);
+  report("source loss", v.loss_stop);
+  if (!v.loss_reason.empty()) std::printf("source loss seen as   %s\n", v.loss_reason.c_str());
+  if (!v.deadman_stop.stopped || !v.loss_stop.stopped) rc = 1;
+  std::printf("result                %s\n", rc == 0 ? "ok" : "FAILED");
+  return rc;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rise: the RISE console bridge and trainer"};
+  app.require_subcommand(1);
+  DemoOptions demo;
+  CLI::App* d = app.add_subcommand(
+      "demo", "run emulator → rise-hild → rise-sim as separate processes over socketcand and LCM "
+              "multicast, play a scripted drive, print a summary");
+  d->add_option("--id", demo.id, "station id in the channel names")->capture_default_str();
+  d->add_option("--lcm", demo.lcm_url, "LCM URL")->capture_default_str();
+  d->add_option("--script", demo.script, "console timeline to play")->capture_default_str();
+  d->add_option("--panel", demo.panel, "panel definition")->capture_default_str();
+  d->add_option("--robot", demo.robot, "robot file for rise-sim")->capture_default_str();
+  d->add_option("--port", demo.port, "socketcand TCP port (default: a free one)");
+  d->add_option("--log-dir", demo.log_dir, "where the children's logs go (default /tmp/rise-demo-PID)");
+  d->add_option("--timeout", demo.timeout_s, "give up after S seconds")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  if (d->parsed()) return run_demo(demo);
+  return 1;
+}

@@ -1,0 +1,123 @@
+// rise-hild: the HIL daemon. Reads the console's frames from its sources,
+// maps them to named controls under the safety rules, publishes PanelState on
+// LCM and sends PanelFeedback back to the console.
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <chrono>
+#include <poll.h>
+
+#include "hil/bridge.hpp"
+#include "hil/panel_state_message.hpp"
+#include "panels/data_path.hpp"
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rise-hild: console (CAN) → PanelState on LCM, PanelFeedback → console"};
+  std::string panel_file = "panels/definitions/rise_console.yaml";
+  std::vector<std::string> can_urls;
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string id = "t1";
+  std::string log_level = "info";
+  double status_every_s = 0.0;
+  app.add_option("--panel", panel_file, "panel definition (YAML)")->capture_default_str();
+  app.add_option("--can", can_urls,
+                 "bus of each source, in the definition's order: socketcan://IFACE, "
+                 "socketcand://HOST:PORT/BUS, mem://NAME")
+      ->required();
+  app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
+  app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
+  app.add_option("--status-every", status_every_s, "log a status line every S seconds (0: on change only)");
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(log_level));
+
+  rise::panels::PanelDefinition definition;
+  try {
+    definition = rise::panels::load_panel_definition(rise::panels::find_data_file(panel_file));
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  if (can_urls.size() != definition.sources.size()) {
+    spdlog::error("{}: the panel has {} source(s) but {} --can URL(s) were given", definition.file,
+                  definition.sources.size(), can_urls.size());
+    return 2;
+  }
+  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
+  try {
+    for (const auto& url : can_urls) buses.push_back(rise::io::open_can_bus(url));
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    spdlog::error("cannot open LCM at {}", lcm_url);
+    return 2;
+  }
+  const std::string state_channel = rise::hil::channel(id, "panel_state");
+  const std::string feedback_channel = rise::hil::channel(id, "panel_feedback");
+
+  int64_t seq = 0;
+  std::string last_reason = "-";
+  auto publish = [&](const rise::hil::PanelSnapshot& snap) {
+    const auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), can_urls);
+    lcm.publish(state_channel, &msg);
+    // Log when the reason changes, not every time an age in it grows.
+    std::string reason_kind = snap.failsafe_reason;
+    std::erase_if(reason_kind, [](char c) { return c >= '0' && c <= '9'; });
+    if (reason_kind != last_reason) {
+      if (snap.failsafe) spdlog::warn("failsafe: {}", snap.failsafe_reason);
+      else spdlog::info("panel ok: all sources healthy");
+      last_reason = reason_kind;
+    }
+  };
+  rise::hil::Bridge bridge(definition, std::move(buses), publish);
+
+  struct FeedbackHandler {
+    rise::hil::Bridge* bridge;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelFeedback* m) {
+      bridge->set_feedback(rise::hil::from_message(*m));
+    }
+  } handler{&bridge};
+  lcm::Subscription* sub = lcm.subscribe(feedback_channel, &FeedbackHandler::on, &handler);
+  sub->setQueueCapacity(4);  // only the newest feedback matters
+
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  bridge.start();
+  spdlog::info("rise-hild ready: panel '{}' ({}), publishing {} at {} Hz, feedback from {}",
+               definition.name, definition.file, state_channel, definition.publish_hz,
+               feedback_channel);
+
+  auto next_status = std::chrono::steady_clock::now();
+  while (!g_stop) {
+    pollfd pfd{lcm.getFileno(), POLLIN, 0};
+    if (::poll(&pfd, 1, 50) > 0) lcm.handle();
+    if (status_every_s > 0 && std::chrono::steady_clock::now() >= next_status) {
+      next_status += std::chrono::microseconds(static_cast<int64_t>(status_every_s * 1e6));
+      const auto snap = bridge.snapshot();
+      for (const auto& s : snap.sources)
+        spdlog::info("source {}: connected={} stale={} ok={} bad={} reconnects={}", s.name,
+                     s.connected, s.stale, s.frames_ok, s.frames_bad(), s.reconnects);
+    }
+  }
+  bridge.stop();
+  spdlog::info("rise-hild stopped after {} messages", seq);
+  return 0;
+}

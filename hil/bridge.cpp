@@ -1,0 +1,175 @@
+#include "hil/bridge.hpp"
+
+#include <chrono>
+
+namespace rise::hil {
+namespace {
+namespace fp = rise::firmware_protocol;
+
+bool same_frames(const FeedbackFrames& a, const FeedbackFrames& b) {
+  if (a.indicators.leds_on != b.indicators.leds_on || a.indicators.buzzer != b.indicators.buzzer ||
+      a.displays.size() != b.displays.size())
+    return false;
+  for (std::size_t i = 0; i < a.displays.size(); ++i)
+    if (a.displays[i].raw != b.displays[i].raw || a.displays[i].index != b.displays[i].index)
+      return false;
+  return true;
+}
+
+io::CanFrame to_can(const fp::WireFrame& w) {
+  io::CanFrame f;
+  f.id = w.can_id;
+  f.len = static_cast<uint8_t>(w.data.size());
+  std::copy(w.data.begin(), w.data.end(), f.data.begin());
+  return f;
+}
+}  // namespace
+
+int64_t monotonic_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+Bridge::Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<io::CanBus>> buses,
+               PublishFn publish, BridgeSettings settings)
+    : mapper_(std::move(definition)),
+      buses_(std::move(buses)),
+      publish_(std::move(publish)),
+      settings_(settings) {}
+
+Bridge::~Bridge() { stop(); }
+
+void Bridge::start() {
+  if (running_.exchange(true)) return;
+  for (std::size_t i = 0; i < buses_.size(); ++i) threads_.emplace_back([this, i] { source_loop(i); });
+  threads_.emplace_back([this] { publish_loop(); });
+}
+
+void Bridge::stop() {
+  if (!running_.exchange(false)) return;
+  wake_.notify_all();
+  for (auto& t : threads_) t.join();
+  threads_.clear();
+}
+
+void Bridge::set_feedback(FeedbackRequest request) {
+  std::lock_guard lock(mutex_);
+  feedback_ = std::move(request);
+  ++feedback_version_;
+}
+
+PanelSnapshot Bridge::snapshot() const {
+  std::lock_guard lock(mutex_);
+  return mapper_.evaluate(monotonic_us());
+}
+
+void Bridge::source_loop(std::size_t source) {
+  io::CanBus& bus = *buses_[source];
+  // Each source has its own encoder: our feedback frames carry their own
+  // alive counters, as the console's do.
+  fp::Encoder encoder(mapper_.definition().sources[source].node);
+  int64_t retry_ms = settings_.reopen_min_ms;
+  int64_t next_retry_us = 0;
+  int64_t next_feedback_us = 0;
+  uint64_t sent_version = ~0ull;
+  FeedbackFrames last_sent;
+  bool have_sent = false;
+  io::CanFrame frame;
+
+  while (running_) {
+    const int64_t now = monotonic_us();
+    if (!bus.is_open()) {
+      {
+        std::lock_guard lock(mutex_);
+        mapper_.on_connection(source, false, now);
+      }
+      wake_.notify_all();
+      if (now >= next_retry_us) {
+        if (bus.reopen() == io::IoStatus::Ok) {
+          retry_ms = settings_.reopen_min_ms;
+          have_sent = false;
+        } else {
+          next_retry_us = now + retry_ms * 1000;
+          retry_ms = std::min(retry_ms * 2, settings_.reopen_max_ms);
+        }
+      }
+      if (!bus.is_open()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        continue;
+      }
+    }
+    {
+      std::lock_guard lock(mutex_);
+      mapper_.on_connection(source, true, now);
+    }
+
+    // Feedback: repeated at its period, sent at once when it changes.
+    if (now >= next_feedback_us || !have_sent) {
+      PanelSnapshot snap;
+      FeedbackRequest request;
+      uint64_t version;
+      {
+        std::lock_guard lock(mutex_);
+        snap = mapper_.evaluate(now);
+        request = feedback_;
+        version = feedback_version_;
+      }
+      FeedbackFrames frames = build_feedback(mapper_.definition(), source, request, snap);
+      const bool due = now >= next_feedback_us;
+      if (due || !have_sent || version != sent_version || !same_frames(frames, last_sent)) {
+        bus.send(to_can(encoder.next(frames.indicators)));
+        for (const auto& d : frames.displays) bus.send(to_can(encoder.next(d)));
+        last_sent = std::move(frames);
+        sent_version = version;
+        have_sent = true;
+        if (due) next_feedback_us = now + settings_.feedback_period_ms * 1000;
+      }
+    }
+
+    const io::IoStatus st = bus.receive(frame, 5);
+    if (st == io::IoStatus::Ok) {
+      if (frame.error || frame.remote || frame.fd || frame.extended) continue;
+      bool changed;
+      {
+        std::lock_guard lock(mutex_);
+        changed = mapper_.on_frame(source, frame.id, std::span<const uint8_t>(frame.data.data(), frame.len),
+                                   monotonic_us());
+        changed_ = changed_ || changed;
+      }
+      if (changed) wake_.notify_all();
+    } else if (st == io::IoStatus::Disconnected) {
+      std::lock_guard lock(mutex_);
+      mapper_.on_connection(source, false, monotonic_us());
+    }
+  }
+}
+
+void Bridge::publish_loop() {
+  const auto period = std::chrono::microseconds(mapper_.definition().publish_period_us());
+  auto next_tick = std::chrono::steady_clock::now();
+  int64_t last_publish_us = 0;
+  while (running_) {
+    PanelSnapshot snap;
+    {
+      std::unique_lock lock(mutex_);
+      // Wake on the next tick, or earlier when a control changed (but keep a
+      // minimum gap so a chattering console cannot flood the network).
+      wake_.wait_until(lock, next_tick, [&] {
+        return !running_ || (changed_ && monotonic_us() - last_publish_us >= settings_.min_change_gap_us);
+      });
+      if (!running_) break;
+      changed_ = false;
+      snap = mapper_.evaluate(monotonic_us());
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (now >= next_tick) {
+      next_tick += period;
+      if (next_tick < now) next_tick = now + period;  // overrun: skip, do not burst
+    }
+    last_publish_us = snap.time_us;
+    publish_(snap);
+  }
+}
+
+}  // namespace rise::hil

@@ -1,0 +1,72 @@
+#pragma once
+
+// The daemon's cyclic core: one receive thread per source, one publisher
+// thread at the panel's rate that also publishes at once when a control
+// changes. Transport-agnostic: frames come from io::CanBus, snapshots go to
+// a callback (the program publishes them on LCM).
+
+#include <atomic>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "hil/feedback.hpp"
+#include "hil/io/can_bus.hpp"
+#include "hil/panel_mapper.hpp"
+
+namespace rise::hil {
+
+struct BridgeSettings {
+  int64_t feedback_period_ms = 100;  ///< feedback frames are repeated at this period and sent on change
+  int64_t reopen_min_ms = 100;       ///< first retry after a lost transport, doubled up to reopen_max_ms
+  int64_t reopen_max_ms = 2000;
+  int64_t min_change_gap_us = 1000;  ///< publish-on-change never faster than this
+};
+
+/// Monotonic microseconds (steady clock).
+int64_t monotonic_us();
+
+class Bridge {
+ public:
+  using PublishFn = std::function<void(const PanelSnapshot&)>;
+
+  /// One bus per source of the definition, in the same order.
+  Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<io::CanBus>> buses,
+         PublishFn publish, BridgeSettings settings = {});
+  ~Bridge();
+  Bridge(const Bridge&) = delete;
+  Bridge& operator=(const Bridge&) = delete;
+
+  void start();
+  void stop();
+
+  /// Thread-safe: the latest feedback request (from LCM).
+  void set_feedback(FeedbackRequest request);
+  /// Thread-safe: the state right now.
+  PanelSnapshot snapshot() const;
+  const panels::PanelDefinition& definition() const { return mapper_.definition(); }
+
+ private:
+  void source_loop(std::size_t source);
+  void publish_loop();
+  void send_feedback(std::size_t source, const PanelSnapshot& snap, bool force);
+
+  PanelMapper mapper_;
+  std::vector<std::unique_ptr<io::CanBus>> buses_;
+  PublishFn publish_;
+  BridgeSettings settings_;
+
+  mutable std::mutex mutex_;  // guards mapper_, feedback_, changed_
+  std::condition_variable wake_;
+  bool changed_ = false;
+  FeedbackRequest feedback_;
+  uint64_t feedback_version_ = 0;
+
+  std::atomic<bool> running_{false};
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace rise::hil

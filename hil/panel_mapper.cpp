@@ -1,0 +1,260 @@
+#include "hil/panel_mapper.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+namespace rise::hil {
+namespace {
+
+namespace fp = rise::firmware_protocol;
+using panels::ControlKind;
+using panels::ControlRole;
+using panels::SignalRef;
+
+constexpr std::size_t type_index(fp::FrameType t) { return static_cast<std::size_t>(t); }
+
+fp::FrameType frame_type_for(const SignalRef& signal) {
+  switch (signal.kind) {
+    case SignalRef::Kind::Axis:
+      return signal.index < fp::kAxesPerFrame ? fp::FrameType::Axes0 : fp::FrameType::Axes1;
+    case SignalRef::Kind::Button: return fp::FrameType::Buttons;
+    case SignalRef::Kind::Switch: return fp::FrameType::Switches;
+  }
+  return fp::FrameType::Axes0;
+}
+
+// Deadband with the remaining travel rescaled, so the output starts at 0 at
+// the band's edge instead of jumping to d.
+float apply_deadband(float x, float band) {
+  const float magnitude = std::fabs(x);
+  if (magnitude <= band) return 0.0f;
+  return std::copysign((magnitude - band) / (1.0f - band), x);
+}
+
+void append_reason(std::string& reasons, const std::string& reason) {
+  if (!reasons.empty()) reasons += "; ";
+  reasons += reason;
+}
+
+void set_safe(const panels::ControlDefinition& c, ControlValue& v) {
+  v.axis = c.safe_axis;
+  v.pressed = c.safe_button;
+  v.position = c.safe_switch;
+  v.forced_safe = true;
+}
+
+}  // namespace
+
+int64_t SourceStatus::frames_bad() const {
+  int64_t sum = 0;
+  for (std::size_t i = 0; i < errors.size(); ++i)
+    if (static_cast<fp::DecodeError>(i) != fp::DecodeError::None) sum += errors[i];
+  return sum;
+}
+
+int64_t heartbeat_timeout_us(const panels::SourceDefinition& source) {
+  const int64_t three_periods_ms = 3 * fp::nominal_period_ms(fp::FrameType::Heartbeat);
+  return 1000 * std::max<int64_t>(three_periods_ms, source.timeout_ms);
+}
+
+PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::move(definition)) {
+  sources_.reserve(definition_.sources.size());
+  for (const auto& s : definition_.sources) {
+    SourceState state(fp::Decoder(s.node, s.max_counter_delta));
+    state.status.name = s.name;
+    sources_.push_back(std::move(state));
+  }
+  for (const auto& c : definition_.controls)
+    sources_[c.source].needs_type[type_index(frame_type_for(c.signal))] = true;
+}
+
+bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
+                           int64_t now_us) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  const fp::DecodeResult r = s.decoder.decode(can_id, data);
+  s.status.errors[static_cast<std::size_t>(r.error)]++;
+  if (!r.ok()) {
+    // Frames of other nodes and of our own feedback share the bus: an unknown
+    // id is counted but is no failed check. Anything else on our ids is.
+    if (r.error != fp::DecodeError::UnknownId) {
+      s.status.check_failed = true;
+      s.ok_in_row = 0;
+    }
+    return false;
+  }
+  if (r.type == fp::FrameType::Indicators || r.type == fp::FrameType::Display) return false;
+
+  s.status.frames_ok++;
+  s.last_valid_us[type_index(r.type)] = now_us;
+  s.last_any_valid_us = now_us;
+  if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[source].recovery_frames)
+    s.status.check_failed = false;
+
+  bool changed = false;
+  if (const auto* axes = std::get_if<fp::AxesFrame>(&r.message)) {
+    const std::size_t group = r.type == fp::FrameType::Axes0 ? 0 : 1;
+    for (std::size_t i = 0; i < fp::kAxesPerFrame; ++i) {
+      int16_t& slot = s.axes[group * fp::kAxesPerFrame + i];
+      changed = changed || slot != axes->raw[i] || !s.axes_seen[group];
+      slot = axes->raw[i];
+    }
+    s.axes_seen[group] = true;
+  } else if (const auto* buttons = std::get_if<fp::ButtonsFrame>(&r.message)) {
+    changed = s.buttons != buttons->pressed || !s.buttons_seen;
+    s.buttons = buttons->pressed;
+    s.buttons_seen = true;
+  } else if (const auto* switches = std::get_if<fp::SwitchesFrame>(&r.message)) {
+    changed = s.switches != switches->position || !s.switches_seen;
+    s.switches = switches->position;
+    s.switches_seen = true;
+  } else if (const auto* hb = std::get_if<fp::HeartbeatFrame>(&r.message)) {
+    changed = !s.status.heartbeat_seen || s.status.console_status != hb->status;
+    s.status.console_status = hb->status;
+    s.status.heartbeat_seen = true;
+    s.protocol_version = hb->protocol_version;
+  }
+  return changed;
+}
+
+void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_us) {
+  if (source >= sources_.size()) return;
+  SourceState& s = sources_[source];
+  if (s.status.connected == connected) return;
+  if (connected && s.last_any_valid_us != 0) s.status.reconnects++;
+  s.status.connected = connected;
+  if (!connected) {
+    s.decoder.reset();
+    s.last_valid_us.fill(0);
+    s.status.heartbeat_seen = false;
+    s.axes_seen[0] = s.axes_seen[1] = false;
+    s.buttons_seen = s.switches_seen = false;
+  }
+  (void)now_us;
+}
+
+bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const {
+  const auto& def = definition_.sources[static_cast<std::size_t>(&s - sources_.data())];
+  const std::string& name = def.name;
+  if (!s.status.connected) {
+    *reason = name + ": disconnected";
+    return false;
+  }
+  const int64_t timeout_us = 1000 * static_cast<int64_t>(def.timeout_ms);
+  for (std::size_t t = 0; t < fp::kFrameTypeCount; ++t) {
+    if (!s.needs_type[t]) continue;
+    const auto type = static_cast<fp::FrameType>(t);
+    if (s.last_valid_us[t] == 0) {
+      *reason = name + ": no " + fp::to_string(type) + " frame yet";
+      return false;
+    }
+    const int64_t age_us = now_us - s.last_valid_us[t];
+    if (age_us > timeout_us) {
+      *reason = name + ": stale (no valid " + fp::to_string(type) + " frame for " +
+                std::to_string(age_us / 1000) + " ms)";
+      return false;
+    }
+  }
+  if (!s.status.heartbeat_seen) {
+    *reason = name + ": no heartbeat yet";
+    return false;
+  }
+  if (now_us - s.last_valid_us[type_index(fp::FrameType::Heartbeat)] > heartbeat_timeout_us(def)) {
+    *reason = name + ": heartbeat stale";
+    return false;
+  }
+  if (s.protocol_version != fp::kProtocolVersion) {
+    *reason = name + ": console speaks protocol version " + std::to_string(s.protocol_version) +
+              ", expected " + std::to_string(fp::kProtocolVersion);
+    return false;
+  }
+  if (s.status.console_status != fp::PanelStatus::Operational) {
+    *reason = name + ": console status " + fp::to_string(s.status.console_status);
+    return false;
+  }
+  if (s.status.check_failed) {
+    *reason = name + ": protection check failed";
+    return false;
+  }
+  return true;
+}
+
+PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
+  PanelSnapshot snap;
+  snap.time_us = now_us;
+  snap.controls.resize(definition_.controls.size());
+  snap.sources.reserve(sources_.size());
+
+  std::string reasons;
+  std::vector<bool> healthy(sources_.size());
+  for (std::size_t i = 0; i < sources_.size(); ++i) {
+    const SourceState& s = sources_[i];
+    std::string reason;
+    healthy[i] = source_healthy(s, now_us, &reason);
+    if (!healthy[i]) append_reason(reasons, reason);
+    SourceStatus status = s.status;
+    status.stale = !healthy[i] && (!s.status.connected || s.last_any_valid_us == 0 ||
+                                   reason.find("stale") != std::string::npos ||
+                                   reason.find("yet") != std::string::npos);
+    status.last_frame_age_us = s.last_any_valid_us == 0 ? -1 : now_us - s.last_any_valid_us;
+    snap.sources.push_back(std::move(status));
+  }
+
+  bool estop = false;
+  std::optional<std::size_t> deadman_index;
+  for (std::size_t i = 0; i < definition_.controls.size(); ++i) {
+    const auto& c = definition_.controls[i];
+    ControlValue& v = snap.controls[i];
+    if (!healthy[c.source]) {
+      set_safe(c, v);
+    } else {
+      const SourceState& s = sources_[c.source];
+      switch (c.kind) {
+        case ControlKind::Axis: {
+          const int16_t raw = s.axes[c.signal.index];
+          if (raw == fp::kAxisInvalid) {
+            set_safe(c, v);
+            append_reason(reasons, c.name + ": not available");
+            break;
+          }
+          float x = fp::axis_to_unit(raw);
+          if (c.invert) x = -x;
+          v.axis = std::clamp(c.scale * apply_deadband(x, c.deadband), -1.0f, 1.0f);
+          break;
+        }
+        case ControlKind::Button: v.pressed = (s.buttons >> c.signal.index) & 1u; break;
+        case ControlKind::Switch: {
+          const uint8_t position = s.switches[c.signal.index];
+          if (position >= c.positions.size()) {
+            set_safe(c, v);
+            append_reason(reasons, c.name + ": position " +
+                                       (position == fp::kSwitchInvalid ? std::string("not available")
+                                                                       : std::to_string(position) + " unknown"));
+            break;
+          }
+          v.position = position;
+          break;
+        }
+      }
+    }
+    // A forced-safe e-stop reads "pressed" but nobody pressed it: the
+    // source's own reason says why.
+    if (c.role == ControlRole::Estop && v.pressed && !v.forced_safe) estop = true;
+    if (c.role == ControlRole::Deadman) deadman_index = i;
+  }
+  if (estop) append_reason(reasons, "e-stop pressed");
+
+  snap.failsafe = !reasons.empty();
+  snap.failsafe_reason = std::move(reasons);
+  snap.deadman = deadman_index && snap.controls[*deadman_index].pressed;
+
+  // Motion needs the dead-man held and no e-stop; a panel in failsafe for any
+  // reason stops motion too, so one stale source cannot leave another's stick live.
+  if (!snap.deadman || snap.failsafe)
+    for (std::size_t i = 0; i < definition_.controls.size(); ++i)
+      if (definition_.controls[i].motion) set_safe(definition_.controls[i], snap.controls[i]);
+  return snap;
+}
+
+}  // namespace rise::hil

@@ -1,0 +1,103 @@
+#pragma once
+
+// Decode → map → safety: turns the frames of a panel's sources into named
+// control values, and decides when the panel cannot be trusted.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "firmware_protocol/console_can.hpp"
+#include "panels/panel_definition.hpp"
+
+namespace rise::hil {
+
+/// Counters and state of one source, as PanelState reports them.
+struct SourceStatus {
+  std::string name;
+  bool connected = false;
+  bool stale = true;
+  bool check_failed = false;        ///< a protection check failed; not yet recovered
+  int64_t last_frame_age_us = -1;   ///< -1: no valid frame yet
+  int64_t frames_ok = 0;
+  std::array<int64_t, firmware_protocol::kDecodeErrorCount> errors{};  ///< by DecodeError
+  int32_t reconnects = 0;
+  firmware_protocol::PanelStatus console_status = firmware_protocol::PanelStatus::Init;
+  bool heartbeat_seen = false;
+
+  int64_t frames_bad() const;
+};
+
+/// The value of one control after transforms and safety rules.
+struct ControlValue {
+  float axis = 0.0f;
+  bool pressed = false;
+  uint8_t position = 0;
+  bool forced_safe = false;  ///< at its safe value because of a safety rule
+};
+
+struct PanelSnapshot {
+  int64_t time_us = 0;              ///< the monotonic time it was evaluated at
+  bool failsafe = true;
+  std::string failsafe_reason;      ///< "; "-joined reasons, empty when not failsafe
+  bool deadman = false;
+  std::vector<ControlValue> controls;  ///< same order as PanelDefinition::controls
+  std::vector<SourceStatus> sources;   ///< same order as PanelDefinition::sources
+};
+
+/// Holds the latest decoded state of every source. Not thread-safe: the
+/// bridge guards it with a mutex. Times are microseconds of a monotonic clock.
+class PanelMapper {
+ public:
+  explicit PanelMapper(panels::PanelDefinition definition);
+
+  /// Feeds one received CAN frame of `source`. Malformed frames are counted
+  /// and dropped. Returns true when a bound control's raw value changed (the
+  /// bridge then publishes at once). No throw; allocates nothing.
+  bool on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
+                int64_t now_us);
+
+  /// Transport state of a source. A disconnect makes it stale at once and
+  /// forgets its alive counters (the console restarts its counters too).
+  void on_connection(std::size_t source, bool connected, int64_t now_us);
+
+  /// Applies the safety rules at `now_us`: a source that is disconnected,
+  /// stale (a bound frame type older than timeout_ms), failing its protection
+  /// check, or whose console reports a fault puts its controls at their safe
+  /// values and the panel in failsafe; the e-stop pressed → failsafe; the
+  /// dead-man released → motion controls at their safe values.
+  PanelSnapshot evaluate(int64_t now_us) const;
+
+  const panels::PanelDefinition& definition() const { return definition_; }
+
+ private:
+  struct SourceState {
+    explicit SourceState(firmware_protocol::Decoder d) : decoder(d) {}
+    firmware_protocol::Decoder decoder;
+    SourceStatus status;
+    std::array<int64_t, firmware_protocol::kFrameTypeCount> last_valid_us{};  // 0 = never
+    bool needs_type[firmware_protocol::kFrameTypeCount] = {};
+    int64_t last_any_valid_us = 0;
+    uint32_t ok_in_row = 0;
+    uint8_t protocol_version = 0;
+    std::array<int16_t, firmware_protocol::kMaxAxes> axes{};
+    uint32_t buttons = 0;
+    std::array<uint8_t, firmware_protocol::kMaxSwitches> switches{};
+    bool axes_seen[firmware_protocol::kAxisFrames] = {};
+    bool buttons_seen = false;
+    bool switches_seen = false;
+  };
+
+  bool source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const;
+
+  panels::PanelDefinition definition_;
+  std::vector<SourceState> sources_;
+};
+
+/// Age after which a missing heartbeat makes a source stale: three heartbeat
+/// periods, or the source timeout if that is longer.
+int64_t heartbeat_timeout_us(const panels::SourceDefinition& source);
+
+}  // namespace rise::hil

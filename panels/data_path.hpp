@@ -1,0 +1,12 @@
+#pragma once
+
+#include <string>
+
+namespace rise::panels {
+
+/// Finds a file shipped in the source tree (definitions, scripts, robots) by
+/// its path relative to the repo root: $RISE_ROOT first, then the source
+/// tree this binary was built from. Returns the path as given if neither has it.
+std::string find_data_file(const std::string& relative);
+
+}  // namespace rise::panels

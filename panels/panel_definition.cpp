@@ -1,0 +1,369 @@
+#include "panels/panel_definition.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "firmware_protocol/console_can.hpp"
+
+namespace rise::panels {
+namespace {
+
+namespace fp = rise::firmware_protocol;
+
+// Every message reads "file:line: key: what", so a user can jump to it.
+class Context {
+ public:
+  explicit Context(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const YAML::Node& node, const std::string& key,
+                         const std::string& what) const {
+    std::ostringstream out;
+    out << file_ << ':' << (node.Mark().line >= 0 ? node.Mark().line + 1 : 0) << ": ";
+    if (!key.empty()) out << key << ": ";
+    out << what;
+    throw std::runtime_error(out.str());
+  }
+
+  // Rejects keys not in `allowed`: a typo must not silently become a default.
+  void only_keys(const YAML::Node& map, const std::string& where,
+                 std::initializer_list<const char*> allowed) const {
+    if (!map.IsMap()) fail(map, where, "expected a mapping");
+    for (const auto& kv : map) {
+      const auto key = kv.first.as<std::string>();
+      bool ok = false;
+      for (const char* a : allowed) ok = ok || key == a;
+      if (!ok) fail(kv.first, join(where, key), "unknown key");
+    }
+  }
+
+  template <typename T>
+  T get(const YAML::Node& map, const char* key, const std::string& where, T fallback) const {
+    const YAML::Node node = map[key];
+    if (!node) return fallback;
+    return as<T>(node, join(where, key));
+  }
+
+  template <typename T>
+  T require(const YAML::Node& map, const char* key, const std::string& where) const {
+    const YAML::Node node = map[key];
+    if (!node) fail(map, join(where, key), "missing");
+    return as<T>(node, join(where, key));
+  }
+
+  template <typename T>
+  T as(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) fail(node, key, "expected a value, not a list or mapping");
+    try {
+      return node.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(node, key, "cannot read '" + node.Scalar() + "' as " + type_name<T>());
+    }
+  }
+
+  static std::string join(const std::string& a, const std::string& b) {
+    return a.empty() ? b : a + "." + b;
+  }
+
+ private:
+  template <typename T>
+  static const char* type_name() {
+    if constexpr (std::is_same_v<T, bool>) return "true/false";
+    else if constexpr (std::is_integral_v<T>) return "an integer";
+    else if constexpr (std::is_floating_point_v<T>) return "a number";
+    else return "text";
+  }
+  std::string file_;
+};
+
+std::string control_key(const std::string& name) { return "controls." + name; }
+
+SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::size_t i) {
+  const std::string where = "sources[" + std::to_string(i) + "]";
+  ctx.only_keys(node, where,
+                {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta"});
+  SourceDefinition s;
+  s.name = ctx.require<std::string>(node, "name", where);
+  s.protocol = ctx.require<std::string>(node, "protocol", where);
+  if (s.protocol != "rise-can-v1")
+    ctx.fail(node["protocol"], where + ".protocol",
+             "unknown protocol '" + s.protocol + "' (known: rise-can-v1)");
+  const int node_id = ctx.get<int>(node, "node", where, 0);
+  if (node_id < 0 || node_id > 15) ctx.fail(node["node"], where + ".node", "must be 0..15");
+  s.node = static_cast<uint8_t>(node_id);
+  const int timeout = ctx.get<int>(node, "timeout_ms", where, 50);
+  if (timeout < 5 || timeout > 10000)
+    ctx.fail(node["timeout_ms"], where + ".timeout_ms", "must be 5..10000");
+  s.timeout_ms = static_cast<uint32_t>(timeout);
+  const int recovery = ctx.get<int>(node, "recovery_frames", where, 3);
+  if (recovery < 1 || recovery > 1000)
+    ctx.fail(node["recovery_frames"], where + ".recovery_frames", "must be 1..1000");
+  s.recovery_frames = static_cast<uint32_t>(recovery);
+  const int delta = ctx.get<int>(node, "max_counter_delta", where, 1);
+  if (delta < 1 || delta > 14)
+    ctx.fail(node["max_counter_delta"], where + ".max_counter_delta", "must be 1..14");
+  s.max_counter_delta = static_cast<uint8_t>(delta);
+  return s;
+}
+
+std::size_t resolve_source(const Context& ctx, const PanelDefinition& def, const YAML::Node& node,
+                           const std::string& where) {
+  const YAML::Node src = node["source"];
+  if (!src) {
+    if (def.sources.size() == 1) return 0;
+    ctx.fail(node, where + ".source", "missing (the panel has several sources)");
+  }
+  const auto name = ctx.as<std::string>(src, where + ".source");
+  const auto index = def.find_source(name);
+  if (!index) ctx.fail(src, where + ".source", "unknown source '" + name + "'");
+  return *index;
+}
+
+ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
+                                const YAML::Node& node, std::size_t i) {
+  std::string where = "controls[" + std::to_string(i) + "]";
+  ctx.only_keys(node, where,
+                {"name", "kind", "source", "signal", "role", "motion", "deadband", "invert",
+                 "scale", "safe", "positions"});
+  ControlDefinition c;
+  c.line = node.Mark().line + 1;
+  c.name = ctx.require<std::string>(node, "name", where);
+  if (c.name.empty()) ctx.fail(node["name"], where + ".name", "must not be empty");
+  where = control_key(c.name);
+
+  const auto kind = ctx.require<std::string>(node, "kind", where);
+  if (kind == "axis") c.kind = ControlKind::Axis;
+  else if (kind == "button") c.kind = ControlKind::Button;
+  else if (kind == "switch") c.kind = ControlKind::Switch;
+  else ctx.fail(node["kind"], where + ".kind", "unknown kind '" + kind + "' (axis, button, switch)");
+
+  c.source = resolve_source(ctx, def, node, where);
+  const auto signal_text = ctx.require<std::string>(node, "signal", where);
+  const auto signal = parse_signal(signal_text);
+  if (!signal)
+    ctx.fail(node["signal"], where + ".signal",
+             "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
+  c.signal = *signal;
+  const bool kind_matches =
+      (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
+      (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
+      (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
+  if (!kind_matches)
+    ctx.fail(node["signal"], where + ".signal",
+             "signal '" + signal_text + "' does not fit a control of kind " + kind);
+
+  const auto role = ctx.get<std::string>(node, "role", where, "none");
+  if (role == "none") c.role = ControlRole::None;
+  else if (role == "deadman") c.role = ControlRole::Deadman;
+  else if (role == "estop") c.role = ControlRole::Estop;
+  else ctx.fail(node["role"], where + ".role", "unknown role '" + role + "' (deadman, estop)");
+  if (c.role != ControlRole::None && c.kind != ControlKind::Button)
+    ctx.fail(node["role"], where + ".role", "only a button can be the " + role);
+
+  c.motion = ctx.get<bool>(node, "motion", where, false);
+  if (c.motion && c.role != ControlRole::None)
+    ctx.fail(node["motion"], where + ".motion", "the " + role + " cannot be a motion control");
+
+  const YAML::Node safe = node["safe"];
+  if (!safe) ctx.fail(node, where + ".safe", "missing: every control declares its safe value");
+  switch (c.kind) {
+    case ControlKind::Axis: {
+      c.safe_axis = ctx.as<float>(safe, where + ".safe");
+      if (!(c.safe_axis >= -1.0f && c.safe_axis <= 1.0f))
+        ctx.fail(safe, where + ".safe", "an axis' safe value must be in -1..1");
+      c.deadband = ctx.get<float>(node, "deadband", where, 0.0f);
+      if (!(c.deadband >= 0.0f && c.deadband < 0.5f))
+        ctx.fail(node["deadband"], where + ".deadband", "must be in 0..0.5");
+      c.invert = ctx.get<bool>(node, "invert", where, false);
+      c.scale = ctx.get<float>(node, "scale", where, 1.0f);
+      if (!(c.scale > 0.0f && c.scale <= 1.0f))
+        ctx.fail(node["scale"], where + ".scale", "must be in (0, 1]");
+      break;
+    }
+    case ControlKind::Button:
+      c.safe_button = ctx.as<bool>(safe, where + ".safe");
+      for (const char* k : {"deadband", "invert", "scale", "positions"})
+        if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a button");
+      break;
+    case ControlKind::Switch: {
+      const YAML::Node positions = node["positions"];
+      if (!positions || !positions.IsSequence() || positions.size() < 2)
+        ctx.fail(positions ? positions : node, where + ".positions",
+                 "a switch needs a list of at least two position labels");
+      for (const auto& p : positions) c.positions.push_back(ctx.as<std::string>(p, where + ".positions"));
+      const auto safe_label = ctx.as<std::string>(safe, where + ".safe");
+      bool found = false;
+      for (std::size_t k = 0; k < c.positions.size(); ++k)
+        if (c.positions[k] == safe_label) {
+          c.safe_switch = static_cast<uint8_t>(k);
+          found = true;
+        }
+      if (!found)
+        ctx.fail(safe, where + ".safe", "'" + safe_label + "' is not one of the positions");
+      for (const char* k : {"deadband", "invert", "scale"})
+        if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a switch");
+      break;
+    }
+  }
+  return c;
+}
+
+void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& node) {
+  ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer"});
+  std::set<std::string> names;
+  if (const YAML::Node leds = node["leds"]) {
+    if (!leds.IsSequence()) ctx.fail(leds, "feedback.leds", "expected a list");
+    std::set<std::pair<std::size_t, int>> bits;
+    for (std::size_t i = 0; i < leds.size(); ++i) {
+      const YAML::Node n = leds[i];
+      std::string where = "feedback.leds[" + std::to_string(i) + "]";
+      ctx.only_keys(n, where, {"name", "source", "bit"});
+      LedDefinition led;
+      led.name = ctx.require<std::string>(n, "name", where);
+      where = "feedback.leds." + led.name;
+      if (!names.insert(led.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
+      led.source = resolve_source(ctx, def, n, where);
+      const int bit = ctx.require<int>(n, "bit", where);
+      if (bit < 0 || bit >= static_cast<int>(fp::kMaxLeds))
+        ctx.fail(n["bit"], where + ".bit", "must be 0..31");
+      if (!bits.insert({led.source, bit}).second)
+        ctx.fail(n["bit"], where + ".bit", "LED bit already used");
+      led.bit = static_cast<uint8_t>(bit);
+      def.leds.push_back(led);
+    }
+  }
+  if (const YAML::Node displays = node["displays"]) {
+    if (!displays.IsSequence()) ctx.fail(displays, "feedback.displays", "expected a list");
+    for (std::size_t i = 0; i < displays.size(); ++i) {
+      const YAML::Node n = displays[i];
+      std::string where = "feedback.displays[" + std::to_string(i) + "]";
+      ctx.only_keys(n, where, {"name", "source", "index", "decimals"});
+      DisplayDefinition d;
+      d.name = ctx.require<std::string>(n, "name", where);
+      where = "feedback.displays." + d.name;
+      if (!names.insert(d.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
+      d.source = resolve_source(ctx, def, n, where);
+      const int index = ctx.require<int>(n, "index", where);
+      if (index < 0 || index > 255) ctx.fail(n["index"], where + ".index", "must be 0..255");
+      d.index = static_cast<uint8_t>(index);
+      const int decimals = ctx.get<int>(n, "decimals", where, 0);
+      if (decimals < 0 || decimals > 9) ctx.fail(n["decimals"], where + ".decimals", "must be 0..9");
+      d.decimals = static_cast<uint8_t>(decimals);
+      def.displays.push_back(d);
+    }
+  }
+  if (const YAML::Node buzzer = node["buzzer"]) {
+    ctx.only_keys(buzzer, "feedback.buzzer", {"source"});
+    def.buzzer_source = resolve_source(ctx, def, buzzer, "feedback.buzzer");
+  }
+}
+
+}  // namespace
+
+std::optional<std::size_t> PanelDefinition::find_control(const std::string& control) const {
+  for (std::size_t i = 0; i < controls.size(); ++i)
+    if (controls[i].name == control) return i;
+  return std::nullopt;
+}
+
+std::optional<std::size_t> PanelDefinition::find_source(const std::string& source) const {
+  for (std::size_t i = 0; i < sources.size(); ++i)
+    if (sources[i].name == source) return i;
+  return std::nullopt;
+}
+
+std::optional<SignalRef> parse_signal(const std::string& text) {
+  const auto dot = text.find('.');
+  if (dot == std::string::npos || dot + 1 >= text.size()) return std::nullopt;
+  const std::string kind = text.substr(0, dot);
+  const std::string digits = text.substr(dot + 1);
+  if (digits.size() > 2 || digits.find_first_not_of("0123456789") != std::string::npos)
+    return std::nullopt;
+  const int index = std::stoi(digits);
+  SignalRef ref;
+  ref.index = static_cast<uint8_t>(index);
+  if (kind == "axis" && index < static_cast<int>(fp::kMaxAxes)) ref.kind = SignalRef::Kind::Axis;
+  else if (kind == "button" && index < static_cast<int>(fp::kMaxButtons))
+    ref.kind = SignalRef::Kind::Button;
+  else if (kind == "switch" && index < static_cast<int>(fp::kMaxSwitches))
+    ref.kind = SignalRef::Kind::Switch;
+  else return std::nullopt;
+  return ref;
+}
+
+std::string to_string(const SignalRef& signal) {
+  const char* kind = signal.kind == SignalRef::Kind::Axis     ? "axis"
+                     : signal.kind == SignalRef::Kind::Button ? "button"
+                                                              : "switch";
+  return std::string(kind) + "." + std::to_string(signal.index);
+}
+
+PanelDefinition parse_panel_definition(const std::string& text, const std::string& file) {
+  const Context ctx(file);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw std::runtime_error(file + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root || !root.IsMap()) ctx.fail(root, "", "expected a mapping with panel, sources, controls");
+  ctx.only_keys(root, "", {"panel", "publish_hz", "sources", "controls", "feedback"});
+
+  PanelDefinition def;
+  def.file = file;
+  def.name = ctx.require<std::string>(root, "panel", "");
+  def.publish_hz = ctx.get<double>(root, "publish_hz", "", 100.0);
+  if (!(def.publish_hz >= 1.0 && def.publish_hz <= 1000.0))
+    ctx.fail(root["publish_hz"], "publish_hz", "must be 1..1000");
+
+  const YAML::Node sources = root["sources"];
+  if (!sources || !sources.IsSequence() || sources.size() == 0)
+    ctx.fail(sources ? sources : root, "sources", "a list of at least one source is required");
+  for (std::size_t i = 0; i < sources.size(); ++i) {
+    auto s = parse_source(ctx, sources[i], i);
+    if (def.find_source(s.name))
+      ctx.fail(sources[i]["name"], "sources[" + std::to_string(i) + "].name",
+               "duplicate source '" + s.name + "'");
+    def.sources.push_back(std::move(s));
+  }
+
+  const YAML::Node controls = root["controls"];
+  if (!controls || !controls.IsSequence() || controls.size() == 0)
+    ctx.fail(controls ? controls : root, "controls", "a list of at least one control is required");
+  std::set<std::tuple<std::size_t, int, int>> bound;
+  bool has_deadman = false;
+  bool has_motion = false;
+  for (std::size_t i = 0; i < controls.size(); ++i) {
+    auto c = parse_control(ctx, def, controls[i], i);
+    if (def.find_control(c.name))
+      ctx.fail(controls[i]["name"], control_key(c.name) + ".name", "duplicate control name");
+    if (!bound.insert({c.source, static_cast<int>(c.signal.kind), c.signal.index}).second)
+      ctx.fail(controls[i]["signal"], control_key(c.name) + ".signal",
+               "signal '" + to_string(c.signal) + "' is already bound to another control");
+    if (c.role == ControlRole::Deadman) {
+      if (has_deadman) ctx.fail(controls[i]["role"], control_key(c.name) + ".role", "a second dead-man");
+      has_deadman = true;
+    }
+    has_motion = has_motion || c.motion;
+    def.controls.push_back(std::move(c));
+  }
+  if (has_motion && !has_deadman)
+    ctx.fail(controls, "controls", "motion controls need a control with role: deadman");
+
+  if (const YAML::Node feedback = root["feedback"]) parse_feedback(ctx, def, feedback);
+  return def;
+}
+
+PanelDefinition load_panel_definition(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ":0: cannot open the panel definition");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parse_panel_definition(text.str(), path);
+}
+
+}  // namespace rise::panels

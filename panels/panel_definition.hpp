@@ -1,0 +1,101 @@
+#pragma once
+
+// A console described as data: its device sources, its named controls with
+// the signal each is bound to and the value it takes when unsafe, and its
+// feedback outputs. Loaded from YAML (panels/definitions/rise_console.yaml).
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rise::panels {
+
+enum class ControlKind { Axis, Button, Switch };
+
+/// What the bridge does with a control beyond passing it on.
+enum class ControlRole {
+  None,
+  Deadman,  ///< released → every motion control at its safe value
+  Estop,    ///< pressed → panel failsafe
+};
+
+/// Where a control's raw value comes from: a source and one of its signals.
+/// For protocol rise-can-v1 the signals are axis.0..5, button.0..31, switch.0..5.
+struct SignalRef {
+  enum class Kind { Axis, Button, Switch } kind = Kind::Axis;
+  uint8_t index = 0;
+};
+
+struct ControlDefinition {
+  std::string name;
+  ControlKind kind = ControlKind::Axis;
+  ControlRole role = ControlRole::None;
+  std::size_t source = 0;     ///< index into PanelDefinition::sources
+  SignalRef signal;
+  bool motion = false;        ///< zeroed (safe value) while the dead-man is released
+  // Axes: value = clamp(scale * deadband(invert ? -raw : raw)); the deadband
+  // is rescaled so the output stays continuous (|x| ≤ d → 0, else (|x|-d)/(1-d)).
+  float deadband = 0.0f;
+  bool invert = false;
+  float scale = 1.0f;
+  // Safe value: axes use safe_axis, buttons safe_button, switches safe_switch.
+  float safe_axis = 0.0f;
+  bool safe_button = false;
+  uint8_t safe_switch = 0;
+  std::vector<std::string> positions;  ///< switch position labels
+  int line = 0;                        ///< line in the definition file (for messages)
+};
+
+struct SourceDefinition {
+  std::string name;
+  std::string protocol;           ///< "rise-can-v1"
+  uint8_t node = 0;               ///< console node id on the bus (0..15)
+  uint32_t timeout_ms = 50;       ///< stale when no valid frame within this
+  uint32_t recovery_frames = 3;   ///< valid frames in a row to leave a failed check
+  uint8_t max_counter_delta = 1;  ///< alive counter jump tolerated (1 = none lost)
+};
+
+struct LedDefinition {
+  std::string name;
+  std::size_t source = 0;
+  uint8_t bit = 0;
+};
+struct DisplayDefinition {
+  std::string name;
+  std::size_t source = 0;
+  uint8_t index = 0;
+  uint8_t decimals = 0;
+};
+
+struct PanelDefinition {
+  std::string name;
+  std::string file;               ///< where it was loaded from
+  double publish_hz = 100.0;
+  std::vector<SourceDefinition> sources;
+  std::vector<ControlDefinition> controls;
+  std::vector<LedDefinition> leds;
+  std::vector<DisplayDefinition> displays;
+  std::optional<std::size_t> buzzer_source;
+
+  /// Index of a control by name, or nullopt.
+  std::optional<std::size_t> find_control(const std::string& name) const;
+  std::optional<std::size_t> find_source(const std::string& name) const;
+  /// Publish period in microseconds.
+  int64_t publish_period_us() const { return static_cast<int64_t>(1e6 / publish_hz); }
+};
+
+/// Loads a panel definition. Throws std::runtime_error naming file:line and
+/// the key for every mistake (unknown key, wrong type, bad range, unknown
+/// source or signal, a signal bound twice, duplicate names, motion controls
+/// without a dead-man).
+PanelDefinition load_panel_definition(const std::string& path);
+
+/// Same, from text; `file` is used in messages.
+PanelDefinition parse_panel_definition(const std::string& text, const std::string& file);
+
+/// "axis.1" → SignalRef; nullopt if malformed or out of the protocol's range.
+std::optional<SignalRef> parse_signal(const std::string& text);
+std::string to_string(const SignalRef& signal);
+
+}  // namespace rise::panels

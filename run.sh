@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# The project's one entry point. On a fresh Debian 12 machine (as root) it
+# installs what is missing, builds incrementally, then:
+#   bash run.sh demo    the whole chain on built-in defaults (rise demo)
+#   bash run.sh test    every test (ctest)
+#   bash run.sh build   only set up and build
+# Extra arguments after demo/test go to `rise demo` / ctest.
+set -euo pipefail
+cd "$(dirname "$(readlink -f "$0")")"
+root=$PWD
+build=${RISE_BUILD_DIR:-$root/build}
+
+# Debian 12 packages: toolchain, libraries, and the third-party peers the
+# tests talk to (python3-can for socketcand, socat for pty pairs, clang's
+# libFuzzer runtime for the fuzz targets).
+packages=(
+  cmake ninja-build g++ pkg-config
+  libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2
+  python3 python3-can socat
+  clang libclang-rt-14-dev
+)
+
+setup() {
+  local missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  local sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "run.sh: installing ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" \
+    >/tmp/rise-apt.log 2>&1 || { tail -30 /tmp/rise-apt.log; exit 1; }
+}
+
+build() {
+  local werror=OFF
+  [ -n "${CI:-}" ] && werror=ON
+  if [ ! -f "$build/build.ninja" ]; then
+    cmake -S "$root" -B "$build" -G Ninja -DRISE_WERROR=$werror >/dev/null
+  fi
+  cmake --build "$build" -j2
+}
+
+cmd=${1:-demo}
+[ $# -gt 0 ] && shift
+case "$cmd" in
+  demo) setup; build; exec "$build/bin/rise" demo "$@" ;;
+  test) setup; build; cd "$build" && exec ctest --output-on-failure --timeout 300 -j2 "$@" ;;
+  build) setup; build ;;
+  *) echo "usage: bash run.sh demo|test|build [args]" >&2; exit 2 ;;
+esac

@@ -1,0 +1,159 @@
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <mutex>
+#include <thread>
+
+#include "hil/bridge.hpp"
+#include "panels/console_emulator.hpp"
+
+namespace fp = rise::firmware_protocol;
+using rise::hil::PanelSnapshot;
+
+namespace {
+
+rise::panels::PanelDefinition console() {
+  return rise::panels::load_panel_definition(std::string(RISE_SOURCE_DIR) +
+                                             "/panels/definitions/rise_console.yaml");
+}
+
+// The console emulator from panels/ as the test double: its own thread, its
+// own end of an in-memory bus, the firmware's real frame rates.
+class EmulatorThread {
+ public:
+  EmulatorThread(const rise::panels::PanelDefinition& def, const std::string& bus_url)
+      : emulator_(def, 0), bus_(rise::io::open_can_bus(bus_url)) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~EmulatorThread() {
+    running_ = false;
+    thread_.join();
+  }
+  void apply(const rise::panels::TimelineEvent& e) {
+    std::lock_guard lock(mutex_);
+    emulator_.apply(e);
+  }
+  rise::panels::ConsoleFeedback feedback() {
+    std::lock_guard lock(mutex_);
+    return emulator_.feedback();
+  }
+
+ private:
+  void run() {
+    rise::io::CanFrame f;
+    while (running_) {
+      {
+        std::lock_guard lock(mutex_);
+        emulator_.tick(*bus_, rise::hil::monotonic_us());
+      }
+      while (bus_->receive(f, 1) == rise::io::IoStatus::Ok) {
+        std::lock_guard lock(mutex_);
+        emulator_.on_frame(f);
+      }
+    }
+  }
+  std::mutex mutex_;
+  rise::panels::ConsoleEmulator emulator_;
+  std::unique_ptr<rise::io::CanBus> bus_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+rise::panels::TimelineEvent set(const rise::panels::PanelDefinition& def, const char* control, float axis,
+                                bool pressed) {
+  rise::panels::TimelineEvent e;
+  e.control = *def.find_control(control);
+  e.axis = axis;
+  e.pressed = pressed;
+  return e;
+}
+
+struct Published {
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<PanelSnapshot> snapshots;
+
+  void add(const PanelSnapshot& s) {
+    std::lock_guard lock(mutex);
+    snapshots.push_back(s);
+    cv.notify_all();
+  }
+  // Waits (deadline, not a sleep) for a snapshot that satisfies pred.
+  template <typename Pred>
+  std::optional<PanelSnapshot> wait_for(Pred pred, int timeout_ms, std::size_t from = 0) {
+    std::unique_lock lock(mutex);
+    std::optional<PanelSnapshot> found;
+    cv.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] {
+      for (std::size_t i = from; i < snapshots.size(); ++i)
+        if (pred(snapshots[i])) {
+          found = snapshots[i];
+          return true;
+        }
+      return false;
+    });
+    return found;
+  }
+  std::size_t size() {
+    std::lock_guard lock(mutex);
+    return snapshots.size();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the bridge publishes the emulated console's state, sends feedback, and goes failsafe within one "
+          "publish period of the source timeout",
+          "[hil]") {
+  const auto def = console();
+  const auto drive_y = *def.find_control("drive_y");
+  Published published;
+  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
+  buses.push_back(rise::io::open_can_bus("mem://bridge_test"));
+  rise::hil::Bridge bridge(def, std::move(buses), [&](const PanelSnapshot& s) { published.add(s); });
+  bridge.start();
+
+  auto emulator = std::make_unique<EmulatorThread>(def, "mem://bridge_test");
+  emulator->apply(set(def, "deadman", 0, true));
+  emulator->apply(set(def, "drive_y", 0.6f, false));
+
+  const auto live = published.wait_for(
+      [&](const PanelSnapshot& s) { return !s.failsafe && s.deadman && s.controls[drive_y].axis > 0.5f; }, 3000);
+  REQUIRE(live.has_value());
+  CHECK(live->controls[drive_y].axis == Approx((0.6 - 0.05) / 0.95).margin(1e-3));
+
+  // The console shows what the bridge sends back: power LED on, no fault.
+  rise::hil::FeedbackRequest request;
+  request.displays.emplace_back("speed", 1.25f);
+  bridge.set_feedback(request);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(3);
+  while (std::chrono::steady_clock::now() < deadline) {
+    const auto fb = emulator->feedback();
+    if (fb.displays.count(0) && fb.displays.at(0).raw == 125 && (fb.leds_on & 1u)) break;
+    std::this_thread::yield();
+  }
+  const auto fb = emulator->feedback();
+  CHECK((fb.leds_on & 0b111u) == 0b001u);
+  REQUIRE(fb.displays.count(0) == 1);
+  CHECK(fb.displays.at(0).raw == 125);
+  CHECK(fb.bad_frames == 0);
+
+  // Pull the plug: the emulator's thread ends, no more frames arrive.
+  const std::size_t before = published.size();
+  emulator.reset();
+  const auto lost = published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 3000, before);
+  REQUIRE(lost.has_value());
+  const int64_t timeout_us = 1000 * def.sources[0].timeout_ms;
+  const int64_t period_us = def.publish_period_us();
+  CHECK(lost->failsafe_reason.find("stale") != std::string::npos);
+  CHECK(lost->controls[drive_y].axis == 0.0f);
+  // Exact property: no snapshot older than the timeout was ever published as safe.
+  {
+    std::lock_guard lock(published.mutex);
+    for (const auto& s : published.snapshots)
+      if (s.sources[0].last_frame_age_us > timeout_us) CHECK(s.failsafe);
+  }
+  // And the failsafe snapshot came within one publish period of the timeout
+  // (plus scheduling slack of this 2-core machine).
+  CHECK(lost->sources[0].last_frame_age_us <= timeout_us + period_us + 15000);
+  bridge.stop();
+}
