@@ -16,7 +16,7 @@
 #include "panels/panel_definition.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
-#include "sim/stop_time.hpp"
+#include "sim/simulation.hpp"
 
 using rise::app::ChainView;
 using rise::app::ChildProcess;
@@ -38,6 +38,7 @@ TEST_CASE("the robot stops within two publish periods plus its own stop time aft
           "after the console is killed",
           "[integration]") {
   const auto def = rise::panels::load_panel_definition(kSource + "/panels/definitions/rise_console.yaml");
+  const auto robot = rise::sim::load_robot_description(kSource + "/sim/robots/skid4.yaml");
   const double publish_period_s = 1.0 / def.publish_hz;
   const double robot_state_period_s = 1.0 / 50.0;
   const std::string id = "itest" + std::to_string(::getpid());
@@ -65,7 +66,7 @@ TEST_CASE("the robot stops within two publish periods plus its own stop time aft
   // 1. Dead-man release at full speed.
   REQUIRE(monitor.wait_until([](const ChainView& v) { return v.deadman_stop.stopped; }, 15000));
   auto v = monitor.view();
-  const double sim_stop_s = rise::sim::stop_time_s(v.deadman_stop.speed_at_trigger_mps);
+  const double sim_stop_s = rise::sim::stop_time_s(robot, v.deadman_stop.speed_at_trigger_mps);
   const double deadman_bound_s = 2 * publish_period_s + sim_stop_s + robot_state_period_s;
   INFO("dead-man: " << v.deadman_stop.seconds() << " s from " << v.deadman_stop.speed_at_trigger_mps
                     << " m/s; sim stop time " << sim_stop_s << " s; bound " << deadman_bound_s << " s");
@@ -78,7 +79,7 @@ TEST_CASE("the robot stops within two publish periods plus its own stop time aft
   REQUIRE(panel.wait_for(5000) == 128 + SIGKILL);
   REQUIRE(monitor.wait_until([](const ChainView& v) { return v.loss_stop.stopped; }, 10000));
   v = monitor.view();
-  const double loss_sim_stop_s = rise::sim::stop_time_s(v.loss_stop.speed_at_trigger_mps);
+  const double loss_sim_stop_s = rise::sim::stop_time_s(robot, v.loss_stop.speed_at_trigger_mps);
   const double loss_bound_s = 2 * publish_period_s + loss_sim_stop_s + robot_state_period_s;
   INFO("source loss (" << v.loss_reason << "): " << v.loss_stop.seconds() << " s; bound " << loss_bound_s << " s");
   CHECK(v.loss_reason.find("console") != std::string::npos);

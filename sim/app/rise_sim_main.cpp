@@ -1,0 +1,190 @@
+// rise-sim: the ODE simulator as an LCM node. Subscribes the trainee's
+// PanelState, steps the world at a fixed 1 ms, publishes RobotState and the
+// console feedback (the speed display).
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <poll.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <filesystem>
+#include <thread>
+
+#include "rise_msgs/PanelFeedback.hpp"
+#include "rise_msgs/PanelState.hpp"
+#include "rise_msgs/RobotState.hpp"
+#include "sim/simulation.hpp"
+
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string source_file(const std::string& relative) {
+  if (std::filesystem::exists(relative)) return relative;
+  const auto p = std::filesystem::path(RISE_SOURCE_DIR) / relative;
+  return std::filesystem::exists(p) ? p.string() : relative;
+}
+
+// The latest panel state, turned into what the robot's control mapping reads.
+struct PanelListener {
+  rise::sim::ControlInput input;
+  std::chrono::steady_clock::time_point received{};
+  bool any = false;
+  int64_t count = 0;
+
+  void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelState* m) {
+    input.axes.clear();
+    input.buttons.clear();
+    input.switches.clear();
+    input.switch_labels.clear();
+    for (const auto& a : m->axes) input.axes[a.name] = a.value;
+    for (const auto& b : m->buttons) input.buttons[b.name] = b.pressed;
+    for (const auto& s : m->switches) {
+      input.switches[s.name] = s.position;
+      input.switch_labels[s.name] = s.label;
+    }
+    input.failsafe = m->failsafe;
+    input.deadman = m->deadman;
+    received = std::chrono::steady_clock::now();
+    any = true;
+    ++count;
+  }
+};
+
+rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::string& robot_id) {
+  rise_msgs::RobotState m;
+  m.utime = wall_us();
+  m.sim_time_s = s.time_s;
+  m.robot_id = robot_id;
+  for (int i = 0; i < 3; ++i) {
+    m.position_m[i] = s.position_m[static_cast<std::size_t>(i)];
+    m.linear_velocity_mps[i] = s.linear_velocity_mps[static_cast<std::size_t>(i)];
+    m.angular_velocity_radps[i] = s.angular_velocity_radps[static_cast<std::size_t>(i)];
+  }
+  for (int i = 0; i < 4; ++i) m.orientation_wxyz[i] = s.orientation_wxyz[static_cast<std::size_t>(i)];
+  for (const auto& w : s.wheels) {
+    m.joint_names.push_back(w.name);
+    m.joint_positions.push_back(w.position_rad);
+    m.joint_velocities.push_back(w.velocity_radps);
+    m.joint_efforts.push_back(w.effort_nm);
+  }
+  m.num_joints = static_cast<int16_t>(m.joint_names.size());
+  m.damage = 0.0f;
+  m.battery = 1.0f;
+  m.motors_enabled = s.motors_enabled;
+  m.stop_reason = s.stop_reason;
+  m.contacts = s.contacts;
+  m.num_contacts = static_cast<int16_t>(m.contacts.size());
+  return m;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rise-sim: ODE robot simulator driven by PanelState over LCM"};
+  std::string robot_file = "sim/robots/skid4.yaml";
+  std::string world_file;
+  std::string id = "t1";
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  bool fast = false;
+  double duration_s = 0.0;
+  double state_hz = 50.0;
+  int panel_timeout_ms = 100;
+  std::string log_level = "info";
+  app.add_option("--robot", robot_file, "robot file (YAML)")->capture_default_str();
+  app.add_option("--world", world_file, "world file (YAML); default: the built-in yard");
+  app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
+  app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
+  app.add_flag("--fast", fast, "run as fast as possible instead of real-time paced");
+  app.add_option("--duration", duration_s, "stop after S simulated seconds (0: run until SIGINT/SIGTERM)");
+  app.add_option("--state-hz", state_hz, "RobotState rate")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--panel-timeout-ms", panel_timeout_ms, "stop the robot when no PanelState arrives for this long")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(log_level));
+
+  rise::sim::RobotDescription robot;
+  rise::sim::WorldDescription world = rise::sim::default_world();
+  try {
+    robot = rise::sim::load_robot_description(source_file(robot_file));
+    if (!world_file.empty()) world = rise::sim::load_world_description(source_file(world_file));
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    spdlog::error("cannot open LCM at {}", lcm_url);
+    return 2;
+  }
+  const std::string panel_channel = "rise/" + id + "/panel_state";
+  const std::string state_channel = "rise/" + id + "/robot_state";
+  const std::string feedback_channel = "rise/" + id + "/panel_feedback";
+  PanelListener panel;
+  // Only the newest panel state matters to the physics; a short queue keeps
+  // a stalled sim from acting on old sticks.
+  lcm.subscribe(panel_channel, &PanelListener::on, &panel)->setQueueCapacity(8);
+
+  rise::sim::Simulation sim(robot, world);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}", robot.name, robot.file, world.name,
+               fast ? "as fast as possible" : "real time", lcm_url, panel_channel, state_channel);
+
+  const int steps_per_state = std::max(1, static_cast<int>(std::lround(1.0 / (state_hz * rise::sim::Simulation::kStepS))));
+  const int steps_per_feedback = 100;  // 10 Hz
+  const auto start = std::chrono::steady_clock::now();
+  const auto timeout = std::chrono::milliseconds(panel_timeout_ms);
+  std::string last_reason = "-";
+  int64_t step = 0;
+  while (!g_stop && (duration_s <= 0 || sim.time_s() < duration_s)) {
+    // Take every waiting LCM message without blocking the physics.
+    pollfd pfd{lcm.getFileno(), POLLIN, 0};
+    while (::poll(&pfd, 1, 0) > 0) lcm.handle();
+
+    rise::sim::ControlInput input = panel.input;
+    input.fresh = panel.any && std::chrono::steady_clock::now() - panel.received <= timeout;
+    sim.set_input(input);
+    sim.step();
+    ++step;
+
+    if (step % steps_per_state == 0) {
+      const auto snap = sim.snapshot();
+      const auto msg = to_message(snap, robot.name);
+      lcm.publish(state_channel, &msg);
+      if (snap.stop_reason != last_reason) {
+        if (snap.motors_enabled) spdlog::info("motors enabled");
+        else spdlog::info("motors stopped: {}", snap.stop_reason);
+        last_reason = snap.stop_reason;
+      }
+      if (step % steps_per_feedback == 0) {
+        rise_msgs::PanelFeedback fb;
+        fb.utime = msg.utime;
+        fb.panel_id = "";
+        fb.num_leds = 0;  // the bridge owns power/fault/e-stop LEDs
+        fb.display_names = {"speed"};
+        fb.display_values = {static_cast<float>(snap.speed_mps())};
+        fb.num_displays = 1;
+        fb.buzzer = 0;
+        fb.rumble = 0.0f;
+        lcm.publish(feedback_channel, &fb);
+      }
+    }
+    if (!fast) std::this_thread::sleep_until(start + std::chrono::microseconds(step * 1000));
+  }
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} panel states", sim.time_s(),
+               wall_s, wall_s > 0 ? sim.time_s() / wall_s : 0.0, panel.count);
+  return 0;
+}

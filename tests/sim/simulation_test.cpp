@@ -1,0 +1,213 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "sim/simulation.hpp"
+
+using namespace rise::sim;
+
+namespace {
+const std::string kRobot = std::string(RISE_SOURCE_DIR) + "/sim/robots/skid4.yaml";
+
+RobotDescription robot() { return load_robot_description(kRobot); }
+
+// A panel with the dead-man held, mode=drive, speed=fast and the given sticks.
+ControlInput drive(float forward, float turn_right) {
+  ControlInput in;
+  in.fresh = true;
+  in.failsafe = false;
+  in.deadman = true;
+  in.axes = {{"drive_y", forward}, {"drive_x", turn_right}};
+  in.buttons = {{"estop", false}};
+  in.switches = {{"mode", 0}, {"speed", 2}};
+  in.switch_labels = {{"mode", "drive"}, {"speed", "fast"}};
+  return in;
+}
+
+void run(Simulation& sim, double seconds) {
+  const auto steps = static_cast<int>(std::lround(seconds / Simulation::kStepS));
+  for (int i = 0; i < steps; ++i) sim.step();
+}
+
+double yaw_deg(const RobotSnapshot& s) { return s.yaw_rad() * 180.0 / M_PI; }
+
+std::string load_error(const std::string& text) {
+  try {
+    parse_robot_description(text, "bad.yaml");
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+}  // namespace
+
+TEST_CASE("the shipped robot file loads", "[sim]") {
+  const auto r = robot();
+  CHECK(r.name == "skid4");
+  CHECK(r.chassis.mass_kg == Approx(40.0));
+  CHECK(r.wheels.radius_m == Approx(0.12));
+  CHECK(r.control.linear.axis == "drive_y");
+  CHECK(r.control.angular.invert);
+  REQUIRE(r.control.speed_scale.has_value());
+  CHECK(r.control.speed_scale->second.size() == 3);
+  CHECK(r.control.estop_button == std::optional<std::string>("estop"));
+}
+
+TEST_CASE("a broken robot file is refused with file:line and the key", "[sim]") {
+  std::ifstream in(kRobot);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  const std::string good = buf.str();
+  struct Case {
+    const char* find;
+    const char* replace;
+    const char* expected;
+  };
+  const auto c = GENERATE(Case{"radius_m: 0.12", "radius_m: -0.12", "bad.yaml:10: wheels.radius_m: must be > 0"},
+                          Case{"radius_m: 0.12", "radius: 0.12", "bad.yaml:10: wheels.radius: unknown key"},
+                          Case{"mass_kg: 40", "mass_kg: heavy", "bad.yaml:6: chassis.mass_kg: cannot read 'heavy'"},
+                          Case{"linear:  {axis: drive_y, max_mps: 1.2}", "linear:  {max_mps: 1.2}",
+                               "bad.yaml:21: control.linear.axis: missing"},
+                          Case{"values: [0.3, 0.6, 1.0]", "values: [0.3, 0.6, 1.5]",
+                               "bad.yaml:24: control.speed_scale.values: must be in 0..1"});
+  std::string text = good;
+  const auto at = text.find(c.find);
+  REQUIRE(at != std::string::npos);
+  text.replace(at, std::string(c.find).size(), c.replace);
+  const auto error = load_error(text);
+  INFO(error);
+  CHECK(error.rfind(c.expected, 0) == 0);
+  CHECK_THROWS_WITH(load_robot_description("/nonexistent/robot.yaml"), Catch::Contains("/nonexistent/robot.yaml:0"));
+}
+
+TEST_CASE("the shipped yard world file is the built-in default", "[sim]") {
+  const auto file = load_world_description(std::string(RISE_SOURCE_DIR) + "/sim/worlds/yard.yaml");
+  const auto builtin = default_world();
+  REQUIRE(file.boxes.size() == builtin.boxes.size());
+  for (std::size_t i = 0; i < file.boxes.size(); ++i) {
+    CHECK(file.boxes[i].name == builtin.boxes[i].name);
+    for (std::size_t k = 0; k < 3; ++k) {
+      CHECK(file.boxes[i].center_m[k] == Approx(builtin.boxes[i].center_m[k]));
+      CHECK(file.boxes[i].size_m[k] == Approx(builtin.boxes[i].size_m[k]));
+    }
+    CHECK(file.boxes[i].yaw_rad == Approx(builtin.boxes[i].yaw_rad).margin(0.01));
+  }
+  CHECK_THROWS_WITH(parse_world_description("boxes:\n  - {name: a, center_m: [0, 0], size_m: [1, 1, 1]}\n", "w.yaml"),
+                    Catch::StartsWith("w.yaml:2: boxes[0].center_m: expected [x, y, z]"));
+}
+
+TEST_CASE("the robot drives straight at its commanded speed", "[sim]") {
+  Simulation sim(robot(), WorldDescription{});
+  sim.set_input(drive(1.0f, 0.0f));
+  run(sim, 5.0);
+  const auto s = sim.snapshot();
+  // Tolerances: 5 cm lateral drift and 2° heading over ~5 m; speed within 10 % of 1.2 m/s.
+  CHECK(std::fabs(s.position_m[1]) < 0.05);
+  CHECK(std::fabs(yaw_deg(s)) < 2.0);
+  CHECK(s.speed_mps() == Approx(1.2).epsilon(0.10));
+  CHECK(s.position_m[0] > 4.5);
+  CHECK(s.motors_enabled);
+  CHECK(s.wheels.size() == 4);
+}
+
+TEST_CASE("the robot turns in place", "[sim]") {
+  Simulation sim(robot(), WorldDescription{});
+  sim.set_input(drive(0.0f, -0.5f));  // stick left → turn left (counter-clockwise)
+  run(sim, 3.0);
+  const auto s = sim.snapshot();
+  CHECK(std::hypot(s.position_m[0], s.position_m[1]) < 0.10);
+  // Commanded 0.75 rad/s; skid steering slips, so accept 40..110 % of w·t (net of the spin-up).
+  const double turned = std::fabs(s.yaw_rad() - 0.0);
+  INFO("yaw after 3 s: " << yaw_deg(s) << "°, rate " << s.angular_velocity_radps[2] << " rad/s");
+  CHECK(s.angular_velocity_radps[2] > 0.4 * 0.75);
+  CHECK(s.angular_velocity_radps[2] < 1.1 * 0.75);
+  CHECK(turned > 0.3);
+}
+
+TEST_CASE("the robot brakes to standstill whenever motion is not allowed", "[sim]") {
+  const std::string why = GENERATE(std::string("failsafe"), std::string("deadman"), std::string("estop"),
+                                   std::string("stale"), std::string("mode"));
+  Simulation sim(robot(), WorldDescription{});
+  sim.set_input(drive(1.0f, 0.0f));
+  run(sim, 3.0);
+  REQUIRE(sim.snapshot().speed_mps() > 1.0);
+  ControlInput in = drive(1.0f, 0.0f);
+  if (why == "failsafe") in.failsafe = true;
+  if (why == "deadman") in.deadman = false;
+  if (why == "estop") in.buttons["estop"] = true;
+  if (why == "stale") in.fresh = false;
+  if (why == "mode") in.switch_labels["mode"] = "arm";
+  sim.set_input(in);
+  const double t0 = sim.time_s();
+  double stopped_after = -1;
+  for (int i = 0; i < 2000 && stopped_after < 0; ++i) {
+    sim.step();
+    if (sim.snapshot().speed_mps() < 0.01) stopped_after = sim.time_s() - t0;
+  }
+  INFO(why << ": stopped after " << stopped_after << " s");
+  // Stated bound: from 1.2 m/s to standstill within 0.5 s of simulated time.
+  CHECK(stopped_after > 0.0);
+  CHECK(stopped_after < 0.5);
+  CHECK_FALSE(sim.snapshot().motors_enabled);
+  CHECK_FALSE(sim.snapshot().stop_reason.empty());
+}
+
+TEST_CASE("stop_time_s measures the robot's own braking time", "[sim]") {
+  const double full = stop_time_s(robot(), 1.2);
+  const double slow = stop_time_s(robot(), 0.3);
+  CHECK(full > 0.0);
+  CHECK(full < 0.5);
+  CHECK(slow <= full);
+}
+
+TEST_CASE("two runs with the same inputs give bit-identical trajectories", "[sim]") {
+  auto trajectory = [] {
+    Simulation sim(robot(), default_world());
+    std::vector<double> out;
+    for (int i = 0; i < 3000; ++i) {
+      sim.set_input(drive(i < 1500 ? 1.0f : 0.4f, i < 1500 ? 0.0f : 0.7f));
+      sim.step();
+      if (i % 100 == 0) {
+        const auto s = sim.snapshot();
+        out.insert(out.end(), {s.position_m[0], s.position_m[1], s.position_m[2], s.orientation_wxyz[3]});
+      }
+    }
+    return out;
+  };
+  const auto a = trajectory();
+  const auto b = trajectory();
+  REQUIRE(a.size() == b.size());
+  CHECK(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+}
+
+TEST_CASE("driving into a box reports the box among the contacts", "[sim]") {
+  WorldDescription world;
+  world.boxes.push_back({"crate", {2.0, 0.0, 0.3}, {0.6, 1.0, 0.6}, 0.0});
+  Simulation sim(robot(), world);
+  sim.set_input(drive(0.5f, 0.0f));
+  bool touched = false;
+  for (int i = 0; i < 8000 && !touched; ++i) {
+    sim.step();
+    for (const auto& c : sim.snapshot().contacts) touched = touched || c == "crate";
+  }
+  CHECK(touched);
+  CHECK(sim.snapshot().position_m[0] < 2.0);  // it did not drive through
+}
+
+TEST_CASE("the control mapping scales by the speed switch and refuses an unknown position", "[sim]") {
+  const auto mapping = robot().control;
+  auto in = drive(1.0f, 0.0f);
+  in.switches["speed"] = 0;
+  auto c = map_controls(mapping, in);
+  CHECK(c.enabled);
+  CHECK(c.linear_mps == Approx(0.3 * 1.2));
+  in.switches["speed"] = 7;
+  c = map_controls(mapping, in);
+  CHECK_FALSE(c.enabled);
+  CHECK(c.stop_reason == "speed position unknown");
+  in = drive(0.0f, 1.0f);  // stick right
+  c = map_controls(mapping, in);
+  CHECK(c.angular_radps == Approx(-1.5));  // clockwise
+}
