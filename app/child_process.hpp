@@ -1,7 +1,7 @@
 #pragma once
 
-// Child processes for the front door and the multi-process tests: started
-// with posix_spawn, output to a log file, stopped by PID.
+// Child processes for the front door and the multi-process tests: output to
+// a log file, stopped by PID, and ended by the kernel if their parent dies.
 
 #include <sys/types.h>
 

@@ -27,8 +27,7 @@ constexpr std::array<uint8_t, 256> make_crc_table() {
 }
 constexpr std::array<uint8_t, 256> kCrcTable = make_crc_table();
 
-constexpr std::array<uint32_t, kFrameTypeCount> kBaseIds = {0x110, 0x120, 0x130, 0x140,
-                                                            0x170, 0x210, 0x220};
+constexpr std::array<uint32_t, kFrameTypeCount> kBaseIds = {0x110, 0x120, 0x130, 0x140, 0x170, 0x210, 0x220};
 
 void put_u16(std::array<uint8_t, kFrameLength>& d, std::size_t at, uint16_t v) {
   d[at] = static_cast<uint8_t>(v & 0xFFu);
@@ -50,8 +49,7 @@ uint32_t get_u32(std::span<const uint8_t> d, std::size_t at) {
 struct PayloadWriter {
   std::array<uint8_t, kFrameLength>& d;
   void operator()(const AxesFrame& m) const {
-    for (std::size_t i = 0; i < kAxesPerFrame; ++i)
-      put_u16(d, 2 + 2 * i, static_cast<uint16_t>(m.raw[i]));
+    for (std::size_t i = 0; i < kAxesPerFrame; ++i) put_u16(d, 2 + 2 * i, static_cast<uint16_t>(m.raw[i]));
   }
   void operator()(const ButtonsFrame& m) const { put_u32(d, 2, m.pressed); }
   void operator()(const SwitchesFrame& m) const {
@@ -81,12 +79,13 @@ bool read_payload(FrameType type, std::span<const uint8_t> d, Message& out) {
     case FrameType::Axes1: {
       AxesFrame m;
       m.group = type == FrameType::Axes0 ? 0 : 1;
-      for (std::size_t i = 0; i < kAxesPerFrame; ++i)
-        m.raw[i] = static_cast<int16_t>(get_u16(d, 2 + 2 * i));
+      for (std::size_t i = 0; i < kAxesPerFrame; ++i) m.raw[i] = static_cast<int16_t>(get_u16(d, 2 + 2 * i));
       out = m;
       return true;
     }
-    case FrameType::Buttons: out = ButtonsFrame{get_u32(d, 2)}; return true;
+    case FrameType::Buttons:
+      out = ButtonsFrame{get_u32(d, 2)};
+      return true;
     case FrameType::Switches: {
       SwitchesFrame m;
       std::copy(d.begin() + 2, d.begin() + 2 + kMaxSwitches, m.position.begin());
@@ -121,48 +120,70 @@ uint32_t can_id(FrameType type, uint8_t node_id) { return base_id(type) + (node_
 uint32_t nominal_period_ms(FrameType type) {
   switch (type) {
     case FrameType::Axes0:
-    case FrameType::Axes1: return 10;
+    case FrameType::Axes1:
+      return 10;
     case FrameType::Buttons:
-    case FrameType::Switches: return 20;
-    case FrameType::Heartbeat: return 100;
+    case FrameType::Switches:
+      return 20;
+    case FrameType::Heartbeat:
+      return 100;
     case FrameType::Indicators:
-    case FrameType::Display: return 0;
+    case FrameType::Display:
+      return 0;
   }
   return 0;
 }
 
 const char* to_string(FrameType type) {
   switch (type) {
-    case FrameType::Axes0: return "Axes0";
-    case FrameType::Axes1: return "Axes1";
-    case FrameType::Buttons: return "Buttons";
-    case FrameType::Switches: return "Switches";
-    case FrameType::Heartbeat: return "Heartbeat";
-    case FrameType::Indicators: return "Indicators";
-    case FrameType::Display: return "Display";
+    case FrameType::Axes0:
+      return "Axes0";
+    case FrameType::Axes1:
+      return "Axes1";
+    case FrameType::Buttons:
+      return "Buttons";
+    case FrameType::Switches:
+      return "Switches";
+    case FrameType::Heartbeat:
+      return "Heartbeat";
+    case FrameType::Indicators:
+      return "Indicators";
+    case FrameType::Display:
+      return "Display";
   }
   return "?";
 }
 
 const char* to_string(PanelStatus status) {
   switch (status) {
-    case PanelStatus::Init: return "Init";
-    case PanelStatus::Operational: return "Operational";
-    case PanelStatus::Fault: return "Fault";
-    case PanelStatus::Shutdown: return "Shutdown";
+    case PanelStatus::Init:
+      return "Init";
+    case PanelStatus::Operational:
+      return "Operational";
+    case PanelStatus::Fault:
+      return "Fault";
+    case PanelStatus::Shutdown:
+      return "Shutdown";
   }
   return "?";
 }
 
 const char* to_string(DecodeError error) {
   switch (error) {
-    case DecodeError::None: return "None";
-    case DecodeError::UnknownId: return "UnknownId";
-    case DecodeError::BadLength: return "BadLength";
-    case DecodeError::BadCrc: return "BadCrc";
-    case DecodeError::RepeatedCounter: return "RepeatedCounter";
-    case DecodeError::SkippedCounter: return "SkippedCounter";
-    case DecodeError::BadValue: return "BadValue";
+    case DecodeError::None:
+      return "None";
+    case DecodeError::UnknownId:
+      return "UnknownId";
+    case DecodeError::BadLength:
+      return "BadLength";
+    case DecodeError::BadCrc:
+      return "BadCrc";
+    case DecodeError::RepeatedCounter:
+      return "RepeatedCounter";
+    case DecodeError::SkippedCounter:
+      return "SkippedCounter";
+    case DecodeError::BadValue:
+      return "BadValue";
   }
   return "?";
 }

@@ -112,7 +112,7 @@ enum class DecodeError : uint8_t {
   BadCrc,           ///< byte 0 does not match frame_crc()
   RepeatedCounter,  ///< same alive counter as the previous frame of this type
   SkippedCounter,   ///< alive counter jumped by more than max_counter_delta
-  BadValue,         ///< field out of range (group nibble, status, buzzer mode)
+  BadValue,         ///< field out of range (panel status, buzzer mode, display decimals)
 };
 inline constexpr std::size_t kDecodeErrorCount = 7;
 const char* to_string(DecodeError error);

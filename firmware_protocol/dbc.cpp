@@ -1,13 +1,13 @@
 #include "firmware_protocol/dbc.hpp"
 
 #include <algorithm>
-#include <iterator>
 #include <bit>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
 
@@ -21,6 +21,7 @@ constexpr uint32_t kMaxFrameBytes = 64;  // CAN FD
 // Vector's container for signals not placed in any frame (id 0xC0000000). Its
 // signal names may repeat and it is never on the bus.
 constexpr std::string_view kIndependentSignals = "VECTOR__INDEPENDENT_SIG_MSG";
+constexpr uint32_t kIndependentSignalsId = 0xC0000000u;
 
 enum class TokenKind : uint8_t { Identifier, Number, String, Punct, End };
 
@@ -29,27 +30,25 @@ struct Token {
   std::string_view text;  // for String: between the quotes, escapes not yet resolved
   int line = 0;
   bool line_start = false;  // first token on its line
-  bool column0 = false;     // starts in the first column
 };
 
 // Statement keywords of the DBC grammar. Skipping an unknown statement stops
 // at ';' or at one of these at the start of a line, so a statement without a
 // terminator cannot swallow the next one.
+// clang-format off
 constexpr std::string_view kKeywords[] = {
-    "VERSION",     "NS_",          "NS_DESC_",         "BS_",            "BU_",         "BO_",
-    "SG_",         "EV_",          "CM_",              "BA_DEF_",        "BA_",         "VAL_",
-    "CAT_DEF_",    "CAT_",         "FILTER",           "BA_DEF_DEF_",    "EV_DATA_",    "ENVVAR_DATA_",
-    "SGTYPE_",     "SGTYPE_VAL_",  "BA_DEF_SGTYPE_",   "BA_SGTYPE_",     "SIG_TYPE_REF_", "VAL_TABLE_",
-    "SIG_GROUP_",  "SIG_VALTYPE_", "SIGTYPE_VALTYPE_", "BO_TX_BU_",      "BA_DEF_REL_", "BA_REL_",
-    "BA_DEF_DEF_REL_", "BU_SG_REL_", "BU_EV_REL_",     "BU_BO_REL_",     "SG_MUL_VAL_"};
+    "VERSION", "NS_", "NS_DESC_", "BS_", "BU_", "BO_", "SG_", "EV_", "CM_", "BA_DEF_", "BA_", "VAL_",
+    "CAT_DEF_", "CAT_", "FILTER", "BA_DEF_DEF_", "EV_DATA_", "ENVVAR_DATA_", "SGTYPE_", "SGTYPE_VAL_",
+    "BA_DEF_SGTYPE_", "BA_SGTYPE_", "SIG_TYPE_REF_", "VAL_TABLE_", "SIG_GROUP_", "SIG_VALTYPE_",
+    "SIGTYPE_VALTYPE_", "BO_TX_BU_", "BA_DEF_REL_", "BA_REL_", "BA_DEF_DEF_REL_", "BU_SG_REL_",
+    "BU_EV_REL_", "BU_BO_REL_", "SG_MUL_VAL_"};
+// clang-format on
 
 bool is_keyword(std::string_view word) {
   return std::find(std::begin(kKeywords), std::end(kKeywords), word) != std::end(kKeywords);
 }
 
-bool is_ident_start(char c) {
-  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
-}
+bool is_ident_start(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_'; }
 bool is_ident_char(char c) { return is_ident_start(c) || (c >= '0' && c <= '9'); }
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 
@@ -71,14 +70,26 @@ uint32_t big_endian_msb_position(uint32_t start_bit) {
   return (start_bit / 8) * 8 + (7 - start_bit % 8);
 }
 
-}  // namespace
+struct ParsedDbc {
+  std::string version;
+  std::vector<std::string> nodes;
+  std::vector<DbcMessage> messages;
+};
 
-// Turns DBC text into a DbcDatabase; one instance per parse.
+// Const or mutable, as the vector is.
+template <typename Messages>
+auto find_message(Messages& messages, uint32_t id, bool extended) -> decltype(&messages.front()) {
+  for (auto& m : messages)
+    if (m.id == id && m.extended == extended && m.name != kIndependentSignals) return &m;
+  return nullptr;
+}
+
+// Turns DBC text into messages; one instance per parse.
 class DbcParser {
  public:
   DbcParser(std::string_view text, const std::string& file) : text_(text), file_(file) {}
 
-  DbcDatabase run() {
+  ParsedDbc run() {
     tokenize();
     while (peek().kind != TokenKind::End) statement();
     return std::move(db_);
@@ -89,7 +100,7 @@ class DbcParser {
   const std::string& file_;
   std::vector<Token> tokens_;
   std::size_t pos_ = 0;
-  DbcDatabase db_;
+  ParsedDbc db_;
   DbcMessage* current_ = nullptr;  // the BO_ that following SG_ lines belong to
 
   [[noreturn]] void fail(int line, std::string_view key, std::string_view message) const {
@@ -102,11 +113,10 @@ class DbcParser {
   void tokenize() {
     int line = 1;
     bool line_start = true;
-    std::size_t line_begin = 0;
     std::size_t i = 0;
     const std::size_t n = text_.size();
-    auto push = [&](TokenKind kind, std::size_t begin, std::size_t end, int token_line, bool col0) {
-      tokens_.push_back(Token{kind, text_.substr(begin, end - begin), token_line, line_start, col0});
+    auto push = [&](TokenKind kind, std::size_t begin, std::size_t end, int token_line) {
+      tokens_.push_back(Token{kind, text_.substr(begin, end - begin), token_line, line_start});
       line_start = false;
     };
     while (i < n) {
@@ -114,14 +124,13 @@ class DbcParser {
       if (c == '\n') {
         ++line;
         line_start = true;
-        line_begin = ++i;
+        ++i;
         continue;
       }
       if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') {
         ++i;
         continue;
       }
-      const bool col0 = i == line_begin;
       if (c == '/' && i + 1 < n && text_[i + 1] == '/') {  // comment to end of line
         while (i < n && text_[i] != '\n') ++i;
         continue;
@@ -135,26 +144,23 @@ class DbcParser {
           ++j;
         }
         if (j >= n) fail(start_line, "string", "unterminated string");
-        push(TokenKind::String, i + 1, j, start_line, col0);
-        if (line != start_line) {
-          // The next token is on a later line than this one began on, but it
-          // continues this string's statement: it is not a line start.
-          line_begin = text_.rfind('\n', j) + 1;
-        }
+        // A token after a multi-line string continues its statement: it is
+        // on a later line but not a line start.
+        push(TokenKind::String, i + 1, j, start_line);
         i = j + 1;
         continue;
       }
       if (is_ident_start(c)) {
         std::size_t j = i + 1;
         while (j < n && is_ident_char(text_[j])) ++j;
-        push(TokenKind::Identifier, i, j, line, col0);
+        push(TokenKind::Identifier, i, j, line);
         i = j;
         continue;
       }
       const bool sign = (c == '-' || c == '+');
       const std::size_t digits_at = sign ? i + 1 : i;
-      if (digits_at < n && (is_digit(text_[digits_at]) ||
-                            (text_[digits_at] == '.' && digits_at + 1 < n && is_digit(text_[digits_at + 1])))) {
+      if (digits_at < n && (is_digit(text_[digits_at]) || (text_[digits_at] == '.' && digits_at + 1 < n &&
+                                                           is_digit(text_[digits_at + 1])))) {
         std::size_t j = digits_at;
         while (j < n && is_digit(text_[j])) ++j;
         if (j < n && text_[j] == '.') {
@@ -169,14 +175,14 @@ class DbcParser {
             j = k;
           }
         }
-        push(TokenKind::Number, i, j, line, col0);
+        push(TokenKind::Number, i, j, line);
         i = j;
         continue;
       }
-      push(TokenKind::Punct, i, i + 1, line, col0);
+      push(TokenKind::Punct, i, i + 1, line);
       ++i;
     }
-    tokens_.push_back(Token{TokenKind::End, {}, line, true, true});
+    tokens_.push_back(Token{TokenKind::End, {}, line, true});
   }
 
   // ---- token access ------------------------------------------------------
@@ -193,9 +199,12 @@ class DbcParser {
   }
   static std::string describe(const Token& t) {
     switch (t.kind) {
-      case TokenKind::End: return "end of file";
-      case TokenKind::String: return "string \"" + std::string(t.text) + "\"";
-      default: return "'" + std::string(t.text) + "'";
+      case TokenKind::End:
+        return "end of file";
+      case TokenKind::String:
+        return "string \"" + std::string(t.text) + "\"";
+      default:
+        return "'" + std::string(t.text) + "'";
     }
   }
   void expect_punct(char c, std::string_view key) {
@@ -209,11 +218,14 @@ class DbcParser {
   }
   // Whether `t` belongs to the statement that started on `line` (the grammar
   // of BU_, BO_ and SG_ is line-oriented).
-  static bool same_line(const Token& t, int line) { return t.kind != TokenKind::End && t.line == line && !t.line_start; }
+  static bool same_line(const Token& t, int line) {
+    return t.kind != TokenKind::End && t.line == line && !t.line_start;
+  }
 
   template <typename T>
   T integer(const Token& t, std::string_view what, std::string_view key) const {
-    if (t.kind != TokenKind::Number) fail(t.line, key, "expected " + std::string(what) + ", found " + describe(t));
+    if (t.kind != TokenKind::Number)
+      fail(t.line, key, "expected " + std::string(what) + ", found " + describe(t));
     std::string_view s = t.text;
     if (!s.empty() && s.front() == '+') s.remove_prefix(1);
     T value{};
@@ -223,7 +235,8 @@ class DbcParser {
     return value;
   }
   double real(const Token& t, std::string_view what, std::string_view key) const {
-    if (t.kind != TokenKind::Number) fail(t.line, key, "expected " + std::string(what) + ", found " + describe(t));
+    if (t.kind != TokenKind::Number)
+      fail(t.line, key, "expected " + std::string(what) + ", found " + describe(t));
     std::string_view s = t.text;
     if (!s.empty() && s.front() == '+') s.remove_prefix(1);
     double value = 0.0;
@@ -250,7 +263,8 @@ class DbcParser {
   void statement() {
     const Token t = take();
     if (is_punct(t, ';')) return;  // stray terminator
-    if (t.kind != TokenKind::Identifier) fail(t.line, "statement", "expected a keyword, found " + describe(t));
+    if (t.kind != TokenKind::Identifier)
+      fail(t.line, "statement", "expected a keyword, found " + describe(t));
     const std::string_view kw = t.text;
     if (kw != "SG_") current_ = nullptr;
     if (kw == "VERSION") return version(t);
@@ -267,8 +281,9 @@ class DbcParser {
 
   void version(const Token& kw) {
     const Token t = take();
-    if (t.kind != TokenKind::String || t.line != kw.line) fail(kw.line, "VERSION", "expected a quoted version");
-    db_.version_ = unescape(t.text);
+    if (t.kind != TokenKind::String || t.line != kw.line)
+      fail(kw.line, "VERSION", "expected a quoted version");
+    db_.version = unescape(t.text);
   }
 
   void new_symbols(const Token& kw) {
@@ -292,7 +307,7 @@ class DbcParser {
     while (same_line(peek(), kw.line)) {
       const Token t = take();
       if (t.kind != TokenKind::Identifier) fail(t.line, "BU_", "expected a node name, found " + describe(t));
-      db_.nodes_.emplace_back(t.text);
+      db_.nodes.emplace_back(t.text);
     }
   }
 
@@ -313,9 +328,10 @@ class DbcParser {
     m.dlc = static_cast<uint8_t>(dlc);
     if (same_line(peek(), kw.line)) m.transmitter = expect(TokenKind::Identifier, "transmitter", key).text;
     if (same_line(peek(), kw.line)) fail(kw.line, key, "unexpected " + describe(peek()));
-    if (m.name != kIndependentSignals && db_.find(m.id, m.extended) != nullptr) fail(kw.line, key, "duplicate message id");
-    db_.messages_.push_back(std::move(m));
-    current_ = &db_.messages_.back();
+    if (m.name != kIndependentSignals && find_message(db_.messages, m.id, m.extended) != nullptr)
+      fail(kw.line, key, "duplicate message id");
+    db_.messages.push_back(std::move(m));
+    current_ = &db_.messages.back();
   }
 
   void signal(const Token& kw) {
@@ -336,7 +352,8 @@ class DbcParser {
           s.is_multiplexer = true;
           digits.remove_suffix(1);
         }
-        const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), s.multiplexer_value);
+        const auto [end, ec] =
+            std::from_chars(digits.data(), digits.data() + digits.size(), s.multiplexer_value);
         if (ec != std::errc{} || end != digits.data() + digits.size())
           fail(kw.line, key, "bad multiplexer indicator '" + std::string(mux) + "'");
         s.is_multiplexed = true;
@@ -353,7 +370,8 @@ class DbcParser {
     if (order > 1) fail(kw.line, key, "byte order must be 0 (Motorola) or 1 (Intel)");
     s.byte_order = order == 1 ? ByteOrder::LittleEndian : ByteOrder::BigEndian;
     const Token sign = take();
-    if (!is_punct(sign, '+') && !is_punct(sign, '-')) fail(kw.line, key, "expected '+' or '-', found " + describe(sign));
+    if (!is_punct(sign, '+') && !is_punct(sign, '-'))
+      fail(kw.line, key, "expected '+' or '-', found " + describe(sign));
     s.is_signed = is_punct(sign, '-');
     expect_punct('(', key);
     s.factor = real(take(), "factor", key);
@@ -375,7 +393,8 @@ class DbcParser {
     if (s.length_bits == 0 || s.length_bits > 64) fail(kw.line, key, "length must be 1..64 bits");
     if (s.factor == 0.0) fail(kw.line, key, "factor is 0");
     if (!signal_fits(s, kMaxFrameBytes)) fail(kw.line, key, "bits lie outside a 64-byte frame");
-    if (m->name != kIndependentSignals && m->signal(s.name) != nullptr) fail(kw.line, key, "duplicate signal in " + m->name);
+    if (m->name != kIndependentSignals && m->signal(s.name) != nullptr)
+      fail(kw.line, key, "duplicate signal in " + m->name);
     if (s.is_multiplexer && !s.is_multiplexed &&
         std::any_of(m->signals.begin(), m->signals.end(),
                     [](const DbcSignal& o) { return o.is_multiplexer && !o.is_multiplexed; }))
@@ -384,13 +403,22 @@ class DbcParser {
     current_ = m;
   }
 
-  DbcSignal& signal_of(const Token& id_token, const Token& name_token, std::string_view key) {
+  // The message a VAL_ / SIG_VALTYPE_ / BA_ refers to by its file id.
+  DbcMessage* message_of(const Token& id_token, std::string_view key) {
     const auto raw_id = integer<uint32_t>(id_token, "message id", key);
     const bool extended = (raw_id & kExtendedFlag) != 0;
-    const uint32_t id = extended ? (raw_id & kExtendedIdMask) : raw_id;
-    auto it = std::find_if(db_.messages_.begin(), db_.messages_.end(),
-                           [&](const DbcMessage& m) { return m.id == id && m.extended == extended; });
-    if (it == db_.messages_.end()) fail(id_token.line, key, "unknown message");
+    DbcMessage* m = find_message(db_.messages, extended ? (raw_id & kExtendedIdMask) : raw_id, extended);
+    if (m == nullptr && raw_id == kIndependentSignalsId) {
+      const auto it = std::find_if(db_.messages.begin(), db_.messages.end(),
+                                   [](const DbcMessage& x) { return x.name == kIndependentSignals; });
+      if (it != db_.messages.end()) m = &*it;
+    }
+    if (m == nullptr) fail(id_token.line, key, "unknown message");
+    return m;
+  }
+
+  DbcSignal& signal_of(const Token& id_token, const Token& name_token, std::string_view key) {
+    DbcMessage* it = message_of(id_token, key);
     auto s = std::find_if(it->signals.begin(), it->signals.end(),
                           [&](const DbcSignal& x) { return x.name == name_token.text; });
     if (s == it->signals.end()) fail(name_token.line, key, "unknown signal in " + it->name);
@@ -424,8 +452,9 @@ class DbcParser {
     } else if (type == 2 && s.length_bits == 64) {
       s.value_type = SignalValueType::Float64;
     } else if (type != 0) {
-      fail(id_token.line, key, "value type " + std::to_string(type) + " does not fit a " +
-                                   std::to_string(s.length_bits) + "-bit signal");
+      fail(id_token.line, key,
+           "value type " + std::to_string(type) + " does not fit a " + std::to_string(s.length_bits) +
+               "-bit signal");
     }
     if (is_punct(peek(), ';')) take();
   }
@@ -440,17 +469,13 @@ class DbcParser {
     take();
     const Token id_token = take();
     const std::string key = "BA_ GenMsgCycleTime BO_ " + std::string(id_token.text);
-    const auto raw_id = integer<uint32_t>(id_token, "message id", key);
-    const bool extended = (raw_id & kExtendedFlag) != 0;
-    const auto ms = integer<uint32_t>(take(), "cycle time", key);
-    auto it = std::find_if(db_.messages_.begin(), db_.messages_.end(), [&](const DbcMessage& m) {
-      return m.extended == extended && m.id == (extended ? raw_id & kExtendedIdMask : raw_id);
-    });
-    if (it == db_.messages_.end()) fail(id_token.line, key, "unknown message");
-    it->cycle_time_ms = ms;
+    DbcMessage* m = message_of(id_token, key);
+    m->cycle_time_ms = integer<uint32_t>(take(), "cycle time", key);
     skip_statement();
   }
 };
+
+}  // namespace
 
 const DbcSignal* DbcMessage::signal(std::string_view signal_name) const {
   for (const DbcSignal& s : signals)
@@ -473,13 +498,16 @@ DbcDatabase DbcDatabase::load(const std::string& path) {
 }
 
 DbcDatabase DbcDatabase::parse(std::string_view text, const std::string& name_for_errors) {
-  return DbcParser(text, name_for_errors).run();
+  ParsedDbc parsed = DbcParser(text, name_for_errors).run();
+  DbcDatabase db;
+  db.version_ = std::move(parsed.version);
+  db.nodes_ = std::move(parsed.nodes);
+  db.messages_ = std::move(parsed.messages);
+  return db;
 }
 
 const DbcMessage* DbcDatabase::find(uint32_t id, bool extended) const {
-  for (const DbcMessage& m : messages_)
-    if (m.id == id && m.extended == extended && m.name != kIndependentSignals) return &m;
-  return nullptr;
+  return find_message(messages_, id, extended);
 }
 
 const DbcMessage* DbcDatabase::find(std::string_view name) const {
@@ -543,7 +571,9 @@ double physical_value(const DbcSignal& signal, int64_t raw) {
     case SignalValueType::Float32:
       scaled = std::bit_cast<float>(static_cast<uint32_t>(static_cast<uint64_t>(raw) & 0xFFFFFFFFu));
       break;
-    case SignalValueType::Float64: scaled = std::bit_cast<double>(raw); break;
+    case SignalValueType::Float64:
+      scaled = std::bit_cast<double>(raw);
+      break;
     case SignalValueType::Integer:
       scaled = signal.is_signed || signal.length_bits < 64 ? static_cast<double>(raw)
                                                            : static_cast<double>(static_cast<uint64_t>(raw));
@@ -552,7 +582,8 @@ double physical_value(const DbcSignal& signal, int64_t raw) {
   return scaled * signal.factor + signal.offset;
 }
 
-std::vector<DecodedSignal> DbcDatabase::decode(const DbcMessage& message, std::span<const uint8_t> data) const {
+std::vector<DecodedSignal> DbcDatabase::decode(const DbcMessage& message,
+                                               std::span<const uint8_t> data) const {
   std::vector<DecodedSignal> out;
   out.reserve(message.signals.size());
   bool have_mux = false;
@@ -572,7 +603,8 @@ std::vector<DecodedSignal> DbcDatabase::decode(const DbcMessage& message, std::s
   return out;
 }
 
-std::vector<uint8_t> DbcDatabase::encode(const DbcMessage& message, std::span<const SignalValue> values) const {
+std::vector<uint8_t> DbcDatabase::encode(const DbcMessage& message,
+                                         std::span<const SignalValue> values) const {
   std::vector<uint8_t> data(message.dlc, 0);
   for (const SignalValue& v : values) {
     const DbcSignal* s = message.signal(v.name);
@@ -595,7 +627,8 @@ std::vector<uint8_t> DbcDatabase::encode(const DbcMessage& message, std::span<co
       if (!(rounded >= lo && rounded < hi_exclusive))
         throw std::out_of_range(message.name + "." + s->name + ": value " + std::to_string(v.value) +
                                 " does not fit " + std::to_string(n) + " bits");
-      raw = s->is_signed ? static_cast<uint64_t>(static_cast<int64_t>(rounded)) : static_cast<uint64_t>(rounded);
+      raw = s->is_signed ? static_cast<uint64_t>(static_cast<int64_t>(rounded))
+                         : static_cast<uint64_t>(rounded);
     }
     insert_raw(*s, raw, data);
   }

@@ -101,15 +101,13 @@ class DbcDatabase {
   /// not named stay raw 0. The caller names the multiplexer value that fits
   /// the multiplexed signals it gives. Throws std::invalid_argument for an
   /// unknown signal name and std::out_of_range for a value that does not fit
-  /// the signal's bits.
+  /// the signal's bits or a signal that lies beyond message.dlc bytes.
   std::vector<uint8_t> encode(const DbcMessage& message, std::span<const SignalValue> values) const;
 
  private:
   std::string version_;
   std::vector<std::string> nodes_;
   std::vector<DbcMessage> messages_;
-
-  friend class DbcParser;
 };
 
 /// Raw bits of a signal from a frame (sign-extended if signed). The signal

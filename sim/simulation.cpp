@@ -3,6 +3,8 @@
 #include <ode/ode.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdarg>
 #include <cmath>
 #include <mutex>
 #include <set>
@@ -18,11 +20,18 @@ constexpr double kLateralFrictionRatio = 0.6;  // tyre side grip vs rolling grip
 constexpr double kObstacleFriction = 0.5;
 constexpr int kMaxContacts = 4;
 
+std::atomic<int64_t> g_ode_messages{0};
+
+// ODE reports solver hiccups ("LCP internal error") as messages on stderr;
+// a library does not print, so they are counted instead (ode_messages()).
+void count_message(int, const char*, va_list) { ++g_ode_messages; }
+
 void init_ode_once() {
   static std::once_flag once;
   std::call_once(once, [] {
     dInitODE2(0);
     dRandSetSeed(0);
+    dSetMessageHandler(&count_message);
   });
 }
 
@@ -60,6 +69,8 @@ double axis_value(const AxisMapping& a, const ControlInput& in) {
 }
 
 }  // namespace
+
+int64_t ode_messages() { return g_ode_messages.load(); }
 
 double RobotSnapshot::yaw_rad() const {
   const auto& q = orientation_wxyz;
@@ -115,7 +126,7 @@ struct Simulation::Impl {
     dWorldSetGravity(world, 0, 0, -9.81);
     const double h = kStepS;
     dWorldSetERP(world, 0.2);
-    dWorldSetCFM(world, 1e-6);
+    dWorldSetCFM(world, 1e-5);
     dWorldSetContactSurfaceLayer(world, 0.0005);
     dWorldSetAutoDisableFlag(world, 0);
     (void)h;
@@ -160,7 +171,8 @@ struct Simulation::Impl {
       hinges[i] = dJointCreateHinge(world, nullptr);
       dJointAttach(hinges[i], chassis, wheels[i]);
       dJointSetHingeAnchor(hinges[i], xs[i], ys[i], w.radius_m);
-      dJointSetHingeAxis(hinges[i], 0, 1, 0);
+      // Axis along -y: a positive motor speed rolls the robot forward (+x).
+      dJointSetHingeAxis(hinges[i], 0, -1, 0);
       dJointSetHingeParam(hinges[i], dParamFMax, w.max_torque_nm);
       dJointSetHingeParam(hinges[i], dParamVel, 0.0);
       dJointSetFeedback(hinges[i], &feedback[i]);

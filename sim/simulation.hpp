@@ -5,6 +5,7 @@
 // bit for bit.
 
 #include <array>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -87,5 +88,9 @@ class Simulation {
 /// no longer allowed, measured by simulating it: the sim's share of every
 /// stop-time bound.
 double stop_time_s(const RobotDescription& robot, double speed_mps);
+
+/// Number of diagnostic messages ODE has issued in this process (they are
+/// counted, not printed).
+int64_t ode_messages();
 
 }  // namespace rise::sim

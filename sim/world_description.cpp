@@ -7,10 +7,11 @@ namespace rise::sim {
 WorldDescription default_world() {
   WorldDescription w;
   w.name = "yard";
-  // A few obstacles off the straight line ahead of the start, and a wall far ahead.
-  w.boxes.push_back({"crate_a", {4.0, 2.5, 0.3}, {0.6, 0.6, 0.6}, 0.0});
-  w.boxes.push_back({"crate_b", {6.0, -3.0, 0.4}, {0.8, 0.8, 0.8}, 0.4});
-  w.boxes.push_back({"barrier", {3.0, -1.8, 0.25}, {2.0, 0.2, 0.5}, 0.0});
+  // A few obstacles beside the start, clear of the demo's drive (ahead, then
+  // a right curve), and a wall far ahead.
+  w.boxes.push_back({"crate_a", {-3.0, 3.0, 0.3}, {0.6, 0.6, 0.6}, 0.0});
+  w.boxes.push_back({"crate_b", {-4.0, -3.0, 0.4}, {0.8, 0.8, 0.8}, 0.4});
+  w.boxes.push_back({"barrier", {0.0, -4.0, 0.25}, {2.0, 0.2, 0.5}, 0.0});
   w.boxes.push_back({"wall_north", {25.0, 0.0, 1.0}, {0.3, 20.0, 2.0}, 0.0});
   return w;
 }

@@ -1,7 +1,6 @@
 #include "firmware_protocol/console_can.hpp"
 
 #include <catch2/catch.hpp>
-
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -29,8 +28,10 @@ bool same(const fp::Message& a, const fp::Message& b) {
     const auto& y = std::get<fp::AxesFrame>(b);
     return (x->group & 1) == (y.group & 1) && x->raw == y.raw;
   }
-  if (const auto* x = std::get_if<fp::ButtonsFrame>(&a)) return x->pressed == std::get<fp::ButtonsFrame>(b).pressed;
-  if (const auto* x = std::get_if<fp::SwitchesFrame>(&a)) return x->position == std::get<fp::SwitchesFrame>(b).position;
+  if (const auto* x = std::get_if<fp::ButtonsFrame>(&a))
+    return x->pressed == std::get<fp::ButtonsFrame>(b).pressed;
+  if (const auto* x = std::get_if<fp::SwitchesFrame>(&a))
+    return x->position == std::get<fp::SwitchesFrame>(b).position;
   if (const auto* x = std::get_if<fp::HeartbeatFrame>(&a)) {
     const auto& y = std::get<fp::HeartbeatFrame>(b);
     return x->protocol_version == y.protocol_version && x->status == y.status && x->uptime_ms == y.uptime_ms;
@@ -51,7 +52,9 @@ fp::WireFrame protected_frame(uint32_t can_id, std::array<uint8_t, fp::kFrameLen
   return w;
 }
 
-fp::DecodeError decode_error(fp::Decoder& d, const fp::WireFrame& w) { return d.decode(w.can_id, w.data).error; }
+fp::DecodeError decode_error(fp::Decoder& d, const fp::WireFrame& w) {
+  return d.decode(w.can_id, w.data).error;
+}
 
 fp::WireFrame buttons(uint8_t node, uint8_t counter, uint32_t pressed = 0x5) {
   return fp::encode(fp::ButtonsFrame{pressed}, node, counter);
@@ -70,7 +73,8 @@ TEST_CASE("CRC-8 SAE J1850 gives the catalogue check value for \"123456789\"", "
   }
 }
 
-TEST_CASE("frame CRC covers both identifier bytes and payload bytes 1..7, not byte 0", "[firmware_protocol]") {
+TEST_CASE("frame CRC covers both identifier bytes and payload bytes 1..7, not byte 0",
+          "[firmware_protocol]") {
   std::array<uint8_t, fp::kFrameLength> data{0x00, 0x03, 0x00, 0x40, 0x00, 0xE0, 0x00, 0x00};
   const uint8_t crc = fp::frame_crc(0x111, data);
   // Reference: CRC-8 SAE J1850 of 11 01 03 00 40 00 E0 00 00.
@@ -122,23 +126,21 @@ TEST_CASE("axis scaling clamps to -1..1 and rounds to the nearest raw value", "[
 }
 
 TEST_CASE("every message type survives encode and decode", "[firmware_protocol]") {
-  const fp::Message message = GENERATE(
-      fp::Message{fp::AxesFrame{0, {0, 0, 0}}},
-      fp::Message{fp::AxesFrame{0, {32767, -32767, fp::kAxisInvalid}}},
-      fp::Message{fp::AxesFrame{1, {1, -1, 12345}}},
-      fp::Message{fp::ButtonsFrame{0}},
-      fp::Message{fp::ButtonsFrame{0xFFFFFFFFu}},
-      fp::Message{fp::ButtonsFrame{0x80000001u}},
-      fp::Message{fp::SwitchesFrame{{0, 1, 2, 3, 254, fp::kSwitchInvalid}}},
-      fp::Message{fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Init, 0}},
-      fp::Message{fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Shutdown, 0xFFFFFFFFu}},
-      fp::Message{fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Fault, 123456}},
-      fp::Message{fp::IndicatorsFrame{0xA5A5A5A5u, fp::BuzzerMode::Beep}},
-      fp::Message{fp::IndicatorsFrame{0, fp::BuzzerMode::Off}},
-      fp::Message{fp::DisplayFrame{3, 9, -2147483647 - 1}},
-      fp::Message{fp::DisplayFrame{255, 0, 2147483647}});
-  const uint8_t node = GENERATE(0, 1, 15);
-  const uint8_t counter = GENERATE(0, 7, 15);
+  const fp::Message message =
+      GENERATE(fp::Message{fp::AxesFrame{0, {0, 0, 0}}},
+               fp::Message{fp::AxesFrame{0, {32767, -32767, fp::kAxisInvalid}}},
+               fp::Message{fp::AxesFrame{1, {1, -1, 12345}}}, fp::Message{fp::ButtonsFrame{0}},
+               fp::Message{fp::ButtonsFrame{0xFFFFFFFFu}}, fp::Message{fp::ButtonsFrame{0x80000001u}},
+               fp::Message{fp::SwitchesFrame{{0, 1, 2, 3, 254, fp::kSwitchInvalid}}},
+               fp::Message{fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Init, 0}},
+               fp::Message{fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Shutdown, 0xFFFFFFFFu}},
+               fp::Message{fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Fault, 123456}},
+               fp::Message{fp::IndicatorsFrame{0xA5A5A5A5u, fp::BuzzerMode::Beep}},
+               fp::Message{fp::IndicatorsFrame{0, fp::BuzzerMode::Off}},
+               fp::Message{fp::DisplayFrame{3, 9, -2147483647 - 1}},
+               fp::Message{fp::DisplayFrame{255, 0, 2147483647}});
+  const auto node = GENERATE(uint8_t{0}, uint8_t{1}, uint8_t{15});
+  const auto counter = GENERATE(uint8_t{0}, uint8_t{7}, uint8_t{15});
 
   const fp::WireFrame w = fp::encode(message, node, counter);
   CHECK(w.can_id == fp::can_id(fp::frame_type_of(message), node));
@@ -182,13 +184,19 @@ TEST_CASE("decoder reports every kind of error", "[firmware_protocol]") {
     const uint32_t heartbeat_id = fp::can_id(fp::FrameType::Heartbeat, 1);
     const uint32_t indicators_id = fp::can_id(fp::FrameType::Indicators, 1);
     const uint32_t display_id = fp::can_id(fp::FrameType::Display, 1);
-    CHECK(decode_error(decoder, protected_frame(heartbeat_id, {0, 0, 1, 4, 0, 0, 0, 0})) == fp::DecodeError::BadValue);
-    CHECK(decode_error(decoder, protected_frame(indicators_id, {0, 0, 0, 0, 0, 0, 3, 0})) == fp::DecodeError::BadValue);
-    CHECK(decode_error(decoder, protected_frame(display_id, {0, 0, 0, 10, 0, 0, 0, 0})) == fp::DecodeError::BadValue);
+    CHECK(decode_error(decoder, protected_frame(heartbeat_id, {0, 0, 1, 4, 0, 0, 0, 0})) ==
+          fp::DecodeError::BadValue);
+    CHECK(decode_error(decoder, protected_frame(indicators_id, {0, 0, 0, 0, 0, 0, 3, 0})) ==
+          fp::DecodeError::BadValue);
+    CHECK(decode_error(decoder, protected_frame(display_id, {0, 0, 0, 10, 0, 0, 0, 0})) ==
+          fp::DecodeError::BadValue);
     // The largest legal values pass.
-    CHECK(decode_error(decoder, protected_frame(heartbeat_id, {0, 1, 1, 3, 0, 0, 0, 0})) == fp::DecodeError::None);
-    CHECK(decode_error(decoder, protected_frame(indicators_id, {0, 1, 0, 0, 0, 0, 2, 0})) == fp::DecodeError::None);
-    CHECK(decode_error(decoder, protected_frame(display_id, {0, 1, 0, 9, 0, 0, 0, 0})) == fp::DecodeError::None);
+    CHECK(decode_error(decoder, protected_frame(heartbeat_id, {0, 1, 1, 3, 0, 0, 0, 0})) ==
+          fp::DecodeError::None);
+    CHECK(decode_error(decoder, protected_frame(indicators_id, {0, 1, 0, 0, 0, 0, 2, 0})) ==
+          fp::DecodeError::None);
+    CHECK(decode_error(decoder, protected_frame(display_id, {0, 1, 0, 9, 0, 0, 0, 0})) ==
+          fp::DecodeError::None);
   }
   SECTION("repeated counter") {
     REQUIRE(decode_error(decoder, good) == fp::DecodeError::None);
@@ -254,18 +262,24 @@ TEST_CASE("decoder resynchronises on the counter after a counter error", "[firmw
   }
 }
 
-TEST_CASE("decoder leaves the counter alone when it rejects a frame for CRC, length or value", "[firmware_protocol]") {
+TEST_CASE("decoder leaves the counter alone when it rejects a frame for CRC, length or value",
+          "[firmware_protocol]") {
   fp::Decoder decoder(0);
   REQUIRE(decode_error(decoder, buttons(0, 3)) == fp::DecodeError::None);
   auto corrupt = buttons(0, 9);
   corrupt.data[0] ^= 0x01;
   CHECK(decode_error(decoder, corrupt) == fp::DecodeError::BadCrc);
-  CHECK(decoder.decode(corrupt.can_id, std::span(buttons(0, 9).data).first(5)).error == fp::DecodeError::BadLength);
+  const auto short_frame = buttons(0, 9);
+  CHECK(decoder.decode(short_frame.can_id, std::span(short_frame.data).first(5)).error ==
+        fp::DecodeError::BadLength);
   const uint32_t display_id = fp::can_id(fp::FrameType::Display, 0);
-  REQUIRE(decode_error(decoder, protected_frame(display_id, {0, 3, 0, 0, 0, 0, 0, 0})) == fp::DecodeError::None);
-  CHECK(decode_error(decoder, protected_frame(display_id, {0, 9, 0, 12, 0, 0, 0, 0})) == fp::DecodeError::BadValue);
+  REQUIRE(decode_error(decoder, protected_frame(display_id, {0, 3, 0, 0, 0, 0, 0, 0})) ==
+          fp::DecodeError::None);
+  CHECK(decode_error(decoder, protected_frame(display_id, {0, 9, 0, 12, 0, 0, 0, 0})) ==
+        fp::DecodeError::BadValue);
   CHECK(decode_error(decoder, buttons(0, 4)) == fp::DecodeError::None);
-  CHECK(decode_error(decoder, protected_frame(display_id, {0, 4, 0, 0, 0, 0, 0, 0})) == fp::DecodeError::None);
+  CHECK(decode_error(decoder, protected_frame(display_id, {0, 4, 0, 0, 0, 0, 0, 0})) ==
+        fp::DecodeError::None);
 }
 
 TEST_CASE("decoder keeps one counter per frame type and honours max_counter_delta", "[firmware_protocol]") {
@@ -319,12 +333,14 @@ TEST_CASE("encoder counts each frame type separately and wraps after 15", "[firm
   CHECK(encoder.next(fp::AxesFrame{1, {}}).data[1] == 0);
   CHECK(encoder.next(fp::AxesFrame{0, {}}).data[1] == 1);
   fp::Decoder decoder(5);
-  for (int i = 0; i < 40; ++i) CHECK(decode_error(decoder, encoder.next(fp::SwitchesFrame{})) == fp::DecodeError::None);
+  for (int i = 0; i < 40; ++i)
+    CHECK(decode_error(decoder, encoder.next(fp::SwitchesFrame{})) == fp::DecodeError::None);
 }
 
 TEST_CASE("encode produces the worked examples of firmware_protocol/README.md", "[firmware_protocol]") {
   // Node 1, Axes0 (0.5, -0.25, 0.0), counter 3; Buttons 0, 5 and 17 held, counter 3.
-  const fp::AxesFrame axes{0, {fp::axis_from_unit(0.5f), fp::axis_from_unit(-0.25f), fp::axis_from_unit(0.f)}};
+  const fp::AxesFrame axes{0,
+                           {fp::axis_from_unit(0.5f), fp::axis_from_unit(-0.25f), fp::axis_from_unit(0.f)}};
   const fp::WireFrame a = fp::encode(axes, 1, 3);
   CHECK(a.can_id == 0x111);
   CHECK(hex(a.data) == "B0 03 00 40 00 E0 00 00");

@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <lcm/lcm-cpp.hpp>
+#include <csignal>
 #include <unistd.h>
 
 #include <filesystem>

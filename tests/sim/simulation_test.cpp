@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -65,13 +66,13 @@ TEST_CASE("a broken robot file is refused with file:line and the key", "[sim]") 
     const char* replace;
     const char* expected;
   };
-  const auto c = GENERATE(Case{"radius_m: 0.12", "radius_m: -0.12", "bad.yaml:10: wheels.radius_m: must be > 0"},
-                          Case{"radius_m: 0.12", "radius: 0.12", "bad.yaml:10: wheels.radius: unknown key"},
+  const auto c = GENERATE(Case{"radius_m: 0.12", "radius_m: -0.12", "bad.yaml:9: wheels.radius_m: must be > 0"},
+                          Case{"radius_m: 0.12", "radius: 0.12", "bad.yaml:9: wheels.radius: unknown key"},
                           Case{"mass_kg: 40", "mass_kg: heavy", "bad.yaml:6: chassis.mass_kg: cannot read 'heavy'"},
                           Case{"linear:  {axis: drive_y, max_mps: 1.2}", "linear:  {max_mps: 1.2}",
-                               "bad.yaml:21: control.linear.axis: missing"},
+                               "bad.yaml:19: control.linear.axis: missing"},
                           Case{"values: [0.3, 0.6, 1.0]", "values: [0.3, 0.6, 1.5]",
-                               "bad.yaml:24: control.speed_scale.values: must be in 0..1"});
+                               "bad.yaml:22: control.speed_scale.values: must be in 0..1"});
   std::string text = good;
   const auto at = text.find(c.find);
   REQUIRE(at != std::string::npos);
