@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   std::string id = "t1";
   std::string log_level = "info";
   double status_every_s = 0.0;
+  double publish_hz = 0.0;
   app.add_option("--panel", panel_file, "panel definition (YAML)")->capture_default_str();
   app.add_option("--can", can_urls,
                  "bus of each source, in the definition's order: socketcan://IFACE, "
@@ -40,6 +41,8 @@ int main(int argc, char** argv) {
       ->required();
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
+  app.add_option("--publish-hz", publish_hz, "PanelState rate (default: the definition's publish_hz, 100)")
+      ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--status-every", status_every_s, "log a status line every S seconds (0: on change only)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -52,6 +55,7 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  if (publish_hz > 0) definition.publish_hz = publish_hz;
   if (can_urls.size() != definition.sources.size()) {
     spdlog::error("{}: the panel has {} source(s) but {} --can URL(s) were given", definition.file,
                   definition.sources.size(), can_urls.size());
