@@ -146,30 +146,36 @@ void Bridge::source_loop(std::size_t source) {
 }
 
 void Bridge::publish_loop() {
+  using Clock = std::chrono::steady_clock;
   const auto period = std::chrono::microseconds(mapper_.definition().publish_period_us());
-  auto next_tick = std::chrono::steady_clock::now();
-  int64_t last_publish_us = 0;
+  const auto gap = std::chrono::microseconds(settings_.min_change_gap_us);
+  auto next_tick = Clock::now();
+  auto last_publish = Clock::now() - gap;
   while (running_) {
     PanelSnapshot snap;
     {
       std::unique_lock lock(mutex_);
-      // Wake on the next tick, or earlier when a control changed (but keep a
-      // minimum gap so a chattering console cannot flood the network).
-      wake_.wait_until(lock, next_tick, [&] {
-        return !running_ || (changed_ && monotonic_us() - last_publish_us >= settings_.min_change_gap_us);
-      });
+      // Publish on the tick, or as soon as a control changed — but not
+      // sooner than `gap` after the last message, so a chattering console
+      // cannot flood the network. A change inside the gap is published when
+      // the gap ends, not at the next tick.
+      while (running_) {
+        const auto now = Clock::now();
+        if (now >= next_tick || (changed_ && now - last_publish >= gap)) break;
+        const auto deadline = changed_ ? std::min(next_tick, last_publish + gap) : next_tick;
+        wake_.wait_until(lock, deadline);
+      }
       if (!running_) break;
       changed_ = false;
       snap = mapper_.evaluate(monotonic_us());
     }
-    const auto now = std::chrono::steady_clock::now();
+    const auto now = Clock::now();
     if (now >= next_tick) {
       next_tick += period;
       if (next_tick < now) next_tick = now + period;  // overrun: skip, do not burst
     }
-    last_publish_us = snap.time_us;
+    last_publish = now;
     publish_(snap);
   }
 }
-
 }  // namespace rise::hil

@@ -23,7 +23,7 @@ struct BridgeSettings {
   int64_t feedback_period_ms = 100;  ///< feedback frames are repeated at this period and sent on change
   int64_t reopen_min_ms = 100;       ///< first retry after a lost transport, doubled up to reopen_max_ms
   int64_t reopen_max_ms = 2000;
-  int64_t min_change_gap_us = 1000;  ///< publish-on-change never faster than this
+  int64_t min_change_gap_us = 250;   ///< publish-on-change never faster than this (≤ 4 kHz)
 };
 
 /// Monotonic microseconds (steady clock).
