@@ -8,8 +8,10 @@
 
 #include <csignal>
 #include <chrono>
+#include <iostream>
 #include <poll.h>
 
+#include "hil/app/inspect_commands.hpp"
 #include "hil/bridge.hpp"
 #include "hil/panel_state_message.hpp"
 #include "panels/data_path.hpp"
@@ -37,16 +39,28 @@ int main(int argc, char** argv) {
   app.add_option("--panel", panel_file, "panel definition (YAML)")->capture_default_str();
   app.add_option("--can", can_urls,
                  "bus of each source, in the definition's order: socketcan://IFACE, "
-                 "socketcand://HOST:PORT/BUS, mem://NAME")
-      ->required();
+                 "socketcand://HOST:PORT/BUS, mem://NAME");
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
   app.add_option("--publish-hz", publish_hz, "PanelState rate (default: the definition's publish_hz, 100)")
       ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--status-every", status_every_s, "log a status line every S seconds (0: on change only)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  // Inspection commands a lab runs before wiring a console in.
+  app.require_subcommand(0, 1);
+  std::string dbc_file, log_file;
+  CLI::App* dbc = app.add_subcommand("dbc", "CAN database tools");
+  CLI::App* dbc_decode = dbc->add_subcommand("decode", "decode a candump log with a DBC, one line per frame");
+  dbc->require_subcommand(1);
+  dbc_decode->add_option("DBC", dbc_file, "DBC file")->required();
+  dbc_decode->add_option("LOG", log_file, "candump -l log")->required();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
+  if (dbc_decode->parsed()) return rise::hil::dbc_decode(dbc_file, log_file, std::cout, std::cerr);
+  if (can_urls.empty()) {
+    spdlog::error("--can is required (one URL per source of the panel)");
+    return 2;
+  }
 
   rise::panels::PanelDefinition definition;
   try {

@@ -1,0 +1,171 @@
+#include "hil/io/candump_log.hpp"
+
+#include <cstdio>
+
+namespace rise::io {
+namespace {
+
+constexpr uint32_t kErrFlag = 0x20000000u;  // CAN_ERR_FLAG in <linux/can.h>
+constexpr uint32_t kEffMask = 0x1FFFFFFFu;
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+bool parse_hex(std::string_view text, uint32_t& out) {
+  if (text.empty() || text.size() > 8) return false;
+  out = 0;
+  for (char c : text) {
+    const int v = hex_value(c);
+    if (v < 0) return false;
+    out = out << 4 | static_cast<uint32_t>(v);
+  }
+  return true;
+}
+
+// Data bytes as pairs of hex digits; can-utils also allows '.' separators.
+bool parse_data(std::string_view text, CanFrame& f, std::size_t max_len) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < text.size();) {
+    if (text[i] == '.') {
+      ++i;
+      continue;
+    }
+    if (i + 1 >= text.size() || n >= max_len) return false;
+    const int hi = hex_value(text[i]), lo = hex_value(text[i + 1]);
+    if (hi < 0 || lo < 0) return false;
+    f.data[n++] = static_cast<uint8_t>(hi << 4 | lo);
+    i += 2;
+  }
+  f.len = static_cast<uint8_t>(n);
+  return true;
+}
+
+}  // namespace
+
+const char* to_string(CandumpError error) {
+  switch (error) {
+    case CandumpError::None: return "ok";
+    case CandumpError::Empty: return "empty line";
+    case CandumpError::NoTimestamp: return "no (seconds.micros) timestamp";
+    case CandumpError::NoInterface: return "no interface name";
+    case CandumpError::BadId: return "bad identifier";
+    case CandumpError::BadData: return "bad data bytes";
+    case CandumpError::TooLong: return "more data than the frame type holds";
+  }
+  return "?";
+}
+
+CandumpParse parse_candump_line(std::string_view line) {
+  CandumpParse r;
+  while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
+  while (!line.empty() && line.front() == ' ') line.remove_prefix(1);
+  if (line.empty()) return r.error = CandumpError::Empty, r;
+  if (line.front() != '(') return r.error = CandumpError::NoTimestamp, r;
+  const auto close = line.find(')');
+  const auto dot = line.find('.');
+  if (close == std::string_view::npos || dot == std::string_view::npos || dot > close)
+    return r.error = CandumpError::NoTimestamp, r;
+  int64_t sec = 0, usec = 0;
+  for (char c : line.substr(1, dot - 1)) {
+    if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
+    sec = sec * 10 + (c - '0');
+  }
+  const auto frac = line.substr(dot + 1, close - dot - 1);
+  if (frac.empty() || frac.size() > 9) return r.error = CandumpError::NoTimestamp, r;
+  int digits = 0;
+  for (char c : frac) {
+    if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
+    if (digits++ < 6) usec = usec * 10 + (c - '0');
+  }
+  for (; digits < 6; ++digits) usec *= 10;
+  r.record.frame.timestamp_us = sec * 1'000'000 + usec;
+
+  std::string_view rest = line.substr(close + 1);
+  while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
+  const auto space = rest.find(' ');
+  if (space == std::string_view::npos || space == 0) return r.error = CandumpError::NoInterface, r;
+  r.record.interface = std::string(rest.substr(0, space));
+  rest = rest.substr(space + 1);
+  while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
+  // Anything after the frame (candump -x adds " R" / " T") is ignored.
+  if (const auto end = rest.find(' '); end != std::string_view::npos) rest = rest.substr(0, end);
+
+  const auto hash = rest.find('#');
+  if (hash == std::string_view::npos) return r.error = CandumpError::BadId, r;
+  CanFrame& f = r.record.frame;
+  uint32_t id = 0;
+  if (!parse_hex(rest.substr(0, hash), id)) return r.error = CandumpError::BadId, r;
+  if (hash == 3) {
+    if (id > 0x7FF) return r.error = CandumpError::BadId, r;
+  } else if (hash == 8) {
+    f.error = (id & kErrFlag) != 0;  // then the id holds the error class
+    f.extended = !f.error;
+    id &= kEffMask;
+  } else {
+    return r.error = CandumpError::BadId, r;
+  }
+  f.id = id;
+
+  std::string_view data = rest.substr(hash + 1);
+  if (!data.empty() && data.front() == '#') {  // CAN FD: flags nibble first
+    data.remove_prefix(1);
+    if (data.empty()) return r.error = CandumpError::BadData, r;
+    const int flags = hex_value(data.front());
+    if (flags < 0) return r.error = CandumpError::BadData, r;
+    f.fd = true;
+    f.brs = flags & 0x1;  // CANFD_BRS
+    f.esi = flags & 0x2;  // CANFD_ESI
+    data.remove_prefix(1);
+    if (!parse_data(data, f, 64)) return r.error = CandumpError::TooLong, r;
+    if (!is_fd_length(f.len)) return r.error = CandumpError::BadData, r;
+    return r;
+  }
+  if (!data.empty() && (data.front() == 'R' || data.front() == 'r')) {
+    f.remote = true;
+    f.len = 0;
+    if (data.size() == 2) {
+      const int len = hex_value(data[1]);
+      if (len < 0 || len > 8) return r.error = CandumpError::BadData, r;
+      f.len = static_cast<uint8_t>(len);
+    } else if (data.size() > 2) {
+      return r.error = CandumpError::BadData, r;
+    }
+    return r;
+  }
+  if (!parse_data(data, f, 8)) return r.error = data.size() > 16 ? CandumpError::TooLong : CandumpError::BadData, r;
+  return r;
+}
+
+std::string format_candump_line(const CanFrame& f, std::string_view interface) {
+  char head[64];
+  std::snprintf(head, sizeof head, "(%lld.%06lld) ", static_cast<long long>(f.timestamp_us / 1'000'000),
+                static_cast<long long>(f.timestamp_us % 1'000'000));
+  std::string out = head;
+  out += interface;
+  char id[16];
+  if (f.error) std::snprintf(id, sizeof id, " %08X#", f.id | kErrFlag);
+  else if (f.extended) std::snprintf(id, sizeof id, " %08X#", f.id);
+  else std::snprintf(id, sizeof id, " %03X#", f.id);
+  out += id;
+  static const char* digits = "0123456789ABCDEF";
+  if (f.remote) {
+    out += 'R';
+    if (f.len) out += digits[f.len & 0xF];
+    return out;
+  }
+  if (f.fd) {
+    out += '#';
+    out += digits[(f.brs ? 1 : 0) | (f.esi ? 2 : 0)];
+  }
+  for (std::size_t i = 0; i < f.len; ++i) {
+    out += digits[f.data[i] >> 4];
+    out += digits[f.data[i] & 0xF];
+  }
+  return out;
+}
+
+}  // namespace rise::io

@@ -1,0 +1,41 @@
+#pragma once
+
+// candump's log format (`candump -l`, read by canplayer and python-can):
+//   (1436509052.249713) can0 123#DEADBEEF        classic, 11-bit id
+//   (1436509052.249713) can0 12345678#00         29-bit id (8 hex digits)
+//   (1436509052.249713) can0 123#R  / 123#R4     remote frame (with length)
+//   (1436509052.249713) can0 123##1112233        CAN FD: flags nibble, then data
+//   (1436509052.249713) can0 20000080#0000...    error frame (CAN_ERR_FLAG in the id)
+// as can-utils' lib.c (parse_canframe, sprint_canframe) reads and writes it.
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "hil/io/can_frame.hpp"
+
+namespace rise::io {
+
+struct CandumpRecord {
+  CanFrame frame;          ///< frame.timestamp_us holds the log's time
+  std::string interface;   ///< e.g. "can0"
+};
+
+enum class CandumpError { None, Empty, NoTimestamp, NoInterface, BadId, BadData, TooLong };
+const char* to_string(CandumpError error);
+
+struct CandumpParse {
+  CandumpError error = CandumpError::None;
+  CandumpRecord record;
+  bool ok() const { return error == CandumpError::None; }
+};
+
+/// Parses one log line (trailing "\r\n" and comments after the frame are
+/// ignored). Does not throw.
+CandumpParse parse_candump_line(std::string_view line);
+
+/// Writes one frame as a log line (without newline), e.g.
+/// "(1700000000.000001) can0 123#DEADBEEF".
+std::string format_candump_line(const CanFrame& frame, std::string_view interface);
+
+}  // namespace rise::io
