@@ -13,11 +13,13 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 #include <optional>
 #include <thread>
 
 #include "app/chain_monitor.hpp"
 #include "app/child_process.hpp"
+#include "rise_msgs/PanelState.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
 #include "sim/simulation.hpp"
@@ -188,6 +190,50 @@ int run_demo(const DemoOptions& o) {
 }
 }  // namespace
 
+// `rise status`: the station's panel and source health, as rise-hild
+// publishes it (one table per PanelState, refreshed every --every seconds).
+int run_status(const std::string& lcm_url, const std::string& id, double every_s, int count) {
+  struct Latest {
+    std::mutex m;
+    rise_msgs::PanelState msg;
+    bool have = false;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelState* p) {
+      std::lock_guard lock(m);
+      msg = *p;
+      have = true;
+    }
+  } latest;
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "rise status: cannot open LCM at %s\n", lcm_url.c_str());
+    return 2;
+  }
+  lcm.subscribe("rise/" + id + "/panel_state", &Latest::on, &latest)->setQueueCapacity(2);
+  for (int shown = 0; (count <= 0 || shown < count) && !g_stop;) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(static_cast<int64_t>(every_s * 1e6));
+    while (std::chrono::steady_clock::now() < until && !g_stop) lcm.handleTimeout(50);
+    std::lock_guard lock(latest.m);
+    if (!latest.have) {
+      std::printf("rise status: no PanelState on rise/%s/panel_state yet\n", id.c_str());
+      continue;
+    }
+    const auto& p = latest.msg;
+    std::printf("panel %s (station %s) seq %lld: %s%s%s\n", p.panel_id.c_str(), p.trainee_id.c_str(),
+                static_cast<long long>(p.seq), p.failsafe ? "FAILSAFE: " : "ok", p.failsafe_reason.c_str(),
+                p.deadman ? ", dead-man held" : "");
+    std::printf("  %-10s %-5s %-5s %9s %10s %8s %6s %8s %6s %6s %5s  %s\n", "source", "conn", "stale", "age ms",
+                "frames ok", "bad", "crc", "counter", "length", "unk id", "reconn", "status / url");
+    for (const auto& h : p.sources)
+      std::printf("  %-10s %-5s %-5s %9.1f %10lld %8lld %6d %8d %6d %6d %5d  %s %s\n", h.name.c_str(),
+                  h.connected ? "yes" : "NO", h.stale ? "YES" : "no", static_cast<double>(h.last_frame_age_us) / 1e3,
+                  static_cast<long long>(h.frames_ok), static_cast<long long>(h.frames_bad), h.crc_errors,
+                  h.counter_errors, h.length_errors, h.unknown_ids, h.reconnects, h.status.c_str(), h.url.c_str());
+    std::fflush(stdout);
+    ++shown;
+  }
+  return 0;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"rise: the RISE console bridge and trainer"};
   app.require_subcommand(1);
@@ -203,11 +249,21 @@ int main(int argc, char** argv) {
   d->add_option("--port", demo.port, "socketcand TCP port (default: a free one)");
   d->add_option("--log-dir", demo.log_dir, "where the children's logs go (default /tmp/rise-demo-PID)");
   d->add_option("--timeout", demo.timeout_s, "give up after S seconds")->capture_default_str();
+  std::string status_id = "t1";
+  std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
+  double status_every_s = 1.0;
+  int status_count = 0;
+  CLI::App* st = app.add_subcommand("status", "show a station's panel state and per-source health counters");
+  st->add_option("--id", status_id, "station id")->capture_default_str();
+  st->add_option("--lcm", status_lcm, "LCM URL")->capture_default_str();
+  st->add_option("--every", status_every_s, "refresh period in seconds")->capture_default_str();
+  st->add_option("--count", status_count, "stop after N tables (0: until Ctrl-C)")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);  // a closed stdout must not skip stopping the children
   if (d->parsed()) return run_demo(demo);
+  if (st->parsed()) return run_status(status_lcm, status_id, status_every_s, status_count);
   return 1;
 }
