@@ -12,12 +12,17 @@ build=${RISE_BUILD_DIR:-$root/build}
 
 # Debian 12 packages: toolchain, libraries, and the third-party peers the
 # tests talk to (python3-can for socketcand, socat for pty pairs, clang's
-# libFuzzer runtime for the fuzz targets).
+# libFuzzer runtime for the fuzz targets, Debian's own kernel + qemu +
+# can-utils for the SocketCAN tests under a real CAN stack, mbpoll and
+# pymodbus as Modbus peers). Installing linux-image-amd64 only adds files
+# under /boot and /lib/modules; it does not change how the machine boots.
 packages=(
   cmake ninja-build g++ pkg-config
   libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2
   python3 python3-can socat
   clang libclang-rt-14-dev
+  qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils
+  libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
 )
 
 setup() {

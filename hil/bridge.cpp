@@ -1,6 +1,9 @@
 #include "hil/bridge.hpp"
 
 #include <chrono>
+#include <optional>
+
+#include "firmware_protocol/console_modbus.hpp"
 
 namespace rise::hil {
 namespace {
@@ -36,13 +39,29 @@ Bridge::Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<i
     : mapper_(std::move(definition)),
       buses_(std::move(buses)),
       publish_(std::move(publish)),
-      settings_(settings) {}
+      settings_(settings) {
+  modbus_links_.resize(buses_.size());
+}
+
+Bridge::Bridge(panels::PanelDefinition definition, std::vector<SourceTransport> transports, PublishFn publish,
+               BridgeSettings settings)
+    : mapper_(std::move(definition)), publish_(std::move(publish)), settings_(settings) {
+  for (auto& t : transports) {
+    buses_.push_back(std::move(t.can));
+    modbus_links_.push_back(std::move(t.modbus));
+  }
+}
 
 Bridge::~Bridge() { stop(); }
 
 void Bridge::start() {
   if (running_.exchange(true)) return;
-  for (std::size_t i = 0; i < buses_.size(); ++i) threads_.emplace_back([this, i] { source_loop(i); });
+  for (std::size_t i = 0; i < buses_.size(); ++i) {
+    if (modbus_links_[i])
+      threads_.emplace_back([this, i] { modbus_source_loop(i); });
+    else if (buses_[i])
+      threads_.emplace_back([this, i] { source_loop(i); });
+  }
   threads_.emplace_back([this] { publish_loop(); });
 }
 
@@ -141,6 +160,132 @@ void Bridge::source_loop(std::size_t source) {
     } else if (st == io::IoStatus::Disconnected) {
       std::lock_guard lock(mutex_);
       mapper_.on_connection(source, false, monotonic_us());
+    }
+  }
+}
+
+// Counts a failed Modbus request; false when the link was closed. Caller holds mutex_.
+bool Bridge::report_modbus(std::size_t source, const io::ModbusResult& result) {
+  using E = PanelMapper::SourceError;
+  const int64_t now = monotonic_us();
+  switch (result.status) {
+    case io::ModbusStatus::Ok: return true;
+    case io::ModbusStatus::Timeout: mapper_.on_source_error(source, E::Timeout, now); break;
+    case io::ModbusStatus::Exception: mapper_.on_source_error(source, E::Exception, now); break;
+    case io::ModbusStatus::CrcError: mapper_.on_source_error(source, E::LinkCrc, now); break;
+    case io::ModbusStatus::Disconnected:
+    case io::ModbusStatus::Error: break;
+  }
+  if (modbus_links_[source]->is_open()) return true;
+  // A timeout only closed the link for a clean restart (see modbus_source_loop).
+  if (result.status != io::ModbusStatus::Timeout) mapper_.on_connection(source, false, now);
+  return false;
+}
+
+void Bridge::modbus_source_loop(std::size_t source) {
+  using E = PanelMapper::SourceError;
+  io::ModbusLink& link = *modbus_links_[source];
+  const panels::SourceDefinition& def = mapper_.definition().sources[source];
+  const auto poll_period_us = static_cast<int64_t>(1e6 / def.poll_hz);
+  int64_t retry_ms = settings_.reopen_min_ms;
+  int64_t next_retry_us = 0;
+  int64_t next_poll_us = 0;
+  int64_t next_feedback_us = 0;
+  std::optional<uint16_t> last_counter;
+  fp::ModbusFeedbackBlock last_sent;
+  bool have_sent = false;
+  std::array<uint16_t, fp::modbus_ir::kCount> registers{};
+  std::array<uint8_t, fp::kModbusDiscreteInputs> bits{};
+  std::array<uint8_t, fp::kModbusCoils> coils{};
+
+  while (running_) {
+    int64_t now = monotonic_us();
+    if (!link.is_open()) {
+      // Closed after a timeout (a late TCP answer must not be taken for the
+      // next one) or lost. Reconnect at once when due; the source is marked
+      // disconnected only when that fails, so one lost answer is judged by
+      // the source's age (timeout_ms), not by this reconnect.
+      last_counter.reset();
+      have_sent = false;
+      bool reopened = false;
+      if (now >= next_retry_us) {
+        if (link.reopen() == io::ModbusStatus::Ok) {
+          retry_ms = settings_.reopen_min_ms;
+          reopened = true;
+        } else {
+          next_retry_us = now + retry_ms * 1000;
+          retry_ms = std::min(retry_ms * 2, settings_.reopen_max_ms);
+        }
+      }
+      if (!reopened) {
+        {
+          std::lock_guard lock(mutex_);
+          mapper_.on_connection(source, false, now);
+        }
+        wake_.notify_all();
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        continue;
+      }
+      std::lock_guard lock(mutex_);
+      mapper_.on_connection(source, true, monotonic_us());
+    }
+    if (now < next_poll_us) {
+      std::this_thread::sleep_for(std::chrono::microseconds(std::min<int64_t>(next_poll_us - now, 5000)));
+      continue;
+    }
+    next_poll_us += poll_period_us;
+    if (next_poll_us <= now) next_poll_us = now + poll_period_us;
+
+    // Inputs: the register block (under the map's CRC), then the buttons.
+    io::ModbusResult r = link.read_input_registers(0, registers);
+    if (r.ok()) r = link.read_discrete_inputs(0, bits);
+    bool changed = false;
+    {
+      std::lock_guard lock(mutex_);
+      now = monotonic_us();
+      if (!report_modbus(source, r)) continue;
+      mapper_.on_connection(source, true, now);
+      if (r.ok()) {
+        uint32_t discrete = 0;
+        for (std::size_t i = 0; i < bits.size(); ++i)
+          if (bits[i] != 0) discrete |= 1u << i;
+        const fp::ModbusInputsResult d = fp::decode_inputs(registers, discrete, last_counter);
+        switch (d.error) {
+          case fp::ModbusDecodeError::None:
+            changed = mapper_.on_inputs(source, d.inputs, now);
+            last_counter = d.inputs.alive_counter;
+            break;
+          case fp::ModbusDecodeError::BadCrc: mapper_.on_source_error(source, E::BadCrc, now); break;
+          case fp::ModbusDecodeError::BadValue: mapper_.on_source_error(source, E::BadValue, now); break;
+          case fp::ModbusDecodeError::StaleCounter: mapper_.on_source_error(source, E::StaleCounter, now); break;
+        }
+        changed_ = changed_ || changed;
+      }
+    }
+    if (changed) wake_.notify_all();
+
+    // Feedback: written when it changes and repeated every feedback period.
+    PanelSnapshot snap;
+    FeedbackRequest request;
+    {
+      std::lock_guard lock(mutex_);
+      snap = mapper_.evaluate(now);
+      request = feedback_;
+    }
+    const FeedbackFrames frames = build_feedback(mapper_.definition(), source, request, snap);
+    const fp::ModbusFeedbackBlock block = fp::encode_feedback(frames.indicators, frames.displays);
+    const bool due = now >= next_feedback_us;
+    if (due || !have_sent || block.coil_bits != last_sent.coil_bits || block.holding != last_sent.holding) {
+      for (std::size_t i = 0; i < coils.size(); ++i) coils[i] = static_cast<uint8_t>((block.coil_bits >> i) & 1u);
+      io::ModbusResult w = link.write_coils(0, coils);
+      if (w.ok()) w = link.write_registers(0, block.holding);
+      std::lock_guard lock(mutex_);
+      if (!report_modbus(source, w)) continue;
+      if (w.ok()) {
+        last_sent = block;
+        have_sent = true;
+        next_feedback_us = now + settings_.feedback_period_ms * 1000;
+      }
     }
   }
 }

@@ -1,9 +1,11 @@
 #pragma once
 
-// The daemon's cyclic core: one receive thread per source, one publisher
+// The daemon's cyclic core: one thread per source (CAN: receive frames;
+// Modbus: poll the register map at the source's poll_hz), one publisher
 // thread at the panel's rate that also publishes at once when a control
-// changes. Transport-agnostic: frames come from io::CanBus, snapshots go to
-// a callback (the program publishes them on LCM).
+// changes. Transport-agnostic: frames come from io::CanBus, register blocks
+// from io::ModbusLink, snapshots go to a callback (the program publishes
+// them on LCM).
 
 #include <atomic>
 #include <condition_variable>
@@ -15,6 +17,7 @@
 
 #include "hil/feedback.hpp"
 #include "hil/io/can_bus.hpp"
+#include "hil/io/modbus_link.hpp"
 #include "hil/panel_mapper.hpp"
 
 namespace rise::hil {
@@ -29,6 +32,13 @@ struct BridgeSettings {
 /// Monotonic microseconds (steady clock).
 int64_t monotonic_us();
 
+/// The transport of one source: a CAN bus (rise-can-v1) or a Modbus link
+/// (rise-modbus-v1); exactly one is set.
+struct SourceTransport {
+  std::unique_ptr<io::CanBus> can;
+  std::unique_ptr<io::ModbusLink> modbus;
+};
+
 class Bridge {
  public:
   using PublishFn = std::function<void(const PanelSnapshot&)>;
@@ -36,6 +46,10 @@ class Bridge {
   /// One bus per source of the definition, in the same order.
   Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<io::CanBus>> buses,
          PublishFn publish, BridgeSettings settings = {});
+  /// One transport per source of the definition, in the same order. Each
+  /// Modbus link is used only from its source's thread.
+  Bridge(panels::PanelDefinition definition, std::vector<SourceTransport> transports, PublishFn publish,
+         BridgeSettings settings = {});
   ~Bridge();
   Bridge(const Bridge&) = delete;
   Bridge& operator=(const Bridge&) = delete;
@@ -51,11 +65,14 @@ class Bridge {
 
  private:
   void source_loop(std::size_t source);
+  void modbus_source_loop(std::size_t source);
+  bool report_modbus(std::size_t source, const io::ModbusResult& result);
   void publish_loop();
   void send_feedback(std::size_t source, const PanelSnapshot& snap, bool force);
 
   PanelMapper mapper_;
-  std::vector<std::unique_ptr<io::CanBus>> buses_;
+  std::vector<std::unique_ptr<io::CanBus>> buses_;            // null for a Modbus source
+  std::vector<std::unique_ptr<io::ModbusLink>> modbus_links_;  // null for a CAN source
   PublishFn publish_;
   BridgeSettings settings_;
 

@@ -118,6 +118,52 @@ bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const 
   return changed;
 }
 
+bool PanelMapper::on_inputs(std::size_t source, const fp::ConsoleInputs& in, int64_t now_us) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.status.frames_ok++;
+  // One block carries what a CAN cycle spreads over five frame types.
+  for (const auto t : {fp::FrameType::Axes0, fp::FrameType::Axes1, fp::FrameType::Buttons, fp::FrameType::Switches,
+                       fp::FrameType::Heartbeat})
+    s.last_valid_us[type_index(t)] = now_us;
+  s.last_any_valid_us = now_us;
+  if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[source].recovery_frames)
+    s.status.check_failed = false;
+
+  const bool changed = s.axes != in.axes || s.buttons != in.buttons || s.switches != in.switches ||
+                       !s.axes_seen[0] || !s.buttons_seen || !s.switches_seen || !s.status.heartbeat_seen ||
+                       s.status.console_status != in.status;
+  s.axes = in.axes;
+  s.buttons = in.buttons;
+  s.switches = in.switches;
+  s.axes_seen[0] = s.axes_seen[1] = true;
+  s.buttons_seen = s.switches_seen = true;
+  s.status.console_status = in.status;
+  s.status.heartbeat_seen = true;
+  s.protocol_version = in.protocol_version;
+  return changed;
+}
+
+void PanelMapper::on_source_error(std::size_t source, SourceError kind, int64_t now_us) {
+  (void)now_us;
+  if (source >= sources_.size()) return;
+  SourceState& s = sources_[source];
+  auto count = [&](fp::DecodeError e) { s.status.errors[static_cast<std::size_t>(e)]++; };
+  switch (kind) {
+    case SourceError::BadCrc:
+    case SourceError::BadValue:
+      count(kind == SourceError::BadCrc ? fp::DecodeError::BadCrc : fp::DecodeError::BadValue);
+      s.status.check_failed = true;
+      s.ok_in_row = 0;
+      break;
+    case SourceError::StaleCounter: count(fp::DecodeError::RepeatedCounter); break;
+    case SourceError::Timeout: s.status.timeouts++; break;
+    case SourceError::Exception: s.status.exceptions++; break;
+    case SourceError::LinkCrc: count(fp::DecodeError::BadCrc); break;
+  }
+}
+
 void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_us) {
   if (source >= sources_.size()) return;
   SourceState& s = sources_[source];

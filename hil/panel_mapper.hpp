@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/console_modbus.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace rise::hil {
@@ -24,6 +25,8 @@ struct SourceStatus {
   int64_t frames_ok = 0;
   std::array<int64_t, firmware_protocol::kDecodeErrorCount> errors{};  ///< by DecodeError
   int32_t reconnects = 0;
+  int64_t timeouts = 0;             ///< polled transports: requests without an answer
+  int64_t exceptions = 0;           ///< polled transports: Modbus exception answers
   firmware_protocol::PanelStatus console_status = firmware_protocol::PanelStatus::Init;
   bool heartbeat_seen = false;
 
@@ -58,6 +61,25 @@ class PanelMapper {
   /// bridge then publishes at once). No throw; allocates nothing.
   bool on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
                 int64_t now_us);
+
+  /// Feeds one whole input block of `source` that passed its protection
+  /// check (protocol-neutral; rise-modbus-v1 polls yield these). Refreshes
+  /// every signal's age. Returns true when a bound control's raw value
+  /// changed. No throw; allocates nothing.
+  bool on_inputs(std::size_t source, const firmware_protocol::ConsoleInputs& inputs, int64_t now_us);
+
+  /// What went wrong with one poll of a polled source.
+  enum class SourceError {
+    BadCrc,        ///< block failed its end-to-end CRC → failed check
+    BadValue,      ///< field out of range → failed check
+    StaleCounter,  ///< alive counter did not move: no new data (ages keep growing)
+    Timeout,       ///< no answer
+    Exception,     ///< the slave answered with an exception
+    LinkCrc,       ///< the transport's own CRC failed (RTU)
+  };
+  /// Counts a poll's failure; BadCrc and BadValue fail the protection check
+  /// until recovery_frames good blocks in a row. No throw.
+  void on_source_error(std::size_t source, SourceError kind, int64_t now_us);
 
   /// Transport state of a source. A disconnect makes it stale at once and
   /// forgets its alive counters (the console restarts its counters too).

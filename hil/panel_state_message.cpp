@@ -67,6 +67,8 @@ rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
     h.length_errors = count(fp::DecodeError::BadLength);
     h.unknown_ids = count(fp::DecodeError::UnknownId);
     h.reconnects = s.reconnects;
+    h.timeouts = static_cast<int32_t>(s.timeouts);
+    h.exceptions = static_cast<int32_t>(s.exceptions);
     h.status = s.heartbeat_seen ? fp::to_string(s.console_status) : "unknown";
     m.sources.push_back(h);
   }

@@ -148,6 +148,61 @@ bool ConsoleEmulator::on_frame(const io::CanFrame& frame) {
   return !(before == feedback_);
 }
 
+fp::ConsoleInputs ConsoleEmulator::inputs(int64_t now_us) const {
+  fp::ConsoleInputs in;
+  in.axes = axes_;
+  in.buttons = buttons_;
+  in.switches = switches_;
+  in.status = status_;
+  in.uptime_ms = start_us_ < 0 ? 0u : static_cast<uint32_t>((now_us - start_us_) / 1000);
+  in.alive_counter = alive_counter_;
+  return in;
+}
+
+io::ModbusTableSizes ConsoleEmulator::modbus_table_sizes() {
+  return {fp::kModbusCoils, fp::kModbusDiscreteInputs, fp::modbus_hr::kCount, fp::modbus_ir::kCount};
+}
+
+bool ConsoleEmulator::tick_modbus(io::ModbusServer& server, int64_t now_us) {
+  if (start_us_ < 0) {
+    start_us_ = now_us;
+    next_modbus_cycle_us_ = now_us;
+  }
+  if (silent_ || ended_ || now_us < next_modbus_cycle_us_) return false;
+  constexpr int64_t kCycleUs = 10000;  // the firmware's 10 ms cycle, as the CAN axes period
+  next_modbus_cycle_us_ += kCycleUs;
+  if (next_modbus_cycle_us_ <= now_us) next_modbus_cycle_us_ = now_us + kCycleUs;
+  ++alive_counter_;
+  fp::ModbusInputBlock block = fp::encode_inputs(inputs(now_us));
+  if (corrupt_left_ > 0) {
+    block.registers[fp::modbus_ir::kCrc] ^= 0x5A5A;  // as a firmware serving a torn block would
+    --corrupt_left_;
+  }
+  server.set_inputs(block.registers, block.discrete_bits);
+  ++frames_sent_;
+  return true;
+}
+
+bool ConsoleEmulator::poll_modbus_feedback(const io::ModbusServer& server) {
+  const int64_t writes = server.writes_served();
+  if (writes == feedback_.frames) return false;
+  fp::ModbusFeedbackBlock block;
+  block.coil_bits = server.coil_bits();
+  server.holding_registers(block.holding);
+  const fp::ModbusFeedbackResult r = fp::decode_feedback(block);
+  const ConsoleFeedback before = feedback_;
+  feedback_.frames = writes;
+  if (!r.ok()) {
+    ++feedback_.bad_frames;
+    return false;
+  }
+  feedback_.leds_on = r.indicators.leds_on;
+  feedback_.buzzer = r.indicators.buzzer;
+  for (const auto& d : definition_.displays)
+    if (d.source == source_ && d.index < fp::kModbusDisplays) feedback_.displays[d.index] = r.displays[d.index];
+  return !(before == feedback_);
+}
+
 std::string ConsoleEmulator::feedback_text() const {
   std::ostringstream out;
   out << "leds";

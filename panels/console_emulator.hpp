@@ -2,7 +2,8 @@
 
 // The console's firmware, emulated: sends the rise-can-v1 frames of one
 // source at the firmware's rates with alive counters and CRCs, and decodes
-// the feedback frames the bridge sends back. Doubles as the test double for
+// the feedback frames the bridge sends back; or, for rise-modbus-v1, serves
+// the same state in a Modbus register map. Doubles as the test double for
 // hil/.
 
 #include <array>
@@ -11,7 +12,9 @@
 #include <string>
 
 #include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/console_modbus.hpp"
 #include "hil/io/can_bus.hpp"
+#include "hil/io/modbus_server.hpp"
 #include "panels/panel_definition.hpp"
 #include "panels/timeline.hpp"
 
@@ -42,6 +45,20 @@ class ConsoleEmulator {
   /// (LEDs, displays, buzzer) changed.
   bool on_frame(const io::CanFrame& frame);
 
+  /// The firmware's state at now_us as one block (both protocols read it).
+  firmware_protocol::ConsoleInputs inputs(int64_t now_us) const;
+
+  /// Modbus firmware cycle: every 10 ms writes the input registers and
+  /// discrete inputs with the alive counter +1; silent or ended → the
+  /// registers freeze (still served, counter stopped). Returns true when a
+  /// cycle ran. Does not throw.
+  bool tick_modbus(io::ModbusServer& server, int64_t now_us);
+  /// Reads the coils and holding registers the host wrote; returns true when
+  /// the console's feedback changed. Does not throw.
+  bool poll_modbus_feedback(const io::ModbusServer& server);
+  /// Table sizes of the rise-modbus-v1 map.
+  static io::ModbusTableSizes modbus_table_sizes();
+
   const ConsoleFeedback& feedback() const { return feedback_; }
   /// "leds power=on fault=off estop=off; display speed=0.42; buzzer off"
   std::string feedback_text() const;
@@ -71,6 +88,8 @@ class ConsoleEmulator {
   int64_t next_axes_us_ = 0;
   int64_t next_digital_us_ = 0;
   int64_t next_heartbeat_us_ = 0;
+  int64_t next_modbus_cycle_us_ = 0;
+  uint16_t alive_counter_ = 0;
   int64_t frames_sent_ = 0;
   ConsoleFeedback feedback_;
 };

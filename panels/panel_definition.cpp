@@ -85,13 +85,22 @@ std::string control_key(const std::string& name) { return "controls." + name; }
 SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::size_t i) {
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
-                {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta"});
+                {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit"});
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
-  if (s.protocol != "rise-can-v1")
+  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1")
     ctx.fail(node["protocol"], where + ".protocol",
-             "unknown protocol '" + s.protocol + "' (known: rise-can-v1)");
+             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1)");
+  if (!s.is_modbus() && (node["poll_hz"] || node["unit"]))
+    ctx.fail(node["poll_hz"] ? node["poll_hz"] : node["unit"], where + (node["poll_hz"] ? ".poll_hz" : ".unit"),
+             "only for protocol rise-modbus-v1");
+  s.poll_hz = ctx.get<double>(node, "poll_hz", where, 50.0);
+  if (!(s.poll_hz >= 1.0 && s.poll_hz <= 1000.0))
+    ctx.fail(node["poll_hz"], where + ".poll_hz", "must be 1..1000");
+  const int unit = ctx.get<int>(node, "unit", where, 1);
+  if (unit < 1 || unit > 247) ctx.fail(node["unit"], where + ".unit", "must be 1..247");
+  s.unit = static_cast<uint8_t>(unit);
   const int node_id = ctx.get<int>(node, "node", where, 0);
   if (node_id < 0 || node_id > 15) ctx.fail(node["node"], where + ".node", "must be 0..15");
   s.node = static_cast<uint8_t>(node_id);

@@ -21,7 +21,8 @@ enum class ControlRole {
 };
 
 /// Where a control's raw value comes from: a source and one of its signals.
-/// For protocol rise-can-v1 the signals are axis.0..5, button.0..31, switch.0..5.
+/// For protocols rise-can-v1 and rise-modbus-v1 the signals are axis.0..5,
+/// button.0..31, switch.0..5.
 struct SignalRef {
   enum class Kind { Axis, Button, Switch } kind = Kind::Axis;
   uint8_t index = 0;
@@ -49,11 +50,14 @@ struct ControlDefinition {
 
 struct SourceDefinition {
   std::string name;
-  std::string protocol;           ///< "rise-can-v1"
-  uint8_t node = 0;               ///< console node id on the bus (0..15)
+  std::string protocol;           ///< "rise-can-v1" or "rise-modbus-v1"
+  uint8_t node = 0;               ///< console node id on the bus (0..15), CAN
+  double poll_hz = 50.0;          ///< Modbus: input polls per second
+  uint8_t unit = 1;               ///< Modbus: slave / unit id (1..247)
   uint32_t timeout_ms = 50;       ///< stale when no valid frame within this
   uint32_t recovery_frames = 3;   ///< valid frames in a row to leave a failed check
   uint8_t max_counter_delta = 1;  ///< alive counter jump tolerated (1 = none lost)
+  bool is_modbus() const { return protocol == "rise-modbus-v1"; }
 };
 
 struct LedDefinition {

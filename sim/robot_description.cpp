@@ -1,5 +1,6 @@
 #include "sim/robot_description.hpp"
 
+#include <cmath>
 #include <fstream>
 #include <sstream>
 
@@ -20,6 +21,32 @@ AxisMapping parse_axis(const YamlReader& r, const YAML::Node& n, const std::stri
   return m;
 }
 
+std::pair<std::string, std::string> parse_enable(const YamlReader& r, const YAML::Node& e, const std::string& where) {
+  r.only_keys(e, where, {"switch", "position"});
+  if (!e["switch"] || !e["position"]) r.fail(e, where, "needs switch and position");
+  return std::make_pair(r.as<std::string>(e["switch"], where + ".switch"),
+                        r.as<std::string>(e["position"], where + ".position"));
+}
+
+ArmJointMapping parse_arm_joint(const YamlReader& r, const YAML::Node& n, const std::string& joint,
+                                const std::string& where) {
+  r.only_keys(n, where, {"axis", "max_radps", "invert", "min_deg", "max_deg", "max_torque_nm", "break_torque_nm"});
+  ArmJointMapping j;
+  j.joint = joint;
+  if (!n["axis"]) r.fail(n, where + ".axis", "missing");
+  j.axis.axis = r.as<std::string>(n["axis"], where + ".axis");
+  if (!n["max_radps"]) r.fail(n, where + ".max_radps", "missing");
+  j.axis.max = r.positive(n, "max_radps", where, 0.0);
+  if (n["invert"]) j.axis.invert = r.as<bool>(n["invert"], where + ".invert");
+  constexpr double kDeg = M_PI / 180.0;
+  if (n["min_deg"]) j.min_rad = r.as<double>(n["min_deg"], where + ".min_deg") * kDeg;
+  if (n["max_deg"]) j.max_rad = r.as<double>(n["max_deg"], where + ".max_deg") * kDeg;
+  if (!(j.min_rad < 0.0 && j.max_rad > 0.0)) r.fail(n, where + ".min_deg", "limits must include 0 (min < 0 < max)");
+  j.max_torque_nm = r.positive(n, "max_torque_nm", where, j.max_torque_nm);
+  j.break_torque_nm = r.positive(n, "break_torque_nm", where, j.break_torque_nm);
+  return j;
+}
+
 }  // namespace
 
 std::string read_text_file(const std::string& path) {
@@ -34,11 +61,17 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with robot, chassis, wheels, control");
-  r.only_keys(root, "", {"robot", "chassis", "wheels", "control"});
+  r.only_keys(root, "", {"robot", "kind", "chassis", "wheels", "tracks", "arm", "control"});
   RobotDescription d;
   d.file = file;
   if (!root["robot"]) r.fail(root, "robot", "missing");
   d.name = r.as<std::string>(root["robot"], "robot");
+  if (const YAML::Node k = root["kind"]) {
+    const auto kind = r.as<std::string>(k, "kind");
+    if (kind == "skid_steer") d.kind = RobotKind::SkidSteer;
+    else if (kind == "tracked") d.kind = RobotKind::Tracked;
+    else r.fail(k, "kind", "expected skid_steer or tracked");
+  }
 
   const YAML::Node chassis = root["chassis"];
   if (!chassis) r.fail(root, "chassis", "missing");
@@ -54,35 +87,67 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
   d.chassis.clearance_m = r.positive(chassis, "clearance_m", "chassis", d.chassis.clearance_m, true);
 
   const YAML::Node wheels = root["wheels"];
-  if (!wheels) r.fail(root, "wheels", "missing");
-  r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",
-                                 "max_torque_nm", "max_speed_radps"});
-  auto& w = d.wheels;
-  w.radius_m = r.positive(wheels, "radius_m", "wheels", w.radius_m);
-  w.width_m = r.positive(wheels, "width_m", "wheels", w.width_m);
-  w.mass_kg = r.positive(wheels, "mass_kg", "wheels", w.mass_kg);
-  w.friction = r.positive(wheels, "friction", "wheels", w.friction);
-  w.wheelbase_m = r.positive(wheels, "wheelbase_m", "wheels", w.wheelbase_m);
-  w.track_m = r.positive(wheels, "track_m", "wheels", w.track_m);
-  w.max_torque_nm = r.positive(wheels, "max_torque_nm", "wheels", w.max_torque_nm);
-  w.max_speed_radps = r.positive(wheels, "max_speed_radps", "wheels", w.max_speed_radps);
-  if (w.track_m <= w.width_m) r.fail(wheels["track_m"], "wheels.track_m", "must be wider than a wheel");
-  if (w.radius_m <= d.chassis.clearance_m)
-    r.fail(wheels["radius_m"], "wheels.radius_m", "must exceed chassis.clearance_m");
+  if (d.kind == RobotKind::Tracked && wheels) r.fail(wheels, "wheels", "a tracked robot has tracks, not wheels");
+  if (d.kind == RobotKind::SkidSteer && root["tracks"]) r.fail(root["tracks"], "tracks", "a skid_steer robot has wheels");
+  if (d.kind == RobotKind::SkidSteer) {
+    if (!wheels) r.fail(root, "wheels", "missing");
+    r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",
+                                   "max_torque_nm", "max_speed_radps"});
+    auto& w = d.wheels;
+    w.radius_m = r.positive(wheels, "radius_m", "wheels", w.radius_m);
+    w.width_m = r.positive(wheels, "width_m", "wheels", w.width_m);
+    w.mass_kg = r.positive(wheels, "mass_kg", "wheels", w.mass_kg);
+    w.friction = r.positive(wheels, "friction", "wheels", w.friction);
+    w.wheelbase_m = r.positive(wheels, "wheelbase_m", "wheels", w.wheelbase_m);
+    w.track_m = r.positive(wheels, "track_m", "wheels", w.track_m);
+    w.max_torque_nm = r.positive(wheels, "max_torque_nm", "wheels", w.max_torque_nm);
+    w.max_speed_radps = r.positive(wheels, "max_speed_radps", "wheels", w.max_speed_radps);
+    if (w.track_m <= w.width_m) r.fail(wheels["track_m"], "wheels.track_m", "must be wider than a wheel");
+    if (w.radius_m <= d.chassis.clearance_m)
+      r.fail(wheels["radius_m"], "wheels.radius_m", "must exceed chassis.clearance_m");
+  } else {
+    const YAML::Node tracks = root["tracks"];
+    if (!tracks) r.fail(root, "tracks", "missing");
+    r.only_keys(tracks, "tracks", {"length_m", "radius_m", "gauge_m", "approach_deg", "approach_length_m", "friction",
+                                   "lateral_friction", "max_speed_mps"});
+    auto& t = d.tracks;
+    t.length_m = r.positive(tracks, "length_m", "tracks", t.length_m);
+    t.radius_m = r.positive(tracks, "radius_m", "tracks", t.radius_m);
+    t.gauge_m = r.positive(tracks, "gauge_m", "tracks", t.gauge_m);
+    t.approach_rad = r.positive(tracks, "approach_deg", "tracks", t.approach_rad * 180.0 / M_PI, true) * M_PI / 180.0;
+    if (t.approach_rad > M_PI / 2) r.fail(tracks["approach_deg"], "tracks.approach_deg", "must be <= 90");
+    t.approach_length_m = r.positive(tracks, "approach_length_m", "tracks", t.approach_length_m, true);
+    t.friction = r.positive(tracks, "friction", "tracks", t.friction);
+    t.lateral_friction = r.positive(tracks, "lateral_friction", "tracks", t.lateral_friction);
+    t.max_speed_mps = r.positive(tracks, "max_speed_mps", "tracks", t.max_speed_mps);
+    if (t.radius_m * 2 <= d.chassis.clearance_m)
+      r.fail(tracks["radius_m"], "tracks.radius_m", "the tracks must reach above chassis.clearance_m");
+  }
+
+  if (const YAML::Node arm = root["arm"]) {
+    r.only_keys(arm, "arm", {"mount_m", "upper_length_m", "forearm_length_m", "link_mass_kg", "link_width_m",
+                             "gripper_stroke_m"});
+    ArmDescription a;
+    if (const YAML::Node m = arm["mount_m"]) {
+      if (!m.IsSequence() || m.size() != 2) r.fail(m, "arm.mount_m", "expected [x, y]");
+      for (std::size_t i = 0; i < 2; ++i) a.mount_m[i] = r.as<double>(m[i], "arm.mount_m");
+    }
+    a.upper_length_m = r.positive(arm, "upper_length_m", "arm", a.upper_length_m);
+    a.forearm_length_m = r.positive(arm, "forearm_length_m", "arm", a.forearm_length_m);
+    a.link_mass_kg = r.positive(arm, "link_mass_kg", "arm", a.link_mass_kg);
+    a.link_width_m = r.positive(arm, "link_width_m", "arm", a.link_width_m);
+    a.gripper_stroke_m = r.positive(arm, "gripper_stroke_m", "arm", a.gripper_stroke_m);
+    d.arm = a;
+  }
 
   const YAML::Node control = root["control"];
   if (!control) r.fail(root, "control", "missing: which panel controls drive the robot");
-  r.only_keys(control, "control", {"linear", "angular", "enable", "speed_scale", "estop"});
+  r.only_keys(control, "control", {"linear", "angular", "enable", "speed_scale", "estop", "arm"});
   if (!control["linear"]) r.fail(control, "control.linear", "missing");
   if (!control["angular"]) r.fail(control, "control.angular", "missing");
   d.control.linear = parse_axis(r, control["linear"], "control.linear");
   d.control.angular = parse_axis(r, control["angular"], "control.angular");
-  if (const YAML::Node e = control["enable"]) {
-    r.only_keys(e, "control.enable", {"switch", "position"});
-    if (!e["switch"] || !e["position"]) r.fail(e, "control.enable", "needs switch and position");
-    d.control.enable = std::make_pair(r.as<std::string>(e["switch"], "control.enable.switch"),
-                                      r.as<std::string>(e["position"], "control.enable.position"));
-  }
+  if (const YAML::Node e = control["enable"]) d.control.enable = parse_enable(r, e, "control.enable");
   if (const YAML::Node s = control["speed_scale"]) {
     r.only_keys(s, "control.speed_scale", {"switch", "values"});
     const YAML::Node values = s["values"];
@@ -100,6 +165,28 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
     r.only_keys(e, "control.estop", {"button"});
     if (!e["button"]) r.fail(e, "control.estop.button", "missing");
     d.control.estop_button = r.as<std::string>(e["button"], "control.estop.button");
+  }
+  const YAML::Node arm_control = control["arm"];
+  if (d.arm && !arm_control) r.fail(control, "control.arm", "missing: which panel controls move the arm");
+  if (!d.arm && arm_control) r.fail(arm_control, "control.arm", "the robot has no arm section");
+  if (arm_control) {
+    r.only_keys(arm_control, "control.arm", {"enable", "shoulder_yaw", "shoulder_pitch", "elbow_pitch", "gripper"});
+    ArmMapping a;
+    if (const YAML::Node e = arm_control["enable"]) a.enable = parse_enable(r, e, "control.arm.enable");
+    for (const char* joint : {"shoulder_yaw", "shoulder_pitch", "elbow_pitch"}) {
+      const std::string where = std::string("control.arm.") + joint;
+      if (!arm_control[joint]) r.fail(arm_control, where, "missing");
+      a.joints.push_back(parse_arm_joint(r, arm_control[joint], joint, where));
+    }
+    const YAML::Node g = arm_control["gripper"];
+    if (!g) r.fail(arm_control, "control.arm.gripper", "missing");
+    r.only_keys(g, "control.arm.gripper", {"open", "close", "speed_mps", "max_force_n"});
+    if (!g["open"] || !g["close"]) r.fail(g, "control.arm.gripper", "needs open and close buttons");
+    a.open_button = r.as<std::string>(g["open"], "control.arm.gripper.open");
+    a.close_button = r.as<std::string>(g["close"], "control.arm.gripper.close");
+    a.gripper_speed_mps = r.positive(g, "speed_mps", "control.arm.gripper", a.gripper_speed_mps);
+    a.gripper_max_force_n = r.positive(g, "max_force_n", "control.arm.gripper", a.gripper_max_force_n);
+    d.control.arm = a;
   }
   return d;
 }

@@ -1,15 +1,18 @@
 #pragma once
 
-// What the simulator needs to know about a robot: its body, its wheels, and
-// its control mapping — which panel controls drive which actuators.
-// Loaded from YAML (sim/robots/skid4.yaml).
+// What the simulator needs to know about a robot: its body, its running gear
+// (wheels or tracks), an optional arm, and its control mapping — which panel
+// controls drive which actuators. Loaded from YAML (sim/robots/*.yaml).
 
 #include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace rise::sim {
+
+enum class RobotKind { SkidSteer, Tracked };
 
 struct ChassisDescription {
   std::array<double, 3> size_m{0.8, 0.5, 0.25};  ///< length (x), width (y), height (z)
@@ -28,11 +31,57 @@ struct WheelsDescription {
   double max_speed_radps = 12.0;  ///< per wheel motor
 };
 
+/// Two rigid tracks whose ground contacts move at the track speed (contact
+/// surface motion, Pecka et al. arXiv:1703.04316). Each track is a capsule
+/// (the bottom run between the end rollers) plus a front run rising at
+/// approach_rad so that the track can mount a step.
+struct TracksDescription {
+  double length_m = 0.8;           ///< end roller centre to end roller centre
+  double radius_m = 0.08;          ///< end roller radius (half the track height)
+  double gauge_m = 0.5;            ///< left to right track centre
+  double approach_rad = 0.6;       ///< front run rise above the ground
+  double approach_length_m = 0.3;  ///< front run, roller centre to roller centre
+  double friction = 1.2;           ///< μ along the track
+  double lateral_friction = 0.7;   ///< μ across the track
+  double max_speed_mps = 1.0;
+};
+
+/// A 3-joint arm (shoulder yaw, shoulder pitch, elbow pitch) and a one-finger
+/// prismatic gripper on the chassis top. At zero joint angles the upper arm
+/// rises at 45° forward and the forearm points straight ahead.
+struct ArmDescription {
+  std::array<double, 2> mount_m{0.15, 0.0};  ///< shoulder on the chassis top: x, y in the base frame
+  double upper_length_m = 0.45;
+  double forearm_length_m = 0.40;
+  double link_mass_kg = 3.0;
+  double link_width_m = 0.06;
+  double gripper_stroke_m = 0.08;
+};
+
 /// One axis of motion driven by a panel axis: command = value · max.
 struct AxisMapping {
   std::string axis;
-  double max = 0.0;  ///< m/s for linear, rad/s for angular
+  double max = 0.0;  ///< m/s for linear, rad/s for angular and arm joints
   bool invert = false;
+};
+
+/// A velocity-controlled arm joint: the panel axis sets the target rate.
+struct ArmJointMapping {
+  std::string joint;  ///< shoulder_yaw, shoulder_pitch or elbow_pitch
+  AxisMapping axis;
+  double min_rad = -M_PI;
+  double max_rad = M_PI;
+  double max_torque_nm = 50.0;     ///< motor
+  double break_torque_nm = 500.0;  ///< constraint torque that breaks the joint (sustained 20 ms)
+};
+
+struct ArmMapping {
+  std::optional<std::pair<std::string, std::string>> enable;  ///< e.g. mode = arm
+  std::vector<ArmJointMapping> joints;                        ///< in the order yaw, pitch, elbow
+  std::string open_button;
+  std::string close_button;
+  double gripper_speed_mps = 0.05;
+  double gripper_max_force_n = 80.0;
 };
 
 struct ControlMapping {
@@ -44,13 +93,18 @@ struct ControlMapping {
   std::optional<std::pair<std::string, std::vector<double>>> speed_scale;
   /// Pressed → stop.
   std::optional<std::string> estop_button;
+  /// Present iff the robot has an arm.
+  std::optional<ArmMapping> arm;
 };
 
 struct RobotDescription {
   std::string name;
   std::string file;
+  RobotKind kind = RobotKind::SkidSteer;
   ChassisDescription chassis;
-  WheelsDescription wheels;
+  WheelsDescription wheels;  ///< skid_steer only
+  TracksDescription tracks;  ///< tracked only
+  std::optional<ArmDescription> arm;
   ControlMapping control;
 };
 

@@ -1,8 +1,10 @@
 #pragma once
 
-// The ODE world with one skid-steer robot, stepped at a fixed 1 ms. Pure
-// simulation: no clock, no I/O. The same inputs give the same trajectory,
-// bit for bit.
+// The ODE world with one robot (skid-steer or tracked, optionally with an
+// arm), stepped at a fixed 1 ms. Pure simulation: no clock, no I/O. The same
+// inputs give the same trajectory, bit for bit. Each step also records the
+// semantic events a scenario engine scores (collisions, doors, regions,
+// stairs, broken joints, tip-over).
 
 #include <array>
 #include <cstdint>
@@ -35,14 +37,50 @@ struct WheelState {
   double effort_nm = 0.0;  ///< motor torque applied in the last step
 };
 
+/// An arm joint (rad, rad/s, N·m) or the gripper (m, m/s, N).
+struct JointState {
+  std::string name;
+  double position = 0.0;
+  double velocity = 0.0;
+  double effort = 0.0;  ///< motor torque/force applied in the last step
+  bool broken = false;
+};
+
+enum class SimEventKind {
+  CollisionStarted,  ///< a = robot part, b = entity
+  CollisionStopped,  ///< a = robot part, b = entity (no contact for 50 ms)
+  DoorOpened,        ///< a = door; |angle| > 10°
+  DoorClosed,        ///< a = door; |angle| < 5° again
+  JointBroken,       ///< a = robot or door, b = joint; detail = load
+  RegionEntered,     ///< a = robot, b = region; base inside the box
+  RegionLeft,        ///< a = robot, b = region
+  ObjectMoved,       ///< a = object; > 5 cm from its start (once)
+  StairsClimbed,     ///< a = robot, b = stairs; base above the landing, on it
+  TippedOver,        ///< a = robot; base z axis > 60° from vertical
+};
+/// Stable snake_case name, e.g. "door_opened" (also the LCM `kind`).
+const char* to_string(SimEventKind kind);
+
+struct SimEvent {
+  double time_s = 0.0;
+  SimEventKind kind = SimEventKind::CollisionStarted;
+  std::string a;
+  std::string b;
+  std::string detail;
+};
+
 struct RobotSnapshot {
   double time_s = 0.0;
   std::array<double, 3> position_m{};
   std::array<double, 4> orientation_wxyz{1, 0, 0, 0};
   std::array<double, 3> linear_velocity_mps{};     ///< base frame
   std::array<double, 3> angular_velocity_radps{};  ///< base frame
-  std::vector<WheelState> wheels;                  ///< fl, fr, rl, rr
-  std::vector<std::string> contacts;               ///< obstacles touched (not the ground)
+  std::vector<WheelState> wheels;                  ///< fl, fr, rl, rr; tracked: track_left/right rollers
+  std::vector<JointState> joints;                  ///< arm: shoulder_yaw, shoulder_pitch, elbow_pitch, gripper
+  std::vector<std::string> contacts;               ///< entities touched (not the ground)
+  std::array<double, 3> gripper_position_m{};      ///< finger centre in the world (arm robots)
+  double damage = 0.0;                             ///< 0 intact .. 1 destroyed (broken joints)
+  bool arm_enabled = false;
   bool motors_enabled = false;
   std::string stop_reason;
   double commanded_linear_mps = 0.0;
@@ -62,6 +100,17 @@ struct DriveCommand {
 };
 DriveCommand map_controls(const ControlMapping& mapping, const ControlInput& input);
 
+/// Arm joint rate targets (rad/s, order of ArmMapping::joints) and gripper
+/// rate (m/s, + opens); zero with a reason when arm motion is not allowed.
+/// Pure function, no ODE.
+struct ArmCommand {
+  std::vector<double> joint_radps;
+  double gripper_mps = 0.0;
+  bool enabled = false;
+  std::string stop_reason;
+};
+ArmCommand map_arm_controls(const ControlMapping& mapping, const ControlInput& input);
+
 class Simulation {
  public:
   static constexpr double kStepS = 0.001;
@@ -77,6 +126,13 @@ class Simulation {
   double time_s() const;
   RobotSnapshot snapshot() const;
   const RobotDescription& robot() const;
+  /// Events since the last call, oldest first (safe in the cyclic path:
+  /// never throws).
+  std::vector<SimEvent> take_events();
+  /// Door angle (rad, + = swung about +z) or NaN for an unknown door.
+  double door_angle_rad(const std::string& door) const;
+  /// Centre of a movable object or a door panel (m), NaNs for an unknown name.
+  std::array<double, 3> object_position_m(const std::string& object) const;
 
  private:
   struct Impl;

@@ -1,7 +1,8 @@
 #pragma once
 
-// The environment: a ground plane and static box obstacles (the world file
-// the semantic engine will grow into; see sim/README.md).
+// The environment: a ground plane, static boxes and walls, hinged doors,
+// staircases, movable objects and named regions (the world file format is
+// documented in sim/README.md).
 
 #include <array>
 #include <string>
@@ -16,11 +17,76 @@ struct BoxObstacle {
   double yaw_rad = 0.0;
 };
 
+/// A straight static wall standing on the ground from `from_m` to `to_m`.
+struct Wall {
+  std::string name;
+  std::array<double, 2> from_m{};
+  std::array<double, 2> to_m{};
+  double height_m = 2.5;
+  double thickness_m = 0.15;
+};
+
+/// A door panel on a vertical hinge. Closed, the panel runs from the hinge
+/// along `yaw_rad`; it swings ±open_max_rad. The hinge breaks when its load
+/// (constraint torque about the hinge) stays above break_torque_nm for
+/// break_time_ms.
+struct Door {
+  std::string name;
+  std::array<double, 2> hinge_m{};
+  double width_m = 0.9;
+  double height_m = 2.0;
+  double thickness_m = 0.04;
+  double yaw_rad = 0.0;
+  double open_max_rad = 1.6;
+  double break_torque_nm = 1500.0;
+  double break_time_ms = 20.0;
+  double mass_kg = 20.0;
+  double friction_torque_nm = 2.0;  ///< hinge friction
+  double return_nm_per_rad = 1.0;   ///< door closer
+};
+
+/// A straight staircase of static blocks climbing along `yaw_rad` from
+/// `start_m` (middle of the first riser's foot), ending in a landing.
+struct Stairs {
+  std::string name;
+  std::array<double, 2> start_m{};
+  double yaw_rad = 0.0;
+  int steps = 6;
+  double riser_m = 0.17;
+  double tread_m = 0.28;
+  double width_m = 1.2;
+  double landing_m = 1.5;  ///< landing length along the climb direction
+
+  double landing_height_m() const { return steps * riser_m; }
+};
+
+/// A free box that the robot can push or carry.
+struct MovableObject {
+  std::string name;
+  std::array<double, 3> size_m{0.3, 0.3, 0.3};
+  double mass_kg = 5.0;
+  std::array<double, 3> center_m{};
+};
+
+/// An axis-aligned box of interest (enter / leave events).
+struct Region {
+  std::string name;
+  std::array<double, 3> min_m{};
+  std::array<double, 3> max_m{};
+};
+
 struct WorldDescription {
   std::string name = "yard";
   std::string file;
   double ground_friction = 1.0;
   std::vector<BoxObstacle> boxes;
+  std::vector<Wall> walls;
+  std::vector<Door> doors;
+  std::vector<Stairs> stairs;
+  std::vector<MovableObject> objects;
+  std::vector<Region> regions;
+  std::array<double, 2> robot_start_m{0, 0};  ///< where the robot's base starts
+  double robot_start_yaw_rad = 0.0;
 };
 
 /// The built-in yard: flat ground, a few boxes away from the start.

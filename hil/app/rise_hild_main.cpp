@@ -28,18 +28,20 @@ int64_t wall_us() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"rise-hild: console (CAN) → PanelState on LCM, PanelFeedback → console"};
+  CLI::App app{"rise-hild: console (CAN or Modbus) → PanelState on LCM, PanelFeedback → console"};
   std::string panel_file = "panels/definitions/rise_console.yaml";
-  std::vector<std::string> can_urls;
+  std::vector<std::string> source_urls;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string id = "t1";
   std::string log_level = "info";
   double status_every_s = 0.0;
   double publish_hz = 0.0;
   app.add_option("--panel", panel_file, "panel definition (YAML)")->capture_default_str();
-  app.add_option("--can", can_urls,
-                 "bus of each source, in the definition's order: socketcan://IFACE, "
-                 "socketcand://HOST:PORT/BUS, mem://NAME");
+  // --can is the old name, from when every source was a CAN bus.
+  app.add_option("--source,--can", source_urls,
+                 "transport of each source, one per source in the definition's order: rise-can-v1: "
+                 "socketcan://IFACE, socketcand://HOST:PORT/BUS, mem://NAME; rise-modbus-v1: "
+                 "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N");
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
   app.add_option("--publish-hz", publish_hz, "PanelState rate (default: the definition's publish_hz, 100)")
@@ -57,8 +59,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (dbc_decode->parsed()) return rise::hil::dbc_decode(dbc_file, log_file, std::cout, std::cerr);
-  if (can_urls.empty()) {
-    spdlog::error("--can is required (one URL per source of the panel)");
+  if (source_urls.empty()) {
+    spdlog::error("--source is required (one URL per source of the panel)");
     return 2;
   }
 
@@ -70,14 +72,31 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (publish_hz > 0) definition.publish_hz = publish_hz;
-  if (can_urls.size() != definition.sources.size()) {
-    spdlog::error("{}: the panel has {} source(s) but {} --can URL(s) were given", definition.file,
-                  definition.sources.size(), can_urls.size());
+  if (source_urls.size() != definition.sources.size()) {
+    spdlog::error("{}: the panel has {} source(s) but {} --source URL(s) were given", definition.file,
+                  definition.sources.size(), source_urls.size());
     return 2;
   }
-  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
+  std::vector<rise::hil::SourceTransport> transports;
   try {
-    for (const auto& url : can_urls) buses.push_back(rise::io::open_can_bus(url));
+    for (std::size_t i = 0; i < source_urls.size(); ++i) {
+      const auto& source = definition.sources[i];
+      const bool modbus_url = rise::io::is_modbus_url(source_urls[i]);
+      if (modbus_url != source.is_modbus())
+        throw std::runtime_error("source '" + source.name + "' speaks " + source.protocol + ": '" + source_urls[i] +
+                                 "' is not a " + (source.is_modbus() ? "modbus+tcp:// or modbus+rtu://" : "CAN") +
+                                 " URL");
+      rise::hil::SourceTransport t;
+      if (modbus_url) {
+        // The definition's unit unless the URL names one.
+        auto address = rise::io::parse_modbus_url(source_urls[i]);
+        if (source_urls[i].find("unit=") == std::string::npos) address.unit = source.unit;
+        t.modbus = rise::io::open_modbus_link(address);
+      } else {
+        t.can = rise::io::open_can_bus(source_urls[i]);
+      }
+      transports.push_back(std::move(t));
+    }
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
@@ -94,7 +113,7 @@ int main(int argc, char** argv) {
   int64_t seq = 0;
   std::string last_reason = "-";
   auto publish = [&](const rise::hil::PanelSnapshot& snap) {
-    const auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), can_urls);
+    const auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), source_urls);
     lcm.publish(state_channel, &msg);
     // Log when the reason changes, not every time an age in it grows.
     std::string reason_kind = snap.failsafe_reason;
@@ -105,7 +124,7 @@ int main(int argc, char** argv) {
       last_reason = reason_kind;
     }
   };
-  rise::hil::Bridge bridge(definition, std::move(buses), publish);
+  rise::hil::Bridge bridge(definition, std::move(transports), publish);
 
   struct FeedbackHandler {
     rise::hil::Bridge* bridge;
@@ -131,8 +150,9 @@ int main(int argc, char** argv) {
       next_status += std::chrono::microseconds(static_cast<int64_t>(status_every_s * 1e6));
       const auto snap = bridge.snapshot();
       for (const auto& s : snap.sources)
-        spdlog::info("source {}: connected={} stale={} ok={} bad={} reconnects={}", s.name,
-                     s.connected, s.stale, s.frames_ok, s.frames_bad(), s.reconnects);
+        spdlog::info("source {}: connected={} stale={} ok={} bad={} reconnects={} timeouts={} exceptions={}",
+                     s.name, s.connected, s.stale, s.frames_ok, s.frames_bad(), s.reconnects, s.timeouts,
+                     s.exceptions);
     }
   }
   bridge.stop();

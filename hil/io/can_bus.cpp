@@ -5,6 +5,8 @@
 
 #include "hil/io/can_url.hpp"
 #include "hil/io/mem_bus.hpp"
+#include "hil/io/replay_bus.hpp"
+#include "hil/io/slcan_bus.hpp"
 #include "hil/io/socketcan_bus.hpp"
 #include "hil/io/socketcand_client.hpp"
 #include "hil/io/socketcand_server.hpp"
@@ -33,6 +35,13 @@ std::unique_ptr<CanBus> open_can_bus(std::string_view url) {
         } else if constexpr (std::is_same_v<A, SocketCanAddress>) {
           auto bus = std::make_unique<SocketCanBus>(std::move(text), a);
           if (bus->reopen() != IoStatus::Ok) throw std::runtime_error(bus->last_error());
+          return bus;
+        } else if constexpr (std::is_same_v<A, ReplayAddress>) {
+          return std::make_unique<ReplayBus>(std::move(text), a);
+        } else if constexpr (std::is_same_v<A, SlcanAddress>) {
+          // An unplugged adapter may come later: the caller retries with reopen().
+          auto bus = std::make_unique<SlcanBus>(std::move(text), a);
+          bus->reopen();
           return bus;
         } else if (a.listen) {
           auto bus = std::make_unique<SocketcandServer>(std::move(text), a);

@@ -1,6 +1,8 @@
 #include "hil/io/can_url.hpp"
 
 #include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <optional>
 #include <stdexcept>
 #include <utility>
@@ -236,12 +238,126 @@ MemAddress parse_mem(std::string_view url, std::string_view rest) {
   return MemAddress{std::string(rest)};
 }
 
+// The termios rates of <asm-generic/termbits.h> from 9600 up.
+constexpr uint32_t kSerialBauds[] = {9600,   19200,   38400,   57600,   115200,  230400,  460800,
+                                     500000, 576000,  921600,  1000000, 1152000, 1500000, 2000000,
+                                     2500000, 3000000, 3500000, 4000000};
+
+bool parse_flag(std::string_view url, std::string_view key, std::string_view value) {
+  if (value == "1") return true;
+  if (value != "0") fail(url, std::string(key) + " '" + std::string(value) + "' is not 0 or 1");
+  return false;
+}
+
+SlcanAddress parse_slcan(std::string_view url, std::string_view rest) {
+  SlcanAddress address;
+  const size_t question = rest.find('?');
+  const std::string_view path = rest.substr(0, question);
+  if (path.empty()) fail(url, "missing device path (slcan:///dev/ttyACM0?bitrate=500000)");
+  if (path.front() != '/') fail(url, "device path '" + std::string(path) + "' is not absolute");
+  for (char c : path) {
+    if (static_cast<unsigned char>(c) < 0x21 || static_cast<unsigned char>(c) > 0x7E) {
+      fail(url, "device path has a space or control character");
+    }
+  }
+  address.path = std::string(path);
+  if (question == std::string_view::npos) fail(url, "missing ?bitrate=N (CAN bit/s)");
+  bool have_bitrate = false;
+  const auto items =
+      parse_query(url, rest.substr(question + 1), {"bitrate", "listen_only", "timestamps", "baud"});
+  for (const auto& [key, value] : items) {
+    if (key == "bitrate") {
+      const auto bitrate = parse_decimal(value, 1'000'000);
+      if (!bitrate || slcan_bitrate_code(*bitrate) < 0) {
+        fail(url, "bitrate '" + std::string(value) +
+                      "' is not an slcan rate (10000 20000 50000 100000 125000 250000 500000 "
+                      "800000 1000000)");
+      }
+      address.bitrate_bps = *bitrate;
+      have_bitrate = true;
+    } else if (key == "baud") {
+      const auto baud = parse_decimal(value, 4'000'000);
+      bool known = false;
+      for (uint32_t b : kSerialBauds) known = known || (baud && *baud == b);
+      if (!known) fail(url, "baud '" + std::string(value) + "' is not a termios rate 9600..4000000");
+      address.baud = *baud;
+    } else if (key == "listen_only") {
+      address.listen_only = parse_flag(url, key, value);
+    } else {
+      address.timestamps = parse_flag(url, key, value);
+    }
+  }
+  if (!have_bitrate) fail(url, "missing bitrate=N (CAN bit/s)");
+  return address;
+}
+
+// A finite decimal number (std::strtod syntax, nothing after it).
+std::optional<double> parse_real(std::string_view text) {
+  if (text.empty() || text.size() > 32) return std::nullopt;
+  const std::string copy(text);
+  char* end = nullptr;
+  const double value = std::strtod(copy.c_str(), &end);
+  if (end != copy.c_str() + copy.size() || !std::isfinite(value)) return std::nullopt;
+  return value;
+}
+
+ReplayAddress parse_replay(std::string_view url, std::string_view rest) {
+  ReplayAddress address;
+  const size_t question = rest.find('?');
+  address.path = std::string(rest.substr(0, question));
+  if (address.path.empty()) fail(url, "missing log file path (replay://PATH)");
+  if (question == std::string_view::npos) return address;
+  const auto items = parse_query(url, rest.substr(question + 1),
+                                 {"speed", "loop", "start", "stop", "ids", "channel", "fast"});
+  for (const auto& [key, value] : items) {
+    const std::string what = std::string(key) + " '" + std::string(value) + "'";
+    if (key == "speed") {
+      const auto speed = parse_real(value);
+      if (!speed || *speed <= 0.0) fail(url, what + " is not a number > 0");
+      address.speed = *speed;
+    } else if (key == "loop") {
+      const auto loop = parse_decimal(value, 1'000'000);
+      if (value == "-1") address.loop = -1;
+      else if (loop) address.loop = static_cast<int>(*loop);
+      else fail(url, what + " is not -1 (forever) or a count >= 0");
+    } else if (key == "start" || key == "stop") {
+      const auto seconds = parse_real(value);
+      if (!seconds || *seconds < 0.0) fail(url, what + " is not seconds >= 0");
+      (key == "start" ? address.start_s : address.stop_s) = *seconds;
+    } else if (key == "ids") {
+      for (std::string_view item : split(value, ',')) {
+        const auto id = parse_hex(item, 8);
+        if (!id || *id > 0x1FFFFFFF) fail(url, "id '" + std::string(item) + "' is not a hex CAN id");
+        address.ids.push_back(*id);
+      }
+    } else if (key == "channel") {
+      if (value.empty()) fail(url, "empty channel");
+      address.channel = std::string(value);
+    } else {
+      address.fast = parse_flag(url, key, value);
+    }
+  }
+  if (address.stop_s >= 0.0 && address.stop_s < address.start_s) fail(url, "stop is before start");
+  return address;
+}
+
 }  // namespace
+
+int slcan_bitrate_code(uint32_t bitrate_bps) {
+  // Lawicel CANUSB manual, command Sn: S0 = 10 kbit/s ... S8 = 1 Mbit/s.
+  constexpr uint32_t kRates[] = {10000,  20000,  50000,  100000, 125000,
+                                 250000, 500000, 800000, 1000000};
+  for (int code = 0; code < 9; ++code) {
+    if (kRates[code] == bitrate_bps) return code;
+  }
+  return -1;
+}
 
 CanAddress parse_can_url(std::string_view url) {
   const size_t sep = url.find("://");
   if (sep == std::string_view::npos || sep == 0) {
-    fail(url, "expected SCHEME://... with scheme socketcan, socketcand, socketcand+listen or mem");
+    fail(url, "expected SCHEME://... with scheme socketcan, socketcand, socketcand+listen, mem, "
+              "slcan or replay");
   }
   std::string scheme(url.substr(0, sep));
   for (char& c : scheme) {
@@ -252,8 +368,10 @@ CanAddress parse_can_url(std::string_view url) {
   if (scheme == "socketcand") return parse_socketcand(url, rest, false);
   if (scheme == "socketcand+listen") return parse_socketcand(url, rest, true);
   if (scheme == "mem") return parse_mem(url, rest);
+  if (scheme == "slcan") return parse_slcan(url, rest);
+  if (scheme == "replay") return parse_replay(url, rest);
   fail(url, "unknown scheme '" + scheme +
-                "' (known: socketcan, socketcand, socketcand+listen, mem)");
+                "' (known: socketcan, socketcand, socketcand+listen, mem, slcan, replay)");
 }
 
 }  // namespace rise::io

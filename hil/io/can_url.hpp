@@ -42,7 +42,39 @@ struct MemAddress {
   std::string name;
 };
 
-using CanAddress = std::variant<SocketCanAddress, SocketcandAddress, MemAddress>;
+/// slcan://PATH?bitrate=N[&listen_only=0|1][&timestamps=0|1][&baud=N]: a
+/// Lawicel serial-line adapter at an absolute device path. bitrate is one of
+/// the Lawicel S0..S8 rates; baud (default 115200) is a termios rate that
+/// USB CDC-ACM adapters ignore.
+struct SlcanAddress {
+  std::string path;
+  uint32_t bitrate_bps = 0;
+  bool listen_only = false;
+  bool timestamps = false;
+  uint32_t baud = 115200;
+};
+
+/// Lawicel `Sn` code (0..8) of a CAN bitrate in bit/s, -1 when slcan has none.
+int slcan_bitrate_code(uint32_t bitrate_bps);
+
+/// replay://PATH[?speed=X][&loop=N][&start=S][&stop=S][&ids=ID,ID...][&channel=NAME][&fast=0|1]:
+/// plays a CAN log file (see replay_bus.hpp). speed > 0 scales time (2 =
+/// twice as fast); loop = extra passes (0 = once, -1 = forever); start/stop
+/// in seconds from the first record; ids in hex (frames whose id is one of
+/// them, 11 or 29 bit alike); channel as the log names it ("can0", "1").
+struct ReplayAddress {
+  std::string path;
+  double speed = 1.0;
+  int loop = 0;
+  double start_s = 0.0;
+  double stop_s = -1.0;  ///< < 0: to the end
+  std::vector<uint32_t> ids;  ///< empty: every id
+  std::string channel;        ///< empty: every channel
+  bool fast = false;
+};
+
+using CanAddress =
+    std::variant<SocketCanAddress, SocketcandAddress, MemAddress, SlcanAddress, ReplayAddress>;
 
 /// Parses a CAN bus URL (schemes above). Throws std::invalid_argument whose
 /// message names the URL and what is wrong with it. Not for the cyclic path.

@@ -70,6 +70,8 @@ CandumpParse parse_candump_line(std::string_view line) {
   if (close == std::string_view::npos || dot == std::string_view::npos || dot > close)
     return r.error = CandumpError::NoTimestamp, r;
   int64_t sec = 0, usec = 0;
+  // 12 digits of seconds reach year 33658: more is not a time (and would overflow).
+  if (dot - 1 == 0 || dot - 1 > 12) return r.error = CandumpError::NoTimestamp, r;
   for (char c : line.substr(1, dot - 1)) {
     if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
     sec = sec * 10 + (c - '0');

@@ -92,6 +92,15 @@ IoStatus SocketCanBus::reopen() {
   }
   const int ifindex = ifr.ifr_ifindex;
 
+  // raw_bind() accepts a down interface and only flags ENETDOWN on the socket
+  // afterwards, so a bus "opened" now would report Disconnected on its first
+  // call; say it here, and a reconnect loop retries until `ip link set up`.
+  if (::ioctl(fd, SIOCGIFFLAGS, &ifr) == 0 && (ifr.ifr_flags & IFF_UP) == 0) {
+    detail::close_fd(fd);
+    error_.set("%s: CAN interface '%s' is down", url_.c_str(), address_.interface.c_str());
+    return IoStatus::Disconnected;
+  }
+
   // can-utils and socketcand: enable FD only when the interface's MTU says
   // it carries FD frames (CANFD_MTU, or more for CAN XL); an older kernel
   // without CAN_RAW_FD_FRAMES (ENOPROTOOPT) stays classic.

@@ -37,7 +37,7 @@ class SocketCanBus final : public CanBus {
   IoStatus receive(CanFrame& frame, int timeout_ms) override;
   /// Creates, configures and binds a new socket. Error with "no CAN
   /// support" when the kernel has no CAN stack, Disconnected when the
-  /// interface does not exist. Not for the cyclic path.
+  /// interface does not exist or is down. Not for the cyclic path.
   IoStatus reopen() override;
   bool is_open() const override { return open_.load(); }
   const std::string& url() const override { return url_; }

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "hil/io/can_bus.hpp"
+#include "hil/io/modbus_server.hpp"
 #include "panels/console_emulator.hpp"
 #include "panels/data_path.hpp"
 
@@ -26,6 +27,7 @@ struct EmulateOptions {
   std::string panel = "panels/definitions/rise_console.yaml";
   std::string source;
   std::string can_url = "socketcand+listen://127.0.0.1:29536/can0";
+  std::string modbus_url;  ///< set: serve rise-modbus-v1 instead of CAN
   std::string script;
   bool loop = false;
   bool hold = false;
@@ -51,8 +53,12 @@ int run_emulate(const EmulateOptions& o) {
   }
 
   std::unique_ptr<io::CanBus> bus;
+  std::unique_ptr<io::ModbusServer> server;
   try {
-    bus = io::open_can_bus(o.can_url);
+    if (o.modbus_url.empty())
+      bus = io::open_can_bus(o.can_url);
+    else
+      server = std::make_unique<io::ModbusServer>(o.modbus_url, panels::ConsoleEmulator::modbus_table_sizes());
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
@@ -62,10 +68,10 @@ int run_emulate(const EmulateOptions& o) {
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);
 
-  const uint16_t port = io::listening_port(*bus);
+  const uint16_t port = server ? server->port() : io::listening_port(*bus);
   spdlog::info("rise-panel ready: emulating '{}' source '{}' (node {}) on {}{}{}", definition.name,
-               definition.sources[source].name, definition.sources[source].node, o.can_url,
-               port ? " port " : "", port ? std::to_string(port) : "");
+               definition.sources[source].name, definition.sources[source].node,
+               server ? o.modbus_url : o.can_url, port ? " port " : "", port ? std::to_string(port) : "");
 
   int64_t start_us = monotonic_us();
   std::size_t next_event = 0;
@@ -102,6 +108,14 @@ int run_emulate(const EmulateOptions& o) {
                !o.loop && t > timeline.end_time_s() + 0.5) {
       break;
     }
+    if (server) {
+      // Modbus: the firmware cycle writes the registers; the host's writes
+      // are read back as the console's feedback.
+      emulator.tick_modbus(*server, now);
+      if (emulator.poll_modbus_feedback(*server)) spdlog::info("feedback: {}", emulator.feedback_text());
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      continue;
+    }
     if (!bus->is_open()) {
       if (now >= next_reopen_us) {
         bus->reopen();
@@ -128,13 +142,17 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
 
   EmulateOptions emulate;
-  CLI::App* em = app.add_subcommand("emulate", "act as the console's firmware on a CAN transport");
+  CLI::App* em = app.add_subcommand("emulate", "act as the console's firmware on a CAN transport or as a Modbus slave");
   em->add_option("--panel", emulate.panel, "panel definition (YAML)")->capture_default_str();
   em->add_option("--source", emulate.source, "which source of the panel to emulate (default: the first)");
-  em->add_option("--can", emulate.can_url,
+  CLI::Option* can_option = em->add_option("--can", emulate.can_url,
                  "transport: socketcand+listen://HOST:PORT/BUS (serve), socketcand://HOST:PORT/BUS, "
                  "socketcan://IFACE, mem://NAME")
       ->capture_default_str();
+  em->add_option("--modbus", emulate.modbus_url,
+                 "serve rise-modbus-v1 instead: modbus+tcp-listen://HOST:PORT?unit=N (PORT 0: any free port), "
+                 "modbus+rtu-listen:///dev/pts/N?baud=B&unit=N")
+      ->excludes(can_option);
   em->add_option("--script", emulate.script, "timeline file: 'time control value' lines");
   em->add_flag("--loop", emulate.loop, "repeat the script");
   em->add_flag("--hold", emulate.hold, "keep sending the last state after the script ends");

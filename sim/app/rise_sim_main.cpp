@@ -1,6 +1,7 @@
 // rise-sim: the ODE simulator as an LCM node. Subscribes the trainee's
-// PanelState, steps the world at a fixed 1 ms, publishes RobotState and the
-// console feedback (the speed display).
+// PanelState, steps the world at a fixed 1 ms, publishes RobotState, the
+// console feedback (the speed display) and every simulation event
+// (SimEvent on rise/<id>/sim_event).
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -16,6 +17,7 @@
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
+#include "rise_msgs/SimEvent.hpp"
 #include "sim/simulation.hpp"
 
 namespace {
@@ -77,14 +79,41 @@ rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::s
     m.joint_velocities.push_back(w.velocity_radps);
     m.joint_efforts.push_back(w.effort_nm);
   }
+  for (const auto& j : s.joints) {
+    m.joint_names.push_back(j.name);
+    m.joint_positions.push_back(j.position);
+    m.joint_velocities.push_back(j.velocity);
+    m.joint_efforts.push_back(j.effort);
+  }
   m.num_joints = static_cast<int16_t>(m.joint_names.size());
-  m.damage = 0.0f;
+  m.damage = static_cast<float>(s.damage);
   m.battery = 1.0f;
   m.motors_enabled = s.motors_enabled;
   m.stop_reason = s.stop_reason;
   m.contacts = s.contacts;
   m.num_contacts = static_cast<int16_t>(m.contacts.size());
   return m;
+}
+
+rise_msgs::SimEvent to_message(const rise::sim::SimEvent& e, const std::string& robot_id) {
+  rise_msgs::SimEvent m;
+  m.utime = wall_us();
+  m.sim_time_s = e.time_s;
+  m.robot_id = robot_id;
+  m.kind = rise::sim::to_string(e.kind);
+  m.a = e.a;
+  m.b = e.b;
+  m.detail = e.detail;
+  return m;
+}
+
+// Contacts come and go all the time (a track on step noses); the rest is
+// what a trainer wants to see in the log.
+void log_event(const rise::sim::SimEvent& e) {
+  const bool contact =
+      e.kind == rise::sim::SimEventKind::CollisionStarted || e.kind == rise::sim::SimEventKind::CollisionStopped;
+  spdlog::log(contact ? spdlog::level::debug : spdlog::level::info, "event {:.3f} s: {} {} {} {}", e.time_s,
+              rise::sim::to_string(e.kind), e.a, e.b, e.detail);
 }
 }  // namespace
 
@@ -131,6 +160,7 @@ int main(int argc, char** argv) {
   const std::string panel_channel = "rise/" + id + "/panel_state";
   const std::string state_channel = "rise/" + id + "/robot_state";
   const std::string feedback_channel = "rise/" + id + "/panel_feedback";
+  const std::string event_channel = "rise/" + id + "/sim_event";
   PanelListener panel;
   // Only the newest panel state matters to the physics; a short queue keeps
   // a stalled sim from acting on old sticks.
@@ -139,8 +169,8 @@ int main(int argc, char** argv) {
   rise::sim::Simulation sim(robot, world);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}", robot.name, robot.file, world.name,
-               fast ? "as fast as possible" : "real time", lcm_url, panel_channel, state_channel);
+  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}, {}", robot.name, robot.file, world.name,
+               fast ? "as fast as possible" : "real time", lcm_url, panel_channel, state_channel, event_channel);
 
   const int steps_per_state = std::max(1, static_cast<int>(std::lround(1.0 / (state_hz * rise::sim::Simulation::kStepS))));
   const int steps_per_feedback = 100;  // 10 Hz
@@ -158,6 +188,11 @@ int main(int argc, char** argv) {
     sim.set_input(input);
     sim.step();
     ++step;
+    for (const auto& e : sim.take_events()) {
+      log_event(e);
+      const auto msg = to_message(e, robot.name);
+      lcm.publish(event_channel, &msg);
+    }
 
     if (step % steps_per_state == 0) {
       const auto snap = sim.snapshot();

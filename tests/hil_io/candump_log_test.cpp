@@ -41,6 +41,8 @@ TEST_CASE("candump log lines of every frame kind are read as can-utils writes th
   SECTION("malformed lines give a typed error") {
     CHECK(parse_candump_line("").error == CandumpError::Empty);
     CHECK(parse_candump_line("can0 123#00").error == CandumpError::NoTimestamp);
+    CHECK(parse_candump_line("(99999999999999999999.0) can0 123#00").error == CandumpError::NoTimestamp);
+    CHECK(parse_candump_line("(.5) can0 123#00").error == CandumpError::NoTimestamp);
     CHECK(parse_candump_line("(1.0) can0 800#00").error == CandumpError::BadId);
     CHECK(parse_candump_line("(1.0) can0 1234#00").error == CandumpError::BadId);
     CHECK(parse_candump_line("(1.0) can0 123#0").error == CandumpError::BadData);

@@ -1,0 +1,90 @@
+#pragma once
+
+// One streaming reader for the CAN log formats met in practice:
+//   candump -l   (1398128223.803317) can0 166#D0320009          (see candump_log.hpp)
+//   Vector ASC      17.876708 1  6F9  Rx   d 8 05 0C 00 00 00 00 00 00
+//                   30.005021 CANFD   1 Rx  300  1 0 8  8 11 c2 03 04 05 06 07 08 ...
+//   PEAK TRC 2.x        2     17876.708 DT 1      06F9 Rx -  8    05 0C 00 00 00 00 00 00
+//   PEAK TRC 1.x        1)      1841.0  Rx         0001  8  00 00 00 00 00 00 00 00
+// Vector BLF (binary) is not read.
+
+#include <cstddef>
+#include <cstdint>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hil/io/can_frame.hpp"
+
+namespace rise::io {
+
+enum class CanLogFormat { Candump, VectorAsc, PeakTrc };
+const char* to_string(CanLogFormat format);
+
+/// One frame of a log. frame.timestamp_us is the file's time as the file
+/// counts it: seconds since the Unix epoch for candump, since the start of
+/// the measurement for ASC and TRC (relative ASC stamps are summed up).
+/// Error frames carry no error class in ASC/TRC: their id is 0 and len 8.
+struct CanLogRecord {
+  CanFrame frame;
+  std::string channel;  ///< "can0" (candump), "1" (ASC, TRC bus); empty if the file has none
+  int line = 0;         ///< 1-based line number in the file
+  bool tx = false;      ///< the logger sent it (ASC/TRC "Tx"); false for candump
+};
+
+/// Reads a log file record by record (one line in memory at a time).
+/// Lines that are neither a frame nor a known non-frame line (header,
+/// comment, statistics, chip status, J1939 transport summary, TRC status)
+/// are counted as malformed and skipped; next() never throws.
+class CanLogReader {
+ public:
+  /// How many malformed line numbers are kept (the count goes on).
+  static constexpr size_t kMaxMalformedLines = 1000;
+
+  /// Opens path and detects its format from the first lines, then from the
+  /// extension (.log .asc .trc). Throws std::runtime_error naming the path
+  /// when it cannot be opened or its format is not recognised.
+  explicit CanLogReader(const std::string& path);
+
+  /// The next frame record; false at the end of the file. Does not throw;
+  /// allocates only for the channel string and long lines.
+  bool next(CanLogRecord& record);
+
+  /// Goes back to the first line; the malformed count starts again.
+  void rewind();
+
+  CanLogFormat format() const { return format_; }
+  const std::string& path() const { return path_; }
+  /// Malformed lines seen so far and the first kMaxMalformedLines of their numbers.
+  size_t malformed_count() const { return malformed_count_; }
+  const std::vector<int>& malformed_lines() const { return malformed_lines_; }
+
+ private:
+  enum class LineResult { Frame, Skip, Malformed };
+  LineResult parse_line(std::string_view line, CanLogRecord& record);
+  LineResult parse_asc(std::string_view line, CanLogRecord& record);
+  LineResult parse_trc(std::string_view line, CanLogRecord& record);
+  void reset_state();
+
+  std::string path_;
+  std::ifstream in_;
+  CanLogFormat format_ = CanLogFormat::Candump;
+  std::string text_;
+  int line_ = 0;
+  size_t malformed_count_ = 0;
+  std::vector<int> malformed_lines_;
+  // ASC header state.
+  bool asc_decimal_ = false;
+  bool asc_relative_ = false;
+  int64_t asc_last_us_ = 0;
+  // TRC header state: version times 10 (11 = 1.1, 21 = 2.1), column letters.
+  int trc_version_ = 0;
+  std::string trc_columns_;
+};
+
+/// Every record of a file (convenience for tests and tools; not for big files
+/// in the cyclic path). Throws as CanLogReader's constructor.
+std::vector<CanLogRecord> read_can_log(const std::string& path);
+
+}  // namespace rise::io

@@ -1,0 +1,226 @@
+#include <catch2/catch.hpp>
+
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+#include <vector>
+
+#include "hil/bridge.hpp"
+#include "panels/console_emulator.hpp"
+#include "tests/hil_io/slcan_test_support.hpp"
+
+using rise::hil::PanelSnapshot;
+using rise::io::test::FakeAdapter;
+using rise::io::test::FakeAdapterOptions;
+using rise::io::test::SocatPtys;
+using rise::io::test::TempDir;
+
+namespace {
+
+constexpr const char* kMemUrl = "mem://slcan_chain";
+
+rise::panels::PanelDefinition console() {
+  return rise::panels::load_panel_definition(std::string(RISE_SOURCE_DIR) +
+                                             "/panels/definitions/rise_console.yaml");
+}
+
+// The console's firmware (panels/ emulator) in its own thread on a mem:// bus,
+// at the firmware's real frame rates.
+class EmulatorThread {
+ public:
+  EmulatorThread(const rise::panels::PanelDefinition& def, const std::string& bus_url)
+      : emulator_(def, 0), bus_(rise::io::open_can_bus(bus_url)) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~EmulatorThread() {
+    running_ = false;
+    thread_.join();
+  }
+  void apply(const rise::panels::TimelineEvent& e) {
+    std::lock_guard lock(mutex_);
+    emulator_.apply(e);
+  }
+  rise::panels::ConsoleFeedback feedback() {
+    std::lock_guard lock(mutex_);
+    return emulator_.feedback();
+  }
+
+ private:
+  void run() {
+    rise::io::CanFrame f;
+    while (running_) {
+      {
+        std::lock_guard lock(mutex_);
+        emulator_.tick(*bus_, rise::hil::monotonic_us());
+      }
+      while (bus_->receive(f, 1) == rise::io::IoStatus::Ok) {
+        std::lock_guard lock(mutex_);
+        emulator_.on_frame(f);
+      }
+    }
+  }
+  std::mutex mutex_;
+  rise::panels::ConsoleEmulator emulator_;
+  std::unique_ptr<rise::io::CanBus> bus_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+// A USB slcan adapter plugged into the console's CAN: the fake adapter on the
+// pty forwards what the bridge sends onto the mem:// bus, and every frame of
+// the mem:// bus to the bridge as slcan text.
+class AdapterOnMemBus {
+ public:
+  explicit AdapterOnMemBus(const std::string& pty_path) : mem_(rise::io::open_can_bus(kMemUrl)) {
+    FakeAdapterOptions options;
+    options.on_frame_line = [this](const std::string& line) {
+      if (const auto frame = rise::io::test::parse_slcan_text(line)) mem_->send(*frame);
+    };
+    adapter_ = std::make_unique<FakeAdapter>(pty_path, std::move(options));
+    thread_ = std::thread([this] { run(); });
+  }
+  ~AdapterOnMemBus() {
+    running_ = false;
+    thread_.join();
+    adapter_.reset();
+  }
+  bool opened() const { return adapter_->opened(); }
+  bool channel_open() const { return adapter_->channel_open(); }
+
+ private:
+  void run() {
+    rise::io::CanFrame f;
+    while (running_) {
+      // Like the real adapter: frames reach the host only while the channel is open.
+      if (mem_->receive(f, 5) == rise::io::IoStatus::Ok && adapter_->channel_open()) {
+        adapter_->write(rise::io::test::slcan_text(f) + "\r");
+      }
+    }
+  }
+  std::unique_ptr<rise::io::CanBus> mem_;
+  std::unique_ptr<FakeAdapter> adapter_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+rise::panels::TimelineEvent set(const rise::panels::PanelDefinition& def, const char* control, float axis,
+                                bool pressed) {
+  rise::panels::TimelineEvent e;
+  e.control = *def.find_control(control);
+  e.axis = axis;
+  e.pressed = pressed;
+  return e;
+}
+
+struct Published {
+  std::mutex mutex;
+  std::condition_variable cv;
+  std::vector<PanelSnapshot> snapshots;
+
+  void add(const PanelSnapshot& s) {
+    std::lock_guard lock(mutex);
+    snapshots.push_back(s);
+    cv.notify_all();
+  }
+  // Waits (deadline, not a sleep) for a snapshot from index `from` on that satisfies pred.
+  template <typename Pred>
+  std::optional<PanelSnapshot> wait_for(Pred pred, int timeout_ms, std::size_t from = 0) {
+    std::unique_lock lock(mutex);
+    std::optional<PanelSnapshot> found;
+    cv.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] {
+      for (std::size_t i = from; i < snapshots.size(); ++i)
+        if (pred(snapshots[i])) {
+          found = snapshots[i];
+          return true;
+        }
+      return false;
+    });
+    return found;
+  }
+  std::size_t size() {
+    std::lock_guard lock(mutex);
+    return snapshots.size();
+  }
+};
+
+}  // namespace
+
+TEST_CASE("the bridge drives the emulated console over slcan through a pty pair, goes failsafe when the "
+          "adapter is unplugged and recovers when it comes back",
+          "[hil]") {
+  if (!rise::io::test::have_socat()) {
+    WARN("/usr/bin/socat is absent (Debian package socat): skip");
+    return;
+  }
+  const auto def = console();
+  const auto drive_y = *def.find_control("drive_y");
+  TempDir dir;
+  auto ptys = std::make_unique<SocatPtys>(dir.path());
+  REQUIRE(ptys->ready());
+  auto adapter = std::make_unique<AdapterOnMemBus>(ptys->b());
+  REQUIRE(adapter->opened());
+  auto emulator = std::make_unique<EmulatorThread>(def, kMemUrl);
+  emulator->apply(set(def, "deadman", 0, true));
+  emulator->apply(set(def, "drive_y", 0.6f, false));
+
+  Published published;
+  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
+  buses.push_back(rise::io::open_can_bus("slcan://" + ptys->a() + "?bitrate=500000"));
+  REQUIRE(buses.back()->is_open());
+  rise::hil::Bridge bridge(def, std::move(buses), [&](const PanelSnapshot& s) { published.add(s); });
+  bridge.start();
+
+  const auto is_live = [&](const PanelSnapshot& s) {
+    return !s.failsafe && s.deadman && s.controls[drive_y].axis > 0.5f;
+  };
+  const auto live = published.wait_for(is_live, 3000);
+  REQUIRE(live.has_value());
+  CHECK(live->controls[drive_y].axis == Approx((0.6 - 0.05) / 0.95).margin(1e-3));
+
+  // Feedback travels the other way: bridge → slcan → adapter → console.
+  rise::hil::FeedbackRequest request;
+  request.displays.emplace_back("speed", 1.25f);
+  bridge.set_feedback(request);
+  const auto shows_speed = [&] {
+    const auto fb = emulator->feedback();
+    return fb.displays.count(0) == 1 && fb.displays.at(0).raw == 125 && (fb.leds_on & 1u) != 0;
+  };
+  CHECK(rise::io::test::wait_until(shows_speed, std::chrono::seconds(3)));
+  CHECK(emulator->feedback().bad_frames == 0);
+
+  // Unplug the adapter: socat ends, the tty hangs up.
+  const std::size_t before = published.size();
+  ptys->stop();
+  const auto lost = published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 3000, before);
+  REQUIRE(lost.has_value());
+  CHECK(lost->controls[drive_y].axis == 0.0f);
+  CHECK((lost->failsafe_reason.find("disconnected") != std::string::npos ||
+         lost->failsafe_reason.find("stale") != std::string::npos));
+  const int64_t timeout_us = 1000 * def.sources[0].timeout_ms;
+  const int64_t period_us = def.publish_period_us();
+  {
+    std::lock_guard lock(published.mutex);
+    for (const auto& s : published.snapshots)
+      if (s.sources[0].last_frame_age_us > timeout_us) CHECK(s.failsafe);
+  }
+  // Within one publish period of the source timeout (plus slack for this
+  // 2-core machine), whether the hang-up or the silence was noticed first.
+  CHECK(lost->sources[0].last_frame_age_us <= timeout_us + period_us + 15000);
+  adapter.reset();
+
+  // Plug it in again: a new pty pair on the same path; the bridge reopens.
+  ptys = std::make_unique<SocatPtys>(dir.path());
+  REQUIRE(ptys->ready());
+  adapter = std::make_unique<AdapterOnMemBus>(ptys->b());
+  REQUIRE(adapter->opened());
+  const std::size_t unplugged = published.size();
+  // The bridge retries with a back-off of up to BridgeSettings::reopen_max_ms (2 s).
+  const auto back = published.wait_for(is_live, 8000, unplugged);
+  REQUIRE(back.has_value());
+  CHECK(adapter->channel_open());
+  CHECK(back->controls[drive_y].axis == Approx((0.6 - 0.05) / 0.95).margin(1e-3));
+  bridge.stop();
+}
