@@ -24,13 +24,6 @@ fp::FrameType frame_type_for(const SignalRef& signal) {
   return fp::FrameType::Axes0;
 }
 
-// Deadband with the remaining travel rescaled, so the output starts at 0 at
-// the band's edge instead of jumping to d.
-float apply_deadband(float x, float band) {
-  const float magnitude = std::fabs(x);
-  if (magnitude <= band) return 0.0f;
-  return std::copysign((magnitude - band) / (1.0f - band), x);
-}
 
 void append_reason(std::string& reasons, const std::string& reason) {
   if (!reasons.empty()) reasons += "; ";
@@ -65,8 +58,15 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
     state.status.name = s.name;
     sources_.push_back(std::move(state));
   }
-  for (const auto& c : definition_.controls)
+  for (const auto& c : definition_.controls) {
     sources_[c.source].needs_type[type_index(frame_type_for(c.signal))] = true;
+    const ButtonMode mode = c.behaviour == panels::ButtonBehaviour::Toggle      ? ButtonMode::Toggle
+                            : c.behaviour == panels::ButtonBehaviour::LongPress ? ButtonMode::LongPress
+                            : c.behaviour == panels::ButtonBehaviour::Edge      ? ButtonMode::Edge
+                                                                                : ButtonMode::Direct;
+    filters_.push_back({LowPass(c.lowpass_ms), ButtonFilter({mode, c.debounce_ms, c.long_press_ms, c.pulse_ms}),
+                        true, std::nullopt});
+  }
 }
 
 bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
@@ -264,13 +264,41 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
             append_reason(reasons, c.name + ": not available");
             break;
           }
-          float x = fp::axis_to_unit(raw);
-          if (c.invert) x = -x;
-          v.axis = std::clamp(c.scale * apply_deadband(x, c.deadband), -1.0f, 1.0f);
+          const AxisShaping shaping{c.deadband, c.expo, c.scale, c.invert};
+          const float x = shape_axis(fp::axis_to_unit(raw), shaping);
+          ControlFilter& f = filters_[i];
+          // Restart from the safe value: after a dead-man press the axis ramps up, never jumps.
+          if (f.was_safe) f.lowpass.reset(c.safe_axis, now_us);
+          v.axis = f.lowpass.update(x, now_us);
           break;
         }
-        case ControlKind::Button: v.pressed = (s.buttons >> c.signal.index) & 1u; break;
+        case ControlKind::Button: {
+          const bool raw = (s.buttons >> c.signal.index) & 1u;
+          ControlFilter& f = filters_[i];
+          // After a loss the button restarts "not activated": a latched
+          // toggle never survives the source going away.
+          if (f.was_safe) f.button.reset(raw, c.behaviour == panels::ButtonBehaviour::Direct && raw, now_us);
+          v.pressed = f.button.update(raw, now_us);
+          break;
+        }
         case ControlKind::Switch: {
+          if (!c.bits.empty()) {
+            // Between the detents of a rotary switch no contact (or two) may
+            // be closed for a moment: keep the last valid position.
+            ControlFilter& f = filters_[i];
+            const auto p = switch_from_bits(s.buttons, c.bits,
+                                            c.encoding == panels::BitsEncoding::OneHot ? BitsEncoding::OneHot
+                                                                                       : BitsEncoding::Binary,
+                                            c.positions.size());
+            if (p) f.last_position = p;
+            if (!f.last_position) {
+              set_safe(c, v);
+              append_reason(reasons, c.name + ": position not available");
+              break;
+            }
+            v.position = *f.last_position;
+            break;
+          }
           const uint8_t position = s.switches[c.signal.index];
           if (position >= c.positions.size()) {
             set_safe(c, v);
@@ -300,6 +328,10 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
   if (!snap.deadman || snap.failsafe)
     for (std::size_t i = 0; i < definition_.controls.size(); ++i)
       if (definition_.controls[i].motion) set_safe(definition_.controls[i], snap.controls[i]);
+  for (std::size_t i = 0; i < definition_.controls.size(); ++i) {
+    filters_[i].was_safe = snap.controls[i].forced_safe;
+    if (snap.controls[i].forced_safe && !healthy[definition_.controls[i].source]) filters_[i].last_position.reset();
+  }
   return snap;
 }
 

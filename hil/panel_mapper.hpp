@@ -5,11 +5,13 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "firmware_protocol/console_can.hpp"
+#include "hil/control_transforms.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "panels/panel_definition.hpp"
 
@@ -89,7 +91,10 @@ class PanelMapper {
   /// stale (a bound frame type older than timeout_ms), failing its protection
   /// check, or whose console reports a fault puts its controls at their safe
   /// values and the panel in failsafe; the e-stop pressed → failsafe; the
-  /// dead-man released → motion controls at their safe values.
+  /// dead-man released → motion controls at their safe values. Then the
+  /// per-control transforms (shaping, low-pass, button modes, switches from
+  /// bits) run; a control that was forced safe restarts its filters, so a
+  /// toggle or a filtered axis never carries state across a source loss.
   PanelSnapshot evaluate(int64_t now_us) const;
 
   const panels::PanelDefinition& definition() const { return definition_; }
@@ -116,6 +121,17 @@ class PanelMapper {
 
   panels::PanelDefinition definition_;
   std::vector<SourceState> sources_;
+
+  // Per-control transform state (low-pass, button filters, last valid switch
+  // position). evaluate() advances it: it is called with non-decreasing times
+  // under the bridge's mutex.
+  struct ControlFilter {
+    LowPass lowpass;
+    ButtonFilter button;
+    bool was_safe = true;  // forced safe at the last evaluation: restart filters
+    std::optional<uint8_t> last_position;
+  };
+  mutable std::vector<ControlFilter> filters_;
 };
 
 /// Age after which a missing heartbeat makes a source stale: three heartbeat

@@ -136,8 +136,9 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
                                 const YAML::Node& node, std::size_t i) {
   std::string where = "controls[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
-                {"name", "kind", "source", "signal", "role", "motion", "deadband", "invert",
-                 "scale", "safe", "positions"});
+                {"name", "kind", "source", "signal", "bits", "encoding", "role", "motion", "deadband",
+                 "invert", "scale", "expo", "lowpass_ms", "mode", "debounce_ms", "long_press_ms",
+                 "pulse_ms", "safe", "positions"});
   ControlDefinition c;
   c.line = node.Mark().line + 1;
   c.name = ctx.require<std::string>(node, "name", where);
@@ -151,13 +152,34 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   else ctx.fail(node["kind"], where + ".kind", "unknown kind '" + kind + "' (axis, button, switch)");
 
   c.source = resolve_source(ctx, def, node, where);
-  const auto signal_text = ctx.require<std::string>(node, "signal", where);
+  if (const YAML::Node bits = node["bits"]) {
+    // A switch read from several button inputs: no switch signal of its own.
+    if (c.kind != ControlKind::Switch) ctx.fail(bits, where + ".bits", "only a switch can be read from bits");
+    if (node["signal"]) ctx.fail(node["signal"], where + ".signal", "give either signal or bits, not both");
+    if (!bits.IsSequence() || bits.size() < 1 || bits.size() > 8)
+      ctx.fail(bits, where + ".bits", "expected a list of 1..8 button signals");
+    for (const auto& b : bits) {
+      const auto text = ctx.as<std::string>(b, where + ".bits");
+      const auto ref = parse_signal(text);
+      if (!ref || ref->kind != SignalRef::Kind::Button)
+        ctx.fail(b, where + ".bits", "'" + text + "' is not a button signal (button.0-31)");
+      c.bits.push_back(ref->index);
+    }
+    const auto encoding = ctx.get<std::string>(node, "encoding", where, "binary");
+    if (encoding == "binary") c.encoding = BitsEncoding::Binary;
+    else if (encoding == "one_hot") c.encoding = BitsEncoding::OneHot;
+    else ctx.fail(node["encoding"], where + ".encoding", "unknown encoding '" + encoding + "' (binary, one_hot)");
+    c.signal = SignalRef{SignalRef::Kind::Button, c.bits.front()};
+  } else if (node["encoding"]) {
+    ctx.fail(node["encoding"], where + ".encoding", "only with bits");
+  }
+  const auto signal_text = c.bits.empty() ? ctx.require<std::string>(node, "signal", where) : to_string(c.signal);
   const auto signal = parse_signal(signal_text);
   if (!signal)
     ctx.fail(node["signal"], where + ".signal",
              "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
   c.signal = *signal;
-  const bool kind_matches =
+  const bool kind_matches = !c.bits.empty() ||
       (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
       (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
       (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
@@ -191,13 +213,37 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
       c.scale = ctx.get<float>(node, "scale", where, 1.0f);
       if (!(c.scale > 0.0f && c.scale <= 1.0f))
         ctx.fail(node["scale"], where + ".scale", "must be in (0, 1]");
+      c.expo = ctx.get<float>(node, "expo", where, 0.0f);
+      if (!(c.expo >= 0.0f && c.expo <= 1.0f)) ctx.fail(node["expo"], where + ".expo", "must be in 0..1");
+      c.lowpass_ms = ctx.get<float>(node, "lowpass_ms", where, 0.0f);
+      if (!(c.lowpass_ms >= 0.0f && c.lowpass_ms <= 10000.0f))
+        ctx.fail(node["lowpass_ms"], where + ".lowpass_ms", "must be in 0..10000");
+      for (const char* k : {"mode", "debounce_ms", "long_press_ms", "pulse_ms", "positions"})
+        if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on an axis");
       break;
     }
-    case ControlKind::Button:
+    case ControlKind::Button: {
       c.safe_button = ctx.as<bool>(safe, where + ".safe");
-      for (const char* k : {"deadband", "invert", "scale", "positions"})
+      for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "positions"})
         if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a button");
+      const auto mode = ctx.get<std::string>(node, "mode", where, "direct");
+      if (mode == "direct") c.behaviour = ButtonBehaviour::Direct;
+      else if (mode == "toggle") c.behaviour = ButtonBehaviour::Toggle;
+      else if (mode == "long_press") c.behaviour = ButtonBehaviour::LongPress;
+      else if (mode == "edge") c.behaviour = ButtonBehaviour::Edge;
+      else ctx.fail(node["mode"], where + ".mode", "unknown mode '" + mode + "' (direct, toggle, long_press, edge)");
+      if (c.role != ControlRole::None && c.behaviour != ButtonBehaviour::Direct)
+        ctx.fail(node["mode"], where + ".mode", "the " + role + " must be mode: direct");
+      const auto ms = [&](const char* key, int fallback) {
+        const int v = ctx.get<int>(node, key, where, fallback);
+        if (v < 0 || v > 60000) ctx.fail(node[key], where + "." + key, "must be 0..60000");
+        return static_cast<uint32_t>(v);
+      };
+      c.debounce_ms = ms("debounce_ms", 0);
+      c.long_press_ms = ms("long_press_ms", 800);
+      c.pulse_ms = ms("pulse_ms", 100);
       break;
+    }
     case ControlKind::Switch: {
       const YAML::Node positions = node["positions"];
       if (!positions || !positions.IsSequence() || positions.size() < 2)
@@ -213,8 +259,13 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
         }
       if (!found)
         ctx.fail(safe, where + ".safe", "'" + safe_label + "' is not one of the positions");
-      for (const char* k : {"deadband", "invert", "scale"})
+      for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "mode", "debounce_ms",
+                            "long_press_ms", "pulse_ms"})
         if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a switch");
+      if (c.encoding == BitsEncoding::Binary && !c.bits.empty() && (1u << c.bits.size()) < c.positions.size())
+        ctx.fail(node["bits"], where + ".bits", "too few bits for " + std::to_string(c.positions.size()) + " positions");
+      if (c.encoding == BitsEncoding::OneHot && c.bits.size() != c.positions.size())
+        ctx.fail(node["bits"], where + ".bits", "one_hot needs one bit per position");
       break;
     }
   }
@@ -350,9 +401,13 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
     auto c = parse_control(ctx, def, controls[i], i);
     if (def.find_control(c.name))
       ctx.fail(controls[i]["name"], control_key(c.name) + ".name", "duplicate control name");
-    if (!bound.insert({c.source, static_cast<int>(c.signal.kind), c.signal.index}).second)
-      ctx.fail(controls[i]["signal"], control_key(c.name) + ".signal",
-               "signal '" + to_string(c.signal) + "' is already bound to another control");
+    std::vector<SignalRef> uses{c.signal};
+    for (const uint8_t b : c.bits) uses.push_back(SignalRef{SignalRef::Kind::Button, b});
+    if (!c.bits.empty()) uses.erase(uses.begin());
+    for (const auto& use : uses)
+      if (!bound.insert({c.source, static_cast<int>(use.kind), use.index}).second)
+        ctx.fail(controls[i][c.bits.empty() ? "signal" : "bits"], control_key(c.name) + (c.bits.empty() ? ".signal" : ".bits"),
+                 "signal '" + to_string(use) + "' is already bound to another control");
     if (c.role == ControlRole::Deadman) {
       if (has_deadman) ctx.fail(controls[i]["role"], control_key(c.name) + ".role", "a second dead-man");
       has_deadman = true;

@@ -28,6 +28,17 @@ struct SignalRef {
   uint8_t index = 0;
 };
 
+/// How a button's raw state becomes the control's value.
+enum class ButtonBehaviour {
+  Direct,     ///< pressed while held
+  Toggle,     ///< each press flips the value (latching function on a momentary button)
+  LongPress,  ///< pressed once held for long_press_ms
+  Edge,       ///< pressed for pulse_ms after each press
+};
+
+/// How a switch wired to several inputs reads its position.
+enum class BitsEncoding { Binary, OneHot };
+
 struct ControlDefinition {
   std::string name;
   ControlKind kind = ControlKind::Axis;
@@ -40,6 +51,17 @@ struct ControlDefinition {
   float deadband = 0.0f;
   bool invert = false;
   float scale = 1.0f;
+  float expo = 0.0f;        ///< 0 linear .. 1 cubic (after the deadband, before the scale)
+  float lowpass_ms = 0.0f;  ///< first-order low-pass time constant, 0 = none
+  // Buttons.
+  ButtonBehaviour behaviour = ButtonBehaviour::Direct;
+  uint32_t debounce_ms = 0;
+  uint32_t long_press_ms = 800;
+  uint32_t pulse_ms = 100;
+  // Switches read from several button inputs instead of a switch signal
+  // (e.g. a 3-position rotary switch on two inputs): `bits: [button.4, button.5]`.
+  std::vector<uint8_t> bits;
+  BitsEncoding encoding = BitsEncoding::Binary;
   // Safe value: axes use safe_axis, buttons safe_button, switches safe_switch.
   float safe_axis = 0.0f;
   bool safe_button = false;

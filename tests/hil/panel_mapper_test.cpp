@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 #include "hil/feedback.hpp"
 #include "hil/panel_mapper.hpp"
 #include "panels/panel_definition.hpp"
@@ -253,4 +255,122 @@ TEST_CASE("feedback by name becomes LED bits and display values of the console",
   frames = rise::hil::build_feedback(def, 0, request, snap);
   CHECK(frames.indicators.leds_on == 0b010u);
   CHECK(rise::hil::display_raw(1e12f, 2) == INT32_MAX);
+}
+
+namespace {
+const char* kTransformsPanel = R"(panel: transforms
+sources:
+  - {name: console, protocol: rise-can-v1, node: 0, timeout_ms: 50}
+controls:
+  - {name: drive_y, kind: axis, signal: axis.1, expo: 1.0, lowpass_ms: 100, motion: true, safe: 0.0}
+  - {name: deadman, kind: button, signal: button.0, role: deadman, safe: false}
+  - {name: lights, kind: button, signal: button.2, mode: toggle, safe: false}
+  - {name: horn, kind: button, signal: button.3, mode: long_press, long_press_ms: 500, safe: false}
+  - {name: camera, kind: switch, bits: [button.4, button.5, button.6], encoding: one_hot,
+     positions: [front, arm, rear], safe: front}
+)";
+
+struct TransformFirmware {
+  PanelMapper& mapper;
+  fp::Encoder encoder{0};
+  int16_t drive_y = 0;
+  uint32_t buttons = 0;
+  void cycle(int64_t t) {
+    auto feed = [&](const fp::Message& m) {
+      const auto w = encoder.next(m);
+      mapper.on_frame(0, w.can_id, w.data, t);
+    };
+    feed(fp::HeartbeatFrame{fp::kProtocolVersion, fp::PanelStatus::Operational, 0});
+    feed(fp::AxesFrame{0, {0, drive_y, 0}});
+    feed(fp::ButtonsFrame{buttons});
+  }
+};
+}  // namespace
+
+TEST_CASE("per-control transforms from the definition: expo, low-pass ramp, toggle, long press, switch from bits",
+          "[hil]") {
+  PanelMapper mapper(rise::panels::parse_panel_definition(kTransformsPanel, "t.yaml"));
+  mapper.on_connection(0, true, kT0);
+  TransformFirmware fw{mapper};
+  const auto& def = mapper.definition();
+  auto value = [&](const PanelSnapshot& s, const char* name) { return s.controls[*def.find_control(name)]; };
+
+  fw.buttons = 1u | (1u << 4);  // dead-man, camera = front
+  fw.drive_y = fp::axis_from_unit(0.5f);
+  fw.cycle(kT0);
+  auto s = mapper.evaluate(kT0);
+  INFO(s.failsafe_reason);
+  REQUIRE_FALSE(s.failsafe);
+  // The low-pass restarts from the safe value: no jump at the first reading.
+  CHECK(value(s, "drive_y").axis == 0.0f);
+  // One time constant later: 63 % of the cubic-expo value 0.125.
+  for (int64_t t = kT0 + 10'000; t <= kT0 + 100'000; t += 10'000) {
+    fw.cycle(t);
+    s = mapper.evaluate(t);
+  }
+  CHECK(value(s, "drive_y").axis == Approx(0.125 * (1 - std::exp(-1.0))).margin(2e-3));
+  CHECK(value(s, "camera").position == 0);
+
+  // Toggle: press and release → latched on.
+  fw.buttons |= 1u << 2;
+  fw.cycle(kT0 + 110'000);
+  mapper.evaluate(kT0 + 110'000);
+  fw.buttons &= ~(1u << 2);
+  fw.cycle(kT0 + 120'000);
+  s = mapper.evaluate(kT0 + 120'000);
+  CHECK(value(s, "lights").pressed);
+
+  // Camera rotary switch: between detents (no contact) it keeps "front";
+  // on the "rear" contact it reads rear.
+  fw.buttons &= ~(1u << 4);
+  fw.cycle(kT0 + 130'000);
+  CHECK(value(mapper.evaluate(kT0 + 130'000), "camera").position == 0);
+  fw.buttons |= 1u << 6;
+  fw.cycle(kT0 + 140'000);
+  CHECK(value(mapper.evaluate(kT0 + 140'000), "camera").position == 2);
+
+  // Long press: held 400 ms → not yet; 500 ms → yes.
+  fw.buttons |= 1u << 3;
+  for (int64_t t = kT0 + 150'000; t <= kT0 + 550'000; t += 20'000) {
+    fw.cycle(t);
+    s = mapper.evaluate(t);
+  }
+  CHECK_FALSE(value(s, "horn").pressed);
+  fw.cycle(kT0 + 650'000);
+  CHECK(value(mapper.evaluate(kT0 + 650'000), "horn").pressed);
+
+  // The source goes stale: everything safe; when it returns the toggle has
+  // forgotten its latched state.
+  s = mapper.evaluate(kT0 + 800'000);
+  REQUIRE(s.failsafe);
+  CHECK_FALSE(value(s, "lights").pressed);
+  fw.cycle(kT0 + 810'000);
+  s = mapper.evaluate(kT0 + 810'000);
+  CHECK_FALSE(s.failsafe);
+  CHECK_FALSE(value(s, "lights").pressed);
+}
+
+TEST_CASE("transform keys are checked with file:line and the key", "[hil]") {
+  auto error_of = [](std::string text) {
+    try {
+      rise::panels::parse_panel_definition(text, "t.yaml");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string base = kTransformsPanel;
+  auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string t = base;
+    t.replace(t.find(from), from.size(), to);
+    return t;
+  };
+  CHECK_THAT(error_of(replaced("expo: 1.0", "expo: 2")), Catch::StartsWith("t.yaml:5: controls.drive_y.expo: must be in 0..1"));
+  CHECK_THAT(error_of(replaced("mode: toggle", "mode: latch")), Catch::StartsWith("t.yaml:7: controls.lights.mode: unknown mode 'latch'"));
+  CHECK_THAT(error_of(replaced("button.5, button.6]", "button.5]")),
+             Catch::StartsWith("t.yaml:9: controls.camera.bits: one_hot needs one bit per position"));
+  CHECK_THAT(error_of(replaced("button.6]", "button.2]")),
+             Catch::StartsWith("t.yaml:9: controls.camera.bits: signal 'button.2' is already bound"));
+  CHECK_THAT(error_of(replaced("role: deadman, safe: false", "role: deadman, mode: toggle, safe: false")),
+             Catch::StartsWith("t.yaml:6: controls.deadman.mode: the deadman must be mode: direct"));
 }
