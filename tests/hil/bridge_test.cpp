@@ -4,100 +4,13 @@
 #include <mutex>
 #include <thread>
 
-#include "hil/bridge.hpp"
-#include "panels/console_emulator.hpp"
+#include "tests/hil/bridge_test_support.hpp"
 
 namespace fp = rise::firmware_protocol;
 using rise::hil::PanelSnapshot;
+using namespace rise::hil::test;
 
 namespace {
-
-rise::panels::PanelDefinition console() {
-  return rise::panels::load_panel_definition(std::string(RISE_SOURCE_DIR) +
-                                             "/panels/definitions/rise_console.yaml");
-}
-
-// The console emulator from panels/ as the test double: its own thread, its
-// own end of an in-memory bus, the firmware's real frame rates.
-class EmulatorThread {
- public:
-  EmulatorThread(const rise::panels::PanelDefinition& def, const std::string& bus_url)
-      : emulator_(def, 0), bus_(rise::io::open_can_bus(bus_url)) {
-    thread_ = std::thread([this] { run(); });
-  }
-  ~EmulatorThread() {
-    running_ = false;
-    thread_.join();
-  }
-  void apply(const rise::panels::TimelineEvent& e) {
-    std::lock_guard lock(mutex_);
-    emulator_.apply(e);
-  }
-  rise::panels::ConsoleFeedback feedback() {
-    std::lock_guard lock(mutex_);
-    return emulator_.feedback();
-  }
-
- private:
-  void run() {
-    rise::io::CanFrame f;
-    while (running_) {
-      {
-        std::lock_guard lock(mutex_);
-        emulator_.tick(*bus_, rise::hil::monotonic_us());
-      }
-      while (bus_->receive(f, 1) == rise::io::IoStatus::Ok) {
-        std::lock_guard lock(mutex_);
-        emulator_.on_frame(f);
-      }
-    }
-  }
-  std::mutex mutex_;
-  rise::panels::ConsoleEmulator emulator_;
-  std::unique_ptr<rise::io::CanBus> bus_;
-  std::atomic<bool> running_{true};
-  std::thread thread_;
-};
-
-rise::panels::TimelineEvent set(const rise::panels::PanelDefinition& def, const char* control, float axis,
-                                bool pressed) {
-  rise::panels::TimelineEvent e;
-  e.control = *def.find_control(control);
-  e.axis = axis;
-  e.pressed = pressed;
-  return e;
-}
-
-struct Published {
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::vector<PanelSnapshot> snapshots;
-
-  void add(const PanelSnapshot& s) {
-    std::lock_guard lock(mutex);
-    snapshots.push_back(s);
-    cv.notify_all();
-  }
-  // Waits (deadline, not a sleep) for a snapshot that satisfies pred.
-  template <typename Pred>
-  std::optional<PanelSnapshot> wait_for(Pred pred, int timeout_ms, std::size_t from = 0) {
-    std::unique_lock lock(mutex);
-    std::optional<PanelSnapshot> found;
-    cv.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] {
-      for (std::size_t i = from; i < snapshots.size(); ++i)
-        if (pred(snapshots[i])) {
-          found = snapshots[i];
-          return true;
-        }
-      return false;
-    });
-    return found;
-  }
-  std::size_t size() {
-    std::lock_guard lock(mutex);
-    return snapshots.size();
-  }
-};
 
 }  // namespace
 

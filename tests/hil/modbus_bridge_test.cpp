@@ -20,11 +20,14 @@
 #include "hil/bridge.hpp"
 #include "hil/io/modbus_server.hpp"
 #include "panels/console_emulator.hpp"
+#include "tests/hil/bridge_test_support.hpp"
 
 extern char** environ;
 
 namespace fp = rise::firmware_protocol;
 using rise::hil::PanelSnapshot;
+using rise::hil::test::Published;
+using rise::hil::test::set;
 
 namespace {
 
@@ -82,14 +85,6 @@ class ModbusEmulatorThread {
   std::thread thread_;
 };
 
-rise::panels::TimelineEvent set(const rise::panels::PanelDefinition& def, const char* control, float axis,
-                                bool pressed) {
-  rise::panels::TimelineEvent e;
-  e.control = *def.find_control(control);
-  e.axis = axis;
-  e.pressed = pressed;
-  return e;
-}
 
 rise::panels::TimelineEvent directive(rise::panels::TimelineEvent::Kind kind, int count = 0) {
   rise::panels::TimelineEvent e;
@@ -98,35 +93,6 @@ rise::panels::TimelineEvent directive(rise::panels::TimelineEvent::Kind kind, in
   return e;
 }
 
-struct Published {
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::vector<PanelSnapshot> snapshots;
-
-  void add(const PanelSnapshot& s) {
-    std::lock_guard lock(mutex);
-    snapshots.push_back(s);
-    cv.notify_all();
-  }
-  template <typename Pred>
-  std::optional<PanelSnapshot> wait_for(Pred pred, int timeout_ms, std::size_t from = 0) {
-    std::unique_lock lock(mutex);
-    std::optional<PanelSnapshot> found;
-    cv.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] {
-      for (std::size_t i = from; i < snapshots.size(); ++i)
-        if (pred(snapshots[i])) {
-          found = snapshots[i];
-          return true;
-        }
-      return false;
-    });
-    return found;
-  }
-  std::size_t size() {
-    std::lock_guard lock(mutex);
-    return snapshots.size();
-  }
-};
 
 std::vector<rise::hil::SourceTransport> modbus_transport(const std::string& url) {
   std::vector<rise::hil::SourceTransport> t(1);

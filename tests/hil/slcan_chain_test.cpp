@@ -10,9 +10,11 @@
 
 #include "hil/bridge.hpp"
 #include "panels/console_emulator.hpp"
+#include "tests/hil/bridge_test_support.hpp"
 #include "tests/hil_io/slcan_test_support.hpp"
 
 using rise::hil::PanelSnapshot;
+using namespace rise::hil::test;
 using rise::io::test::FakeAdapter;
 using rise::io::test::FakeAdapterOptions;
 using rise::io::test::SocatPtys;
@@ -22,52 +24,7 @@ namespace {
 
 constexpr const char* kMemUrl = "mem://slcan_chain";
 
-rise::panels::PanelDefinition console() {
-  return rise::panels::load_panel_definition(std::string(RISE_SOURCE_DIR) +
-                                             "/panels/definitions/rise_console.yaml");
-}
 
-// The console's firmware (panels/ emulator) in its own thread on a mem:// bus,
-// at the firmware's real frame rates.
-class EmulatorThread {
- public:
-  EmulatorThread(const rise::panels::PanelDefinition& def, const std::string& bus_url)
-      : emulator_(def, 0), bus_(rise::io::open_can_bus(bus_url)) {
-    thread_ = std::thread([this] { run(); });
-  }
-  ~EmulatorThread() {
-    running_ = false;
-    thread_.join();
-  }
-  void apply(const rise::panels::TimelineEvent& e) {
-    std::lock_guard lock(mutex_);
-    emulator_.apply(e);
-  }
-  rise::panels::ConsoleFeedback feedback() {
-    std::lock_guard lock(mutex_);
-    return emulator_.feedback();
-  }
-
- private:
-  void run() {
-    rise::io::CanFrame f;
-    while (running_) {
-      {
-        std::lock_guard lock(mutex_);
-        emulator_.tick(*bus_, rise::hil::monotonic_us());
-      }
-      while (bus_->receive(f, 1) == rise::io::IoStatus::Ok) {
-        std::lock_guard lock(mutex_);
-        emulator_.on_frame(f);
-      }
-    }
-  }
-  std::mutex mutex_;
-  rise::panels::ConsoleEmulator emulator_;
-  std::unique_ptr<rise::io::CanBus> bus_;
-  std::atomic<bool> running_{true};
-  std::thread thread_;
-};
 
 // A USB slcan adapter plugged into the console's CAN: the fake adapter on the
 // pty forwards what the bridge sends onto the mem:// bus, and every frame of
@@ -106,45 +63,7 @@ class AdapterOnMemBus {
   std::thread thread_;
 };
 
-rise::panels::TimelineEvent set(const rise::panels::PanelDefinition& def, const char* control, float axis,
-                                bool pressed) {
-  rise::panels::TimelineEvent e;
-  e.control = *def.find_control(control);
-  e.axis = axis;
-  e.pressed = pressed;
-  return e;
-}
 
-struct Published {
-  std::mutex mutex;
-  std::condition_variable cv;
-  std::vector<PanelSnapshot> snapshots;
-
-  void add(const PanelSnapshot& s) {
-    std::lock_guard lock(mutex);
-    snapshots.push_back(s);
-    cv.notify_all();
-  }
-  // Waits (deadline, not a sleep) for a snapshot from index `from` on that satisfies pred.
-  template <typename Pred>
-  std::optional<PanelSnapshot> wait_for(Pred pred, int timeout_ms, std::size_t from = 0) {
-    std::unique_lock lock(mutex);
-    std::optional<PanelSnapshot> found;
-    cv.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] {
-      for (std::size_t i = from; i < snapshots.size(); ++i)
-        if (pred(snapshots[i])) {
-          found = snapshots[i];
-          return true;
-        }
-      return false;
-    });
-    return found;
-  }
-  std::size_t size() {
-    std::lock_guard lock(mutex);
-    return snapshots.size();
-  }
-};
 
 }  // namespace
 
