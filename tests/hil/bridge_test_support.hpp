@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hil/bridge.hpp"
+#include "hil/io/modbus_server.hpp"
 #include "panels/console_emulator.hpp"
 
 namespace rise::hil::test {
@@ -38,8 +39,8 @@ inline panels::TimelineEvent set(const panels::PanelDefinition& def, const char*
 /// frame rates, in its own thread.
 class EmulatorThread {
  public:
-  EmulatorThread(const panels::PanelDefinition& def, const std::string& bus_url)
-      : emulator_(def, 0), bus_(io::open_can_bus(bus_url)) {
+  EmulatorThread(const panels::PanelDefinition& def, const std::string& bus_url, std::size_t source = 0)
+      : emulator_(def, source), bus_(io::open_can_bus(bus_url)) {
     thread_ = std::thread([this] { run(); });
   }
   ~EmulatorThread() {
@@ -72,6 +73,48 @@ class EmulatorThread {
   std::mutex mutex_;
   panels::ConsoleEmulator emulator_;
   std::unique_ptr<io::CanBus> bus_;
+  std::atomic<bool> running_{true};
+  std::thread thread_;
+};
+
+/// The console's firmware serving the rise-modbus-v1 map from its own
+/// Modbus server (TCP or RTU URL), one firmware cycle per millisecond loop.
+class ModbusEmulatorThread {
+ public:
+  ModbusEmulatorThread(const panels::PanelDefinition& def, uint16_t port, std::size_t source = 0)
+      : ModbusEmulatorThread(def, "modbus+tcp-listen://127.0.0.1:" + std::to_string(port) + "?unit=1", source) {}
+  ModbusEmulatorThread(const panels::PanelDefinition& def, const std::string& url, std::size_t source = 0)
+      : emulator_(def, source), server_(url, panels::ConsoleEmulator::modbus_table_sizes()) {
+    thread_ = std::thread([this] { run(); });
+  }
+  ~ModbusEmulatorThread() {
+    running_ = false;
+    thread_.join();
+  }
+  uint16_t port() const { return server_.port(); }
+  void apply(const panels::TimelineEvent& e) {
+    std::lock_guard lock(mutex_);
+    emulator_.apply(e);
+  }
+  panels::ConsoleFeedback feedback() {
+    std::lock_guard lock(mutex_);
+    return emulator_.feedback();
+  }
+
+ private:
+  void run() {
+    while (running_) {
+      {
+        std::lock_guard lock(mutex_);
+        emulator_.tick_modbus(server_, monotonic_us());
+        emulator_.poll_modbus_feedback(server_);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));  // the firmware's idle loop, not a sync
+    }
+  }
+  std::mutex mutex_;
+  panels::ConsoleEmulator emulator_;
+  io::ModbusServer server_;
   std::atomic<bool> running_{true};
   std::thread thread_;
 };

@@ -28,62 +28,22 @@ namespace fp = rise::firmware_protocol;
 using rise::hil::PanelSnapshot;
 using rise::hil::test::Published;
 using rise::hil::test::set;
+using rise::hil::test::ModbusEmulatorThread;
 
 namespace {
 
-// The reference console, switched to rise-modbus-v1 (same signals).
+// The reference console on rise-modbus-v1 (panels/definitions), with the
+// source timeout a test wants.
 rise::panels::PanelDefinition modbus_console(int timeout_ms = 100) {
-  std::ifstream in(std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml");
+  std::ifstream in(std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console_modbus.yaml");
   std::stringstream text;
   text << in.rdbuf();
   std::string yaml = text.str();
-  const std::string from = "protocol: rise-can-v1\n    node: 0";
-  yaml.replace(yaml.find(from), from.size(), "protocol: rise-modbus-v1\n    unit: 1\n    poll_hz: 100");
-  const std::string timeout = "timeout_ms: 50";
+  const std::string timeout = "timeout_ms: 100";
   yaml.replace(yaml.find(timeout), timeout.size(), "timeout_ms: " + std::to_string(timeout_ms));
   return rise::panels::parse_panel_definition(yaml, "rise_console_modbus.yaml");
 }
 
-// The emulated firmware on its own thread and its own Modbus server.
-class ModbusEmulatorThread {
- public:
-  ModbusEmulatorThread(const rise::panels::PanelDefinition& def, uint16_t port)
-      : ModbusEmulatorThread(def, "modbus+tcp-listen://127.0.0.1:" + std::to_string(port) + "?unit=1") {}
-  ModbusEmulatorThread(const rise::panels::PanelDefinition& def, const std::string& url)
-      : emulator_(def, 0), server_(url, rise::panels::ConsoleEmulator::modbus_table_sizes()) {
-    thread_ = std::thread([this] { run(); });
-  }
-  ~ModbusEmulatorThread() {
-    running_ = false;
-    thread_.join();
-  }
-  uint16_t port() const { return server_.port(); }
-  void apply(const rise::panels::TimelineEvent& e) {
-    std::lock_guard lock(mutex_);
-    emulator_.apply(e);
-  }
-  rise::panels::ConsoleFeedback feedback() {
-    std::lock_guard lock(mutex_);
-    return emulator_.feedback();
-  }
-
- private:
-  void run() {
-    while (running_) {
-      {
-        std::lock_guard lock(mutex_);
-        emulator_.tick_modbus(server_, rise::hil::monotonic_us());
-        emulator_.poll_modbus_feedback(server_);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));  // the firmware's idle loop, not a sync
-    }
-  }
-  std::mutex mutex_;
-  rise::panels::ConsoleEmulator emulator_;
-  rise::io::ModbusServer server_;
-  std::atomic<bool> running_{true};
-  std::thread thread_;
-};
 
 
 rise::panels::TimelineEvent directive(rise::panels::TimelineEvent::Kind kind, int count = 0) {
