@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 
 #include "sim/simulation.hpp"
@@ -26,6 +27,7 @@ struct Result {
   double sim_s = 0.0;
   double wall_s = 0.0;
   std::size_t events = 0;
+  std::map<std::string, int> kinds;
   double travelled_m = 0.0;
 };
 
@@ -64,7 +66,10 @@ Result run(const std::string& robot_file, const rise::sim::WorldDescription& wor
     // The LCM adapter sets the input every step too.
     sim.set_input(script(sim.time_s()));
     sim.step();
-    r.events += sim.take_events().size();
+    for (const auto& e : sim.take_events()) {
+      ++r.events;
+      ++r.kinds[rise::sim::to_string(e.kind)];
+    }
   }
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.sim_s = sim.time_s();
@@ -90,6 +95,9 @@ int main(int argc, char** argv) {
     const Result r = run(root + "/sim/robots/" + robot + ".yaml", world, sim_seconds);
     std::printf("%-14s %10.1f %10.3f %9.1fx %12.0f %8zu %14.2f\n", robot, r.sim_s, r.wall_s, r.sim_s / r.wall_s,
                 r.sim_s / rise::sim::Simulation::kStepS / r.wall_s, r.events, r.travelled_m);
+    std::printf("%-14s", "");
+    for (const auto& [kind, n] : r.kinds) std::printf(" %s×%d", kind.c_str(), n);
+    std::printf("\n");
   }
   std::printf("goal: RTF >= 20x; ODE diagnostics during the runs: %lld\n",
               static_cast<long long>(rise::sim::ode_messages()));

@@ -88,7 +88,8 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
 
   const YAML::Node wheels = root["wheels"];
   if (d.kind == RobotKind::Tracked && wheels) r.fail(wheels, "wheels", "a tracked robot has tracks, not wheels");
-  if (d.kind == RobotKind::SkidSteer && root["tracks"]) r.fail(root["tracks"], "tracks", "a skid_steer robot has wheels");
+  if (d.kind == RobotKind::SkidSteer && root["tracks"])
+    r.fail(root["tracks"], "tracks", "a skid_steer robot has wheels");
   if (d.kind == RobotKind::SkidSteer) {
     if (!wheels) r.fail(root, "wheels", "missing");
     r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",

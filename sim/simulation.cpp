@@ -32,6 +32,7 @@ constexpr int kCollisionReleaseSteps = 50;  // contact gone this long → collis
 constexpr int kArmBreakSteps = 20;          // overload sustained this long breaks an arm joint
 constexpr double kArmJointDamage = 0.25;
 constexpr double kDoorGapM = 0.01;  // door bottom above the floor
+constexpr std::size_t kMaxPendingEvents = 4096;
 
 std::atomic<int64_t> g_ode_messages{0};
 
@@ -59,7 +60,9 @@ struct GeomInfo {
 };
 
 bool is_static(GeomKind k) { return k == GeomKind::Ground || k == GeomKind::Obstacle; }
-bool is_robot(GeomKind k) { return k == GeomKind::Chassis || k == GeomKind::Wheel || k == GeomKind::Track || k == GeomKind::Arm; }
+bool is_robot(GeomKind k) {
+  return k == GeomKind::Chassis || k == GeomKind::Wheel || k == GeomKind::Track || k == GeomKind::Arm;
+}
 
 const char* kWheelNames[4] = {"wheel_fl", "wheel_fr", "wheel_rl", "wheel_rr"};
 const char* kTrackNames[2] = {"track_left", "track_right"};
@@ -261,6 +264,7 @@ struct Simulation::Impl {
   }
 
   void emit(SimEventKind kind, std::string a, std::string b = {}, std::string detail = {}) {
+    if (events.size() >= kMaxPendingEvents) return;  // nobody drains them: do not grow without bound
     events.push_back(SimEvent{time_s(), kind, std::move(a), std::move(b), std::move(detail)});
   }
 
@@ -571,7 +575,8 @@ struct Simulation::Impl {
     // The door hangs in its frame just above the floor: it only meets the
     // robot and objects (and the floor once it has come off its hinge).
     const auto door_vs_static = [](const GeomInfo* door, const GeomInfo* other) {
-      return door->kind == GeomKind::Door && is_static(other->kind) && !(door->loose && other->kind == GeomKind::Ground);
+      return door->kind == GeomKind::Door && is_static(other->kind) &&
+             !(door->loose && other->kind == GeomKind::Ground);
     };
     if (door_vs_static(ia, ib) || door_vs_static(ib, ia)) return;
     const dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
@@ -757,7 +762,8 @@ struct Simulation::Impl {
       if (o.moved) continue;
       const dReal* q = dBodyGetPosition(o.body);
       const auto& c = o.desc->center_m;
-      const double d = std::sqrt((q[0] - c[0]) * (q[0] - c[0]) + (q[1] - c[1]) * (q[1] - c[1]) + (q[2] - c[2]) * (q[2] - c[2]));
+      const double d = std::sqrt((q[0] - c[0]) * (q[0] - c[0]) + (q[1] - c[1]) * (q[1] - c[1]) +
+                                 (q[2] - c[2]) * (q[2] - c[2]));
       if (d > kObjectMovedM) {
         o.moved = true;
         emit(SimEventKind::ObjectMoved, o.desc->name, {}, "moved " + std::to_string(static_cast<int>(d * 100)) + " cm");
@@ -783,7 +789,8 @@ struct Simulation::Impl {
     const double up = R[10];  // world z of the base's z axis
     if (!tipped && up < kTipCos) {
       tipped = true;
-      emit(SimEventKind::TippedOver, robot.name, {}, "tilt " + std::to_string(static_cast<int>(std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI)) + "°");
+      const auto tilt_deg = static_cast<int>(std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI);
+      emit(SimEventKind::TippedOver, robot.name, {}, "tilt " + std::to_string(tilt_deg) + "°");
     } else if (tipped && up > kUprightCos) {
       tipped = false;
     }

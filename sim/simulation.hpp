@@ -42,8 +42,8 @@ struct JointState {
   std::string name;
   double position = 0.0;
   double velocity = 0.0;
-  double effort = 0.0;  ///< motor torque/force applied in the last step
-  bool broken = false;
+  double effort = 0.0;  ///< motor + limit torque/force along the axis in the last step
+  bool broken = false;  ///< destroyed by an overload (position etc. then read 0)
 };
 
 enum class SimEventKind {
@@ -61,8 +61,9 @@ enum class SimEventKind {
 /// Stable snake_case name, e.g. "door_opened" (also the LCM `kind`).
 const char* to_string(SimEventKind kind);
 
+/// Something that happened in the world during a step.
 struct SimEvent {
-  double time_s = 0.0;
+  double time_s = 0.0;  ///< sim time at the end of the step
   SimEventKind kind = SimEventKind::CollisionStarted;
   std::string a;
   std::string b;
@@ -126,8 +127,9 @@ class Simulation {
   double time_s() const;
   RobotSnapshot snapshot() const;
   const RobotDescription& robot() const;
-  /// Events since the last call, oldest first (safe in the cyclic path:
-  /// never throws).
+  /// Events since the last call, oldest first; at most 4096 are kept
+  /// between calls (later ones are dropped). Safe in the cyclic path: never
+  /// throws.
   std::vector<SimEvent> take_events();
   /// Door angle (rad, + = swung about +z) or NaN for an unknown door.
   double door_angle_rad(const std::string& door) const;

@@ -11,10 +11,12 @@ namespace {
 constexpr double kDegToRad = M_PI / 180.0;
 
 template <std::size_t N>
-std::array<double, N> read_vector(const YamlReader& r, const YAML::Node& map, const char* key, const std::string& where) {
+std::array<double, N> read_vector(const YamlReader& r, const YAML::Node& map, const char* key,
+                                  const std::string& where) {
   static const char* const kShapes[] = {"", "[x]", "[x, y]", "[x, y, z]"};
   const YAML::Node v = map[key];
-  if (!v || !v.IsSequence() || v.size() != N) r.fail(v ? v : map, where + "." + key, std::string("expected ") + kShapes[N]);
+  if (!v || !v.IsSequence() || v.size() != N)
+    r.fail(v ? v : map, where + "." + key, std::string("expected ") + kShapes[N]);
   std::array<double, N> out{};
   for (std::size_t k = 0; k < N; ++k) out[k] = r.as<double>(v[k], where + "." + key);
   return out;

@@ -169,8 +169,9 @@ int main(int argc, char** argv) {
   rise::sim::Simulation sim(robot, world);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}, {}", robot.name, robot.file, world.name,
-               fast ? "as fast as possible" : "real time", lcm_url, panel_channel, state_channel, event_channel);
+  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}, {}", robot.name, robot.file,
+               world.name, fast ? "as fast as possible" : "real time", lcm_url, panel_channel, state_channel,
+               event_channel);
 
   const int steps_per_state = std::max(1, static_cast<int>(std::lround(1.0 / (state_hz * rise::sim::Simulation::kStepS))));
   const int steps_per_feedback = 100;  // 10 Hz

@@ -34,24 +34,24 @@ TEST_CASE("the shipped building world loads with its door, staircase, object and
   CHECK(w.walls.size() == 9);
   REQUIRE(w.doors.size() == 1);
   CHECK(w.doors[0].name == "door_ab");
-  CHECK(w.doors[0].width_m == Approx(1.1));
+  CHECK(w.doors[0].width_m == Approx(1.1).margin(1e-9));
   CHECK(w.doors[0].yaw_rad == Approx(M_PI / 2).margin(1e-9));
   CHECK(w.doors[0].open_max_rad == Approx(100.0 * M_PI / 180.0).margin(1e-9));
-  CHECK(w.doors[0].break_torque_nm == Approx(900.0));
+  CHECK(w.doors[0].break_torque_nm == Approx(900.0).margin(1e-9));
   REQUIRE(w.stairs.size() == 1);
   const auto& s = w.stairs[0];
   CHECK(s.steps == 6);
-  CHECK(s.riser_m == Approx(0.17));
-  CHECK(s.tread_m == Approx(0.28));
+  CHECK(s.riser_m == Approx(0.17).margin(1e-9));
+  CHECK(s.tread_m == Approx(0.28).margin(1e-9));
   // "30°-ish": a 17/28 stair climbs at 31.3°.
   CHECK(std::atan2(s.riser_m, s.tread_m) * 180.0 / M_PI == Approx(31.3).margin(0.1));
-  CHECK(s.landing_height_m() == Approx(1.02));
+  CHECK(s.landing_height_m() == Approx(1.02).margin(1e-9));
   REQUIRE(w.objects.size() == 1);
   CHECK(w.objects[0].name == "hazardous_object");
-  CHECK(w.objects[0].mass_kg == Approx(4.0));
+  CHECK(w.objects[0].mass_kg == Approx(4.0).margin(1e-9));
   REQUIRE(w.regions.size() == 1);
   CHECK(w.regions[0].name == "neutralization_area");
-  CHECK(w.regions[0].max_m[0] == Approx(8.5));
+  CHECK(w.regions[0].max_m[0] == Approx(8.5).margin(1e-9));
 }
 
 TEST_CASE("a broken world file is refused with file:line and the key", "[sim]") {
