@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "firmware_protocol/dbc.hpp"
+#include "firmware_protocol/hid_text.hpp"
 #include "hil/io/candump_log.hpp"
 
 namespace rise::hil {
@@ -76,6 +77,16 @@ int dbc_decode(const std::string& dbc_file, const std::string& log_file, std::os
   if (bad_lines) out << ", " << bad_lines << " unreadable lines";
   out << '\n';
   return bad_lines && frames == 0 ? 2 : 0;
+}
+
+int hid_describe(const std::string& file, std::ostream& out, std::ostream& err) {
+  try {
+    out << firmware_protocol::describe_hid_descriptor(firmware_protocol::load_hid_descriptor_file(file));
+  } catch (const std::exception& e) {
+    err << e.what() << '\n';
+    return 2;
+  }
+  return 0;
 }
 
 }  // namespace rise::hil

@@ -56,9 +56,19 @@ int main(int argc, char** argv) {
   dbc->require_subcommand(1);
   dbc_decode->add_option("DBC", dbc_file, "DBC file")->required();
   dbc_decode->add_option("LOG", log_file, "candump -l log")->required();
+  std::string hid_file;
+  CLI::App* hid = app.add_subcommand("hid", "USB HID tools");
+  CLI::App* hid_describe = hid->add_subcommand(
+      "describe", "print every field of a HID report descriptor and the named signal it becomes");
+  hid->require_subcommand(1);
+  hid_describe->add_option("FILE", hid_file,
+                           "descriptor: hex dump, C array, hid-recorder R: line, Android CTS register JSON, "
+                           "xpadneo markdown, or a binary report_descriptor")
+      ->required();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (dbc_decode->parsed()) return rise::hil::dbc_decode(dbc_file, log_file, std::cout, std::cerr);
+  if (hid_describe->parsed()) return rise::hil::hid_describe(hid_file, std::cout, std::cerr);
   if (source_urls.empty()) {
     spdlog::error("--source is required (one URL per source of the panel)");
     return 2;
