@@ -84,6 +84,7 @@ PanelSnapshot Bridge::snapshot() const {
 }
 
 void Bridge::source_loop(std::size_t source) {
+  const bool is_dbc = mapper_.definition().sources[source].is_dbc();
   io::CanBus& bus = *buses_[source];
   // Each source has its own encoder: our feedback frames carry their own
   // alive counters, as the console's do.
@@ -123,8 +124,9 @@ void Bridge::source_loop(std::size_t source) {
       mapper_.on_connection(source, true, now);
     }
 
-    // Feedback: repeated at its period, sent at once when it changes.
-    if (now >= next_feedback_us || !have_sent) {
+    // Feedback: repeated at its period, sent at once when it changes. A DBC
+    // device gets none: our feedback frames are not in its database.
+    if (!is_dbc && (now >= next_feedback_us || !have_sent)) {
       PanelSnapshot snap;
       FeedbackRequest request;
       uint64_t version;
@@ -148,12 +150,13 @@ void Bridge::source_loop(std::size_t source) {
 
     const io::IoStatus st = bus.receive(frame, 5);
     if (st == io::IoStatus::Ok) {
-      if (frame.error || frame.remote || frame.fd || frame.extended) continue;
+      // rise-can-v1 is classic 11-bit only; a DBC device may use FD and 29-bit ids.
+      if (frame.error || frame.remote || (!is_dbc && frame.fd)) continue;
       bool changed;
       {
         std::lock_guard lock(mutex_);
         changed = mapper_.on_frame(source, frame.id, std::span<const uint8_t>(frame.data.data(), frame.len),
-                                   monotonic_us());
+                                   monotonic_us(), frame.extended);
         changed_ = changed_ || changed;
       }
       if (changed) wake_.notify_all();

@@ -1,5 +1,7 @@
 #include "hil/panel_mapper.hpp"
 
+#include "firmware_protocol/dbc.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -59,7 +61,19 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
     sources_.push_back(std::move(state));
   }
   for (const auto& c : definition_.controls) {
-    sources_[c.source].needs_type[type_index(frame_type_for(c.signal))] = true;
+    if (c.dbc_signal) {
+      DbcBinding b;
+      b.message = c.dbc_message;
+      b.signal = c.dbc_signal;
+      if (c.dbc_signal->is_multiplexed)
+        for (const auto& other : c.dbc_message->signals)
+          if (other.is_multiplexer) b.multiplexer = &other;
+      binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
+      sources_[c.source].dbc.push_back(b);
+    } else {
+      binding_of_control_.push_back(-1);
+      sources_[c.source].needs_type[type_index(frame_type_for(c.signal))] = true;
+    }
     const ButtonMode mode = c.behaviour == panels::ButtonBehaviour::Toggle      ? ButtonMode::Toggle
                             : c.behaviour == panels::ButtonBehaviour::LongPress ? ButtonMode::LongPress
                             : c.behaviour == panels::ButtonBehaviour::Edge      ? ButtonMode::Edge
@@ -69,10 +83,53 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
   }
 }
 
+bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data,
+                               int64_t now_us) {
+  bool matched = false, changed = false, bad = false;
+  for (DbcBinding& b : s.dbc) {
+    if (b.message->id != can_id || b.message->extended != extended) continue;
+    matched = true;
+    if (!fp::signal_fits(*b.signal, data.size()) ||
+        (b.multiplexer && !fp::signal_fits(*b.multiplexer, data.size()))) {
+      bad = true;
+      continue;
+    }
+    if (b.multiplexer && static_cast<uint64_t>(fp::extract_raw(*b.multiplexer, data)) != b.signal->multiplexer_value)
+      continue;  // this frame carries another multiplexed page
+    const double value = fp::physical_value(*b.signal, fp::extract_raw(*b.signal, data));
+    changed = changed || b.last_us == 0 || value != b.value;
+    b.value = value;
+    b.last_us = now_us;
+  }
+  const std::size_t index = static_cast<std::size_t>(&s - sources_.data());
+  if (!matched) {
+    s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
+    return false;
+  }
+  if (bad) {
+    // A frame too short for a bound signal: the device does not match its DBC.
+    s.status.errors[static_cast<std::size_t>(fp::DecodeError::BadLength)]++;
+    s.status.check_failed = true;
+    s.ok_in_row = 0;
+    return false;
+  }
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.status.frames_ok++;
+  s.last_any_valid_us = now_us;
+  if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[index].recovery_frames)
+    s.status.check_failed = false;
+  return changed;
+}
+
 bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
-                           int64_t now_us) {
+                           int64_t now_us, bool extended) {
   if (source >= sources_.size()) return false;
   SourceState& s = sources_[source];
+  if (definition_.sources[source].is_dbc()) return on_dbc_frame(s, can_id, extended, data, now_us);
+  if (extended) {
+    s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
+    return false;
+  }
   const fp::DecodeResult r = s.decoder.decode(can_id, data);
   s.status.errors[static_cast<std::size_t>(r.error)]++;
   if (!r.ok()) {
@@ -171,6 +228,7 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   if (connected && s.last_any_valid_us != 0) s.status.reconnects++;
   s.status.connected = connected;
   if (!connected) {
+    for (auto& b : s.dbc) b.last_us = 0;
     s.decoder.reset();
     s.last_valid_us.fill(0);
     s.status.heartbeat_seen = false;
@@ -188,6 +246,26 @@ bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::stri
     return false;
   }
   const int64_t timeout_us = 1000 * static_cast<int64_t>(def.timeout_ms);
+  if (def.is_dbc()) {
+    // A DBC device has no heartbeat or status of ours: every bound message
+    // must keep arriving, and its frames must fit the DBC.
+    for (const auto& b : s.dbc) {
+      if (b.last_us == 0) {
+        *reason = name + ": no " + b.message->name + " frame yet";
+        return false;
+      }
+      const int64_t age_us = now_us - b.last_us;
+      if (age_us > timeout_us) {
+        *reason = name + ": stale (no " + b.message->name + " frame for " + std::to_string(age_us / 1000) + " ms)";
+        return false;
+      }
+    }
+    if (s.status.check_failed) {
+      *reason = name + ": frames do not fit the DBC";
+      return false;
+    }
+    return true;
+  }
   for (std::size_t t = 0; t < fp::kFrameTypeCount; ++t) {
     if (!s.needs_type[t]) continue;
     const auto type = static_cast<fp::FrameType>(t);
@@ -258,14 +336,22 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
       const SourceState& s = sources_[c.source];
       switch (c.kind) {
         case ControlKind::Axis: {
-          const int16_t raw = s.axes[c.signal.index];
-          if (raw == fp::kAxisInvalid) {
-            set_safe(c, v);
-            append_reason(reasons, c.name + ": not available");
-            break;
+          float unit = 0.0f;
+          if (const int b = binding_of_control_[i]; b >= 0) {
+            // A DBC signal's physical range [min, max] maps linearly to -1..1.
+            const double value = s.dbc[static_cast<std::size_t>(b)].value;
+            unit = static_cast<float>(2.0 * (value - c.range_min) / (c.range_max - c.range_min) - 1.0);
+          } else {
+            const int16_t raw = s.axes[c.signal.index];
+            if (raw == fp::kAxisInvalid) {
+              set_safe(c, v);
+              append_reason(reasons, c.name + ": not available");
+              break;
+            }
+            unit = fp::axis_to_unit(raw);
           }
           const AxisShaping shaping{c.deadband, c.expo, c.scale, c.invert};
-          const float x = shape_axis(fp::axis_to_unit(raw), shaping);
+          const float x = shape_axis(unit, shaping);
           ControlFilter& f = filters_[i];
           // Restart from the safe value: after a dead-man press the axis ramps up, never jumps.
           if (f.was_safe) f.lowpass.reset(c.safe_axis, now_us);
@@ -273,7 +359,8 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
           break;
         }
         case ControlKind::Button: {
-          const bool raw = (s.buttons >> c.signal.index) & 1u;
+          const int b = binding_of_control_[i];
+          const bool raw = b >= 0 ? s.dbc[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
           ControlFilter& f = filters_[i];
           // After a loss the button restarts "not activated": a latched
           // toggle never survives the source going away.
@@ -299,7 +386,12 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
             v.position = *f.last_position;
             break;
           }
-          const uint8_t position = s.switches[c.signal.index];
+          uint8_t position = s.switches[c.signal.index];
+          if (const int b = binding_of_control_[i]; b >= 0) {
+            // A DBC signal's value is the position index (its VAL_ table names them).
+            const double value = s.dbc[static_cast<std::size_t>(b)].value;
+            position = value >= 0.0 && value < 255.0 ? static_cast<uint8_t>(std::lround(value)) : fp::kSwitchInvalid;
+          }
           if (position >= c.positions.size()) {
             set_safe(c, v);
             append_reason(reasons, c.name + ": position " +

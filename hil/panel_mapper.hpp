@@ -61,8 +61,10 @@ class PanelMapper {
   /// Feeds one received CAN frame of `source`. Malformed frames are counted
   /// and dropped. Returns true when a bound control's raw value changed (the
   /// bridge then publishes at once). No throw; allocates nothing.
+  /// For a `dbc` source every bound MESSAGE.SIGNAL is read from the frames
+  /// with its message's id (`extended` for 29-bit ids).
   bool on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
-                int64_t now_us);
+                int64_t now_us, bool extended = false);
 
   /// Feeds one whole input block of `source` that passed its protection
   /// check (protocol-neutral; rise-modbus-v1 polls yield these). Refreshes
@@ -100,8 +102,17 @@ class PanelMapper {
   const panels::PanelDefinition& definition() const { return definition_; }
 
  private:
+  // One bound signal of a dbc source.
+  struct DbcBinding {
+    const firmware_protocol::DbcMessage* message = nullptr;
+    const firmware_protocol::DbcSignal* signal = nullptr;
+    const firmware_protocol::DbcSignal* multiplexer = nullptr;  // set for multiplexed signals
+    double value = 0.0;
+    int64_t last_us = 0;  // 0 = never
+  };
   struct SourceState {
     explicit SourceState(firmware_protocol::Decoder d) : decoder(d) {}
+    std::vector<DbcBinding> dbc;  // dbc sources only
     firmware_protocol::Decoder decoder;
     SourceStatus status;
     std::array<int64_t, firmware_protocol::kFrameTypeCount> last_valid_us{};  // 0 = never
@@ -132,6 +143,9 @@ class PanelMapper {
     std::optional<uint8_t> last_position;
   };
   mutable std::vector<ControlFilter> filters_;
+  std::vector<int> binding_of_control_;  // index into the source's dbc bindings, -1 if none
+
+  bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);
 };
 
 /// Age after which a missing heartbeat makes a source stale: three heartbeat

@@ -9,6 +9,9 @@
 #include <stdexcept>
 
 #include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/dbc.hpp"
+
+#include <filesystem>
 
 namespace rise::panels {
 namespace {
@@ -82,16 +85,33 @@ class Context {
 
 std::string control_key(const std::string& name) { return "controls." + name; }
 
-SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::size_t i) {
+SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::size_t i, const std::string& file) {
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
-                {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit"});
+                {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit",
+                 "dbc"});
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
-  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1")
+  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "dbc")
     ctx.fail(node["protocol"], where + ".protocol",
-             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1)");
+             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, dbc)");
+  if (s.is_dbc()) {
+    // A relative path is relative to the definition file.
+    s.dbc_file = ctx.require<std::string>(node, "dbc", where);
+    std::filesystem::path path(s.dbc_file);
+    if (path.is_relative()) path = std::filesystem::path(file).parent_path() / path;
+    s.dbc_file = path.lexically_normal().string();
+    try {
+      s.dbc = std::make_shared<const firmware_protocol::DbcDatabase>(firmware_protocol::DbcDatabase::load(s.dbc_file));
+    } catch (const std::exception& e) {
+      ctx.fail(node["dbc"], where + ".dbc", e.what());
+    }
+    for (const char* k : {"node", "max_counter_delta", "poll_hz", "unit"})
+      if (node[k]) ctx.fail(node[k], where + "." + k, "not used by protocol dbc");
+  } else if (node["dbc"]) {
+    ctx.fail(node["dbc"], where + ".dbc", "only for protocol dbc");
+  }
   if (!s.is_modbus() && (node["poll_hz"] || node["unit"]))
     ctx.fail(node["poll_hz"] ? node["poll_hz"] : node["unit"], where + (node["poll_hz"] ? ".poll_hz" : ".unit"),
              "only for protocol rise-modbus-v1");
@@ -136,7 +156,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
                                 const YAML::Node& node, std::size_t i) {
   std::string where = "controls[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
-                {"name", "kind", "source", "signal", "bits", "encoding", "role", "motion", "deadband",
+                {"name", "kind", "source", "signal", "bits", "encoding", "range", "role", "motion", "deadband",
                  "invert", "scale", "expo", "lowpass_ms", "mode", "debounce_ms", "long_press_ms",
                  "pulse_ms", "safe", "positions"});
   ControlDefinition c;
@@ -152,7 +172,40 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   else ctx.fail(node["kind"], where + ".kind", "unknown kind '" + kind + "' (axis, button, switch)");
 
   c.source = resolve_source(ctx, def, node, where);
-  if (const YAML::Node bits = node["bits"]) {
+  const SourceDefinition& source = def.sources[c.source];
+  if (source.is_dbc()) {
+    // MESSAGE.SIGNAL of the source's DBC.
+    const auto text = ctx.require<std::string>(node, "signal", where);
+    const auto dot = text.find('.');
+    const firmware_protocol::DbcMessage* message =
+        dot == std::string::npos ? nullptr : source.dbc->find(std::string_view(text).substr(0, dot));
+    const firmware_protocol::DbcSignal* signal =
+        message ? message->signal(std::string_view(text).substr(dot + 1)) : nullptr;
+    if (!signal)
+      ctx.fail(node["signal"], where + ".signal",
+               "no signal '" + text + "' (MESSAGE.SIGNAL) in " + source.dbc_file);
+    if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a dbc source");
+    c.dbc_message = message;
+    c.dbc_signal = signal;
+    if (c.kind == ControlKind::Axis) {
+      if (const YAML::Node range = node["range"]) {
+        if (!range.IsSequence() || range.size() != 2) ctx.fail(range, where + ".range", "expected [min, max]");
+        c.range_min = ctx.as<double>(range[0], where + ".range");
+        c.range_max = ctx.as<double>(range[1], where + ".range");
+      } else {
+        c.range_min = signal->minimum;
+        c.range_max = signal->maximum;
+      }
+      if (!(c.range_max > c.range_min))
+        ctx.fail(node["range"] ? node["range"] : node, where + ".range",
+                 "needs min < max (the DBC gives none for " + text + ")");
+    }
+  } else if (node["range"]) {
+    ctx.fail(node["range"], where + ".range", "only for controls of a dbc source");
+  }
+  if (source.is_dbc()) {
+    // no protocol signal to parse
+  } else if (const YAML::Node bits = node["bits"]) {
     // A switch read from several button inputs: no switch signal of its own.
     if (c.kind != ControlKind::Switch) ctx.fail(bits, where + ".bits", "only a switch can be read from bits");
     if (node["signal"]) ctx.fail(node["signal"], where + ".signal", "give either signal or bits, not both");
@@ -173,13 +226,15 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   } else if (node["encoding"]) {
     ctx.fail(node["encoding"], where + ".encoding", "only with bits");
   }
-  const auto signal_text = c.bits.empty() ? ctx.require<std::string>(node, "signal", where) : to_string(c.signal);
+  const auto signal_text = source.is_dbc() ? std::string("axis.0")
+                           : c.bits.empty() ? ctx.require<std::string>(node, "signal", where)
+                                            : to_string(c.signal);
   const auto signal = parse_signal(signal_text);
   if (!signal)
     ctx.fail(node["signal"], where + ".signal",
              "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
   c.signal = *signal;
-  const bool kind_matches = !c.bits.empty() ||
+  const bool kind_matches = !c.bits.empty() || source.is_dbc() ||
       (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
       (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
       (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
@@ -384,7 +439,7 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
   if (!sources || !sources.IsSequence() || sources.size() == 0)
     ctx.fail(sources ? sources : root, "sources", "a list of at least one source is required");
   for (std::size_t i = 0; i < sources.size(); ++i) {
-    auto s = parse_source(ctx, sources[i], i);
+    auto s = parse_source(ctx, sources[i], i, file);
     if (def.find_source(s.name))
       ctx.fail(sources[i]["name"], "sources[" + std::to_string(i) + "].name",
                "duplicate source '" + s.name + "'");
@@ -395,12 +450,24 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
   if (!controls || !controls.IsSequence() || controls.size() == 0)
     ctx.fail(controls ? controls : root, "controls", "a list of at least one control is required");
   std::set<std::tuple<std::size_t, int, int>> bound;
+  std::set<std::pair<std::size_t, const void*>> dbc_bound;
   bool has_deadman = false;
   bool has_motion = false;
   for (std::size_t i = 0; i < controls.size(); ++i) {
     auto c = parse_control(ctx, def, controls[i], i);
     if (def.find_control(c.name))
       ctx.fail(controls[i]["name"], control_key(c.name) + ".name", "duplicate control name");
+    if (c.dbc_signal) {
+      if (!dbc_bound.insert({c.source, c.dbc_signal}).second)
+        ctx.fail(controls[i]["signal"], control_key(c.name) + ".signal", "signal already bound to another control");
+      if (c.role == ControlRole::Deadman) {
+        if (has_deadman) ctx.fail(controls[i]["role"], control_key(c.name) + ".role", "a second dead-man");
+        has_deadman = true;
+      }
+      has_motion = has_motion || c.motion;
+      def.controls.push_back(std::move(c));
+      continue;
+    }
     std::vector<SignalRef> uses{c.signal};
     for (const uint8_t b : c.bits) uses.push_back(SignalRef{SignalRef::Kind::Button, b});
     if (!c.bits.empty()) uses.erase(uses.begin());

@@ -5,9 +5,16 @@
 // feedback outputs. Loaded from YAML (panels/definitions/rise_console.yaml).
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace rise::firmware_protocol {
+class DbcDatabase;
+struct DbcMessage;
+struct DbcSignal;
+}  // namespace rise::firmware_protocol
 
 namespace rise::panels {
 
@@ -67,6 +74,12 @@ struct ControlDefinition {
   bool safe_button = false;
   uint8_t safe_switch = 0;
   std::vector<std::string> positions;  ///< switch position labels
+  // Controls of a "dbc" source: the signal (pointers into the source's
+  // shared database) and, for axes, the physical range that maps to -1..1.
+  const firmware_protocol::DbcMessage* dbc_message = nullptr;
+  const firmware_protocol::DbcSignal* dbc_signal = nullptr;
+  double range_min = 0.0;
+  double range_max = 0.0;
   int line = 0;                        ///< line in the definition file (for messages)
 };
 
@@ -79,7 +92,12 @@ struct SourceDefinition {
   uint32_t timeout_ms = 50;       ///< stale when no valid frame within this
   uint32_t recovery_frames = 3;   ///< valid frames in a row to leave a failed check
   uint8_t max_counter_delta = 1;  ///< alive counter jump tolerated (1 = none lost)
+  /// protocol "dbc": any CAN device a DBC file describes; controls bind
+  /// MESSAGE.SIGNAL names. The database is shared by copies of the definition.
+  std::string dbc_file;
+  std::shared_ptr<const firmware_protocol::DbcDatabase> dbc;
   bool is_modbus() const { return protocol == "rise-modbus-v1"; }
+  bool is_dbc() const { return protocol == "dbc"; }
 };
 
 struct LedDefinition {
