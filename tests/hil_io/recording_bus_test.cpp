@@ -1,0 +1,60 @@
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <filesystem>
+
+#include "hil/io/can_log.hpp"
+#include "hil/io/recording_bus.hpp"
+
+using namespace rise::io;
+
+TEST_CASE("a recorded bus writes every frame it sends and receives as a candump log that reads and replays back",
+          "[hil_io]") {
+  const std::string dir = std::filesystem::temp_directory_path() / ("rise-rec-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/console.log";
+  std::vector<CanFrame> sent;
+  {
+    RecordingBus recorded(open_can_bus("mem://recording_test"), path, "console");
+    auto peer = open_can_bus("mem://recording_test");
+    for (uint32_t i = 0; i < 20; ++i) {
+      CanFrame f;
+      f.id = 0x100 + i;
+      f.len = static_cast<uint8_t>(i % 9);
+      for (uint8_t k = 0; k < f.len; ++k) f.data[k] = static_cast<uint8_t>(i * 7 + k);
+      f.extended = i % 5 == 4;
+      f.timestamp_us = 1'700'000'000'000'000 + i * 1000;
+      if (i % 2) {
+        REQUIRE(peer->send(f) == IoStatus::Ok);
+        CanFrame got;
+        REQUIRE(recorded.receive(got, 1000) == IoStatus::Ok);
+      } else {
+        REQUIRE(recorded.send(f) == IoStatus::Ok);
+      }
+      sent.push_back(f);
+    }
+    CanFrame fd;
+    fd.id = 0x7FF;
+    fd.fd = fd.brs = true;
+    fd.len = 64;
+    fd.timestamp_us = 1'700'000'000'100'000;
+    REQUIRE(recorded.send(fd) == IoStatus::Ok);
+    sent.push_back(fd);
+    CHECK(recorded.frames_recorded() == 21);
+  }
+  const auto records = read_can_log(path);
+  REQUIRE(records.size() == sent.size());
+  for (std::size_t i = 0; i < sent.size(); ++i) {
+    INFO(i);
+    CHECK(records[i].channel == "console");
+    CHECK(same_content(records[i].frame, sent[i]));
+  }
+  // And the daemon can replay what it recorded.
+  auto replay = open_can_bus("replay://" + path + "?fast=1");
+  CanFrame f;
+  std::size_t n = 0;
+  while (replay->receive(f, 100) == IoStatus::Ok) CHECK(same_content(f, sent[n++]));
+  CHECK(n == sent.size());
+  std::filesystem::remove_all(dir);
+}
