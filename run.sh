@@ -23,6 +23,7 @@ packages=(
   clang libclang-rt-14-dev
   qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
+  libhidapi-dev libusb-1.0-0-dev
 )
 
 setup() {

@@ -1,5 +1,6 @@
 #include "hil/bridge.hpp"
 
+#include <array>
 #include <chrono>
 #include <optional>
 
@@ -41,6 +42,7 @@ Bridge::Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<i
       publish_(std::move(publish)),
       settings_(settings) {
   modbus_links_.resize(buses_.size());
+  hid_devices_.resize(buses_.size());
 }
 
 Bridge::Bridge(panels::PanelDefinition definition, std::vector<SourceTransport> transports, PublishFn publish,
@@ -49,6 +51,7 @@ Bridge::Bridge(panels::PanelDefinition definition, std::vector<SourceTransport> 
   for (auto& t : transports) {
     buses_.push_back(std::move(t.can));
     modbus_links_.push_back(std::move(t.modbus));
+    hid_devices_.push_back(std::move(t.hid));
   }
 }
 
@@ -59,6 +62,8 @@ void Bridge::start() {
   for (std::size_t i = 0; i < buses_.size(); ++i) {
     if (modbus_links_[i])
       threads_.emplace_back([this, i] { modbus_source_loop(i); });
+    else if (hid_devices_[i])
+      threads_.emplace_back([this, i] { hid_source_loop(i); });
     else if (buses_[i])
       threads_.emplace_back([this, i] { source_loop(i); });
   }
@@ -289,6 +294,56 @@ void Bridge::modbus_source_loop(std::size_t source) {
         have_sent = true;
         next_feedback_us = now + settings_.feedback_period_ms * 1000;
       }
+    }
+  }
+}
+
+void Bridge::hid_source_loop(std::size_t source) {
+  io::HidDevice& device = *hid_devices_[source];
+  std::array<uint8_t, io::max_hid_report_bytes> report{};
+  int64_t next_enumerate_us = 0;
+  while (running_) {
+    const int64_t now = monotonic_us();
+    if (!device.is_open()) {
+      {
+        std::lock_guard lock(mutex_);
+        mapper_.on_connection(source, false, now);
+      }
+      wake_.notify_all();
+      // Hot-plug by enumeration: cheap (a sysfs walk), so a fixed period
+      // rather than the CAN back-off.
+      if (now >= next_enumerate_us) {
+        next_enumerate_us = now + settings_.hid_enumerate_ms * 1000;
+        if (device.reopen() == io::IoStatus::Ok) {
+          std::lock_guard lock(mutex_);
+          // A descriptor without a bound name keeps the source failsafe
+          // with the mapper's reason; it is checked again on the next plug.
+          mapper_.attach_hid(source, device.report_descriptor());
+          mapper_.on_connection(source, true, monotonic_us());
+        }
+      }
+      if (!device.is_open()) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        continue;
+      }
+    }
+    std::size_t length = 0;
+    const io::IoStatus st = device.read(report, length, 5);
+    if (st == io::IoStatus::Ok) {
+      bool changed;
+      {
+        std::lock_guard lock(mutex_);
+        changed = mapper_.on_hid_report(source, std::span<const uint8_t>(report.data(), length), monotonic_us());
+        changed_ = changed_ || changed;
+      }
+      if (changed) wake_.notify_all();
+    } else if (st == io::IoStatus::Disconnected) {
+      {
+        std::lock_guard lock(mutex_);
+        mapper_.on_connection(source, false, monotonic_us());
+        changed_ = true;  // publish the loss now, not at the next tick
+      }
+      wake_.notify_all();
     }
   }
 }

@@ -17,6 +17,7 @@
 
 #include "hil/feedback.hpp"
 #include "hil/io/can_bus.hpp"
+#include "hil/io/hid_device.hpp"
 #include "hil/io/modbus_link.hpp"
 #include "hil/panel_mapper.hpp"
 
@@ -27,16 +28,18 @@ struct BridgeSettings {
   int64_t reopen_min_ms = 100;       ///< first retry after a lost transport, doubled up to reopen_max_ms
   int64_t reopen_max_ms = 2000;
   int64_t min_change_gap_us = 250;   ///< publish-on-change never faster than this (≤ 4 kHz)
+  int64_t hid_enumerate_ms = 500;    ///< hot-plug: HID devices are enumerated this often while one is away
 };
 
 /// Monotonic microseconds (steady clock).
 int64_t monotonic_us();
 
-/// The transport of one source: a CAN bus (rise-can-v1) or a Modbus link
-/// (rise-modbus-v1); exactly one is set.
+/// The transport of one source: a CAN bus (rise-can-v1, dbc), a Modbus link
+/// (rise-modbus-v1) or a HID device (hid); exactly one is set.
 struct SourceTransport {
   std::unique_ptr<io::CanBus> can;
   std::unique_ptr<io::ModbusLink> modbus;
+  std::unique_ptr<io::HidDevice> hid;
 };
 
 class Bridge {
@@ -66,6 +69,7 @@ class Bridge {
  private:
   void source_loop(std::size_t source);
   void modbus_source_loop(std::size_t source);
+  void hid_source_loop(std::size_t source);
   bool report_modbus(std::size_t source, const io::ModbusResult& result);
   void publish_loop();
   void send_feedback(std::size_t source, const PanelSnapshot& snap, bool force);
@@ -73,6 +77,7 @@ class Bridge {
   PanelMapper mapper_;
   std::vector<std::unique_ptr<io::CanBus>> buses_;            // null for a Modbus source
   std::vector<std::unique_ptr<io::ModbusLink>> modbus_links_;  // null for a CAN source
+  std::vector<std::unique_ptr<io::HidDevice>> hid_devices_;    // null unless a hid source
   PublishFn publish_;
   BridgeSettings settings_;
 

@@ -70,6 +70,11 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
           if (other.is_multiplexer) b.multiplexer = &other;
       binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
       sources_[c.source].dbc.push_back(b);
+    } else if (!c.hid_signal.empty()) {
+      DbcBinding b;
+      b.hid_raw = c.kind == ControlKind::Switch;
+      binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
+      sources_[c.source].dbc.push_back(b);
     } else {
       binding_of_control_.push_back(-1);
       sources_[c.source].needs_type[type_index(frame_type_for(c.signal))] = true;
@@ -118,6 +123,72 @@ bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, s
   s.last_any_valid_us = now_us;
   if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[index].recovery_frames)
     s.status.check_failed = false;
+  return changed;
+}
+
+bool PanelMapper::attach_hid(std::size_t source, std::span<const uint8_t> descriptor, std::string* error) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  const std::string& name = definition_.sources[source].name;
+  s.hid.reset();
+  s.hid_last_us = 0;
+  auto fail = [&](std::string message) {
+    s.hid_error = name + ": " + std::move(message);
+    if (error) *error = s.hid_error;
+    return false;
+  };
+  fp::HidParseResult parsed = fp::parse_hid_descriptor(descriptor);
+  if (!parsed)
+    return fail("report descriptor does not parse (" + std::string(fp::to_string(parsed.error)) + " at byte " +
+                std::to_string(parsed.error_offset) + ")");
+  auto decoder = std::make_unique<fp::HidReportDecoder>(std::move(parsed.descriptor));
+  for (std::size_t i = 0; i < definition_.controls.size(); ++i) {
+    const auto& c = definition_.controls[i];
+    if (c.source != source || c.hid_signal.empty()) continue;
+    const std::size_t index = decoder->find(c.hid_signal);
+    if (index >= decoder->signals().size()) {
+      std::string known;
+      for (std::size_t k = 0; k < decoder->signals().size() && k < 24; ++k)
+        known += (k ? ", " : "") + decoder->signals()[k].name;
+      if (decoder->signals().size() > 24) known += ", ...";
+      return fail("control '" + c.name + "': the device has no signal '" + c.hid_signal + "' (it has: " + known + ")");
+    }
+    DbcBinding& b = s.dbc[static_cast<std::size_t>(binding_of_control_[i])];
+    b.hid_signal = index;
+    b.last_us = 0;
+  }
+  s.hid_values.assign(decoder->signals().size(), fp::HidSignalValue{});
+  s.hid = std::move(decoder);
+  s.hid_error.clear();
+  return true;
+}
+
+bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> report, int64_t now_us) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  if (!s.hid) return false;
+  switch (s.hid->decode(report, s.hid_values)) {
+    case fp::HidDecodeStatus::Ok: break;
+    case fp::HidDecodeStatus::UnknownReportId:
+      s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
+      return false;
+    case fp::HidDecodeStatus::TooShort:
+    case fp::HidDecodeStatus::BufferTooSmall:
+      s.status.errors[static_cast<std::size_t>(fp::DecodeError::BadLength)]++;
+      return false;
+  }
+  bool changed = false;
+  for (DbcBinding& b : s.dbc) {
+    const fp::HidSignalValue& v = s.hid_values[b.hid_signal];
+    const double value = b.hid_raw ? static_cast<double>(v.raw) : v.value;
+    changed = changed || b.last_us == 0 || value != b.value;
+    b.value = value;
+    b.last_us = now_us;
+  }
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.status.frames_ok++;
+  s.last_any_valid_us = now_us;
+  s.hid_last_us = now_us;
   return changed;
 }
 
@@ -229,6 +300,7 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   s.status.connected = connected;
   if (!connected) {
     for (auto& b : s.dbc) b.last_us = 0;
+    s.hid_last_us = 0;
     s.decoder.reset();
     s.last_valid_us.fill(0);
     s.status.heartbeat_seen = false;
@@ -246,6 +318,24 @@ bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::stri
     return false;
   }
   const int64_t timeout_us = 1000 * static_cast<int64_t>(def.timeout_ms);
+  if (def.is_hid()) {
+    // A HID device has no heartbeat: the first report after opening proves
+    // it talks; timeout_ms 0 trusts it until it is unplugged.
+    if (!s.hid) {
+      *reason = s.hid_error.empty() ? name + ": no report descriptor yet" : s.hid_error;
+      return false;
+    }
+    if (s.hid_last_us == 0) {
+      *reason = name + ": no report yet";
+      return false;
+    }
+    const int64_t age_us = now_us - s.hid_last_us;
+    if (timeout_us > 0 && age_us > timeout_us) {
+      *reason = name + ": stale (no report for " + std::to_string(age_us / 1000) + " ms)";
+      return false;
+    }
+    return true;
+  }
   if (def.is_dbc()) {
     // A DBC device has no heartbeat or status of ours: every bound message
     // must keep arriving, and its frames must fit the DBC.

@@ -5,12 +5,14 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/hid_report.hpp"
 #include "hil/control_transforms.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "panels/panel_definition.hpp"
@@ -72,6 +74,18 @@ class PanelMapper {
   /// changed. No throw; allocates nothing.
   bool on_inputs(std::size_t source, const firmware_protocol::ConsoleInputs& inputs, int64_t now_us);
 
+  /// A `hid` source's device was (re)opened with this report descriptor:
+  /// binds every control's signal name to it. False, with `error` set and
+  /// the source failsafe until the next attach, when the descriptor does not
+  /// parse or lacks a bound name. Allocates: call at open, not per report.
+  bool attach_hid(std::size_t source, std::span<const uint8_t> descriptor, std::string* error = nullptr);
+
+  /// Feeds one input report of a `hid` source (with its id byte when the
+  /// descriptor uses ids). Axes take the decoder's normalised value, buttons
+  /// value ≠ 0, switches the signal's raw value (a hat's direction index).
+  /// Returns true when a bound value changed. No throw; allocates nothing.
+  bool on_hid_report(std::size_t source, std::span<const uint8_t> report, int64_t now_us);
+
   /// What went wrong with one poll of a polled source.
   enum class SourceError {
     BadCrc,        ///< block failed its end-to-end CRC → failed check
@@ -109,10 +123,16 @@ class PanelMapper {
     const firmware_protocol::DbcSignal* multiplexer = nullptr;  // set for multiplexed signals
     double value = 0.0;
     int64_t last_us = 0;  // 0 = never
+    std::size_t hid_signal = 0;  // hid sources: index into the decoder's signals
+    bool hid_raw = false;        // hid switches take the raw value
   };
   struct SourceState {
     explicit SourceState(firmware_protocol::Decoder d) : decoder(d) {}
-    std::vector<DbcBinding> dbc;  // dbc sources only
+    std::vector<DbcBinding> dbc;  // dbc and hid sources
+    std::unique_ptr<firmware_protocol::HidReportDecoder> hid;  // hid sources, once attached
+    std::vector<firmware_protocol::HidSignalValue> hid_values;
+    std::string hid_error;  // why the last attach failed
+    int64_t hid_last_us = 0;  // last decoded report since connecting, 0 = none
     firmware_protocol::Decoder decoder;
     SourceStatus status;
     std::array<int64_t, firmware_protocol::kFrameTypeCount> last_valid_us{};  // 0 = never

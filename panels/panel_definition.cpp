@@ -89,13 +89,22 @@ SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::s
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
                 {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit",
-                 "dbc"});
+                 "dbc", "device"});
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
-  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "dbc")
+  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "dbc" && s.protocol != "hid")
     ctx.fail(node["protocol"], where + ".protocol",
-             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, dbc)");
+             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, dbc, hid)");
+  if (s.is_hid()) {
+    s.device = ctx.get<std::string>(node, "device", where, "");
+    if (!s.device.empty() && s.device.rfind("hid://", 0) != 0)
+      ctx.fail(node["device"], where + ".device", "expected hid://VID:PID[?serial=S][&name=TEXT][&interface=N]");
+    for (const char* k : {"node", "max_counter_delta", "poll_hz", "unit"})
+      if (node[k]) ctx.fail(node[k], where + "." + k, "not used by protocol hid");
+  } else if (node["device"]) {
+    ctx.fail(node["device"], where + ".device", "only for protocol hid");
+  }
   if (s.is_dbc()) {
     // A relative path is relative to the definition file.
     s.dbc_file = ctx.require<std::string>(node, "dbc", where);
@@ -124,9 +133,9 @@ SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::s
   const int node_id = ctx.get<int>(node, "node", where, 0);
   if (node_id < 0 || node_id > 15) ctx.fail(node["node"], where + ".node", "must be 0..15");
   s.node = static_cast<uint8_t>(node_id);
-  const int timeout = ctx.get<int>(node, "timeout_ms", where, 50);
-  if (timeout < 5 || timeout > 10000)
-    ctx.fail(node["timeout_ms"], where + ".timeout_ms", "must be 5..10000");
+  const int timeout = ctx.get<int>(node, "timeout_ms", where, s.is_hid() ? 1000 : 50);
+  if ((timeout < 5 && !(s.is_hid() && timeout == 0)) || timeout > 10000)
+    ctx.fail(node["timeout_ms"], where + ".timeout_ms", s.is_hid() ? "must be 0 (never stale) or 5..10000" : "must be 5..10000");
   s.timeout_ms = static_cast<uint32_t>(timeout);
   const int recovery = ctx.get<int>(node, "recovery_frames", where, 3);
   if (recovery < 1 || recovery > 1000)
@@ -203,7 +212,15 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   } else if (node["range"]) {
     ctx.fail(node["range"], where + ".range", "only for controls of a dbc source");
   }
-  if (source.is_dbc()) {
+  if (source.is_hid()) {
+    c.hid_signal = ctx.require<std::string>(node, "signal", where);
+    if (c.hid_signal.empty()) ctx.fail(node["signal"], where + ".signal", "must not be empty");
+    if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a hid source");
+    // Axes arrive normalised by the report decoder (-1..1 or 0..1).
+    c.range_min = -1.0;
+    c.range_max = 1.0;
+  }
+  if (source.is_dbc() || source.is_hid()) {
     // no protocol signal to parse
   } else if (const YAML::Node bits = node["bits"]) {
     // A switch read from several button inputs: no switch signal of its own.
@@ -226,7 +243,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   } else if (node["encoding"]) {
     ctx.fail(node["encoding"], where + ".encoding", "only with bits");
   }
-  const auto signal_text = source.is_dbc() ? std::string("axis.0")
+  const auto signal_text = source.is_dbc() || source.is_hid() ? std::string("axis.0")
                            : c.bits.empty() ? ctx.require<std::string>(node, "signal", where)
                                             : to_string(c.signal);
   const auto signal = parse_signal(signal_text);
@@ -234,7 +251,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
     ctx.fail(node["signal"], where + ".signal",
              "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
   c.signal = *signal;
-  const bool kind_matches = !c.bits.empty() || source.is_dbc() ||
+  const bool kind_matches = !c.bits.empty() || source.is_dbc() || source.is_hid() ||
       (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
       (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
       (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
@@ -451,14 +468,16 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
     ctx.fail(controls ? controls : root, "controls", "a list of at least one control is required");
   std::set<std::tuple<std::size_t, int, int>> bound;
   std::set<std::pair<std::size_t, const void*>> dbc_bound;
+  std::set<std::pair<std::size_t, std::string>> hid_bound;
   bool has_deadman = false;
   bool has_motion = false;
   for (std::size_t i = 0; i < controls.size(); ++i) {
     auto c = parse_control(ctx, def, controls[i], i);
     if (def.find_control(c.name))
       ctx.fail(controls[i]["name"], control_key(c.name) + ".name", "duplicate control name");
-    if (c.dbc_signal) {
-      if (!dbc_bound.insert({c.source, c.dbc_signal}).second)
+    if (c.dbc_signal || !c.hid_signal.empty()) {
+      if (c.dbc_signal ? !dbc_bound.insert({c.source, c.dbc_signal}).second
+                       : !hid_bound.insert({c.source, c.hid_signal}).second)
         ctx.fail(controls[i]["signal"], control_key(c.name) + ".signal", "signal already bound to another control");
       if (c.role == ControlRole::Deadman) {
         if (has_deadman) ctx.fail(controls[i]["role"], control_key(c.name) + ".role", "a second dead-man");

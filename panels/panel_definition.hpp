@@ -80,6 +80,10 @@ struct ControlDefinition {
   const firmware_protocol::DbcSignal* dbc_signal = nullptr;
   double range_min = 0.0;
   double range_max = 0.0;
+  // Controls of a "hid" source: a signal name of the device's report
+  // descriptor (firmware_protocol::hid_signals: x, hat_switch, button_3...).
+  // Known only once the device is open: the bridge checks it then.
+  std::string hid_signal;
   int line = 0;                        ///< line in the definition file (for messages)
 };
 
@@ -96,6 +100,13 @@ struct SourceDefinition {
   /// MESSAGE.SIGNAL names. The database is shared by copies of the definition.
   std::string dbc_file;
   std::shared_ptr<const firmware_protocol::DbcDatabase> dbc;
+  /// protocol "hid": a USB HID device (joystick, gamepad); controls bind the
+  /// names of its report descriptor's signals. `device` is its hid:// URL
+  /// (optional here; the daemon's --source URL wins). timeout_ms defaults to
+  /// 1000 (many gamepads send reports only on change); 0 = never stale, only
+  /// a disconnect makes the source unsafe.
+  std::string device;
+  bool is_hid() const { return protocol == "hid"; }
   bool is_modbus() const { return protocol == "rise-modbus-v1"; }
   bool is_dbc() const { return protocol == "dbc"; }
 };

@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
   app.add_option("--source,--can", source_urls,
                  "transport of each source, one per source in the definition's order: rise-can-v1: "
                  "socketcan://IFACE, socketcand://HOST:PORT/BUS, mem://NAME; rise-modbus-v1: "
-                 "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N");
+                 "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N; "
+                 "hid: hid://VID:PID[?serial=S][&name=TEXT][&interface=N], or - for the definition's device:");
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
   app.add_option("--publish-hz", publish_hz, "PanelState rate (default: the definition's publish_hz, 100)")
@@ -91,6 +92,19 @@ int main(int argc, char** argv) {
   try {
     for (std::size_t i = 0; i < source_urls.size(); ++i) {
       const auto& source = definition.sources[i];
+      // A hid source's URL may come from its definition (`device:`): "-".
+      if (source.is_hid() && source_urls[i] == "-") source_urls[i] = source.device;
+      const bool hid_url = source_urls[i].rfind("hid://", 0) == 0;
+      if (hid_url != source.is_hid())
+        throw std::runtime_error("source '" + source.name + "' speaks " + source.protocol + ": '" + source_urls[i] +
+                                 "' is " + (source.is_hid() ? "not a hid://VID:PID URL (or - for its device:)"
+                                                            : "a HID device URL"));
+      if (hid_url) {
+        rise::hil::SourceTransport t;
+        t.hid = std::make_unique<rise::io::HidDevice>(source_urls[i]);
+        transports.push_back(std::move(t));
+        continue;
+      }
       const bool modbus_url = rise::io::is_modbus_url(source_urls[i]);
       if (modbus_url != source.is_modbus())
         throw std::runtime_error("source '" + source.name + "' speaks " + source.protocol + ": '" + source_urls[i] +

@@ -174,7 +174,8 @@ cd /tmp
 { "$@" < /dev/null 2>&1; echo $? > /tmp/rc; } | cat > /dev/ttyS2
 finish "$(cat /tmp/rc)"
 '
-MODULES="can can-raw vcan"
+# RISE_VCAN_EXTRA_MODULES adds modules (and their dependencies), e.g. "hid uhid hid-generic".
+MODULES="can can-raw vcan${RISE_VCAN_EXTRA_MODULES:+ $RISE_VCAN_EXTRA_MODULES}"
 BASE_KEY=$( { echo "$INIT_SCRIPT$MODULES$KVER"; stat -Lc '%s %Y' "$KERNEL" "$BUSYBOX" "$MODDIR/modules.dep"; } |
   sha256sum | cut -c1-16)
 BASE=$CACHE/base-$KVER-$BASE_KEY.cpio

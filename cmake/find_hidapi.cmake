@@ -1,0 +1,4 @@
+# hidapi with its hidraw backend (Debian libhidapi-dev) ships only a
+# pkg-config file: make an imported target PkgConfig::hidapi_hidraw from it.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(hidapi_hidraw REQUIRED IMPORTED_TARGET hidapi-hidraw)

@@ -1,0 +1,85 @@
+#pragma once
+
+// A USB/Bluetooth HID device (joystick, gamepad, button box) through hidapi's
+// hidraw backend, opened from a URL:
+//
+//   hid://VID:PID[?serial=S][&name=TEXT][&interface=N]
+//
+// VID and PID in hex (`hid://0428:4001`); `serial` matches the serial number
+// exactly, `name` is a substring of the product string, `interface` the USB
+// interface number. Hot-plug is by enumeration: reopen() enumerates (the
+// bridge calls it every reopen period while the device is away); libusb
+// hotplug callbacks are not used.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hil/io/can_bus.hpp"
+#include "hil/io/posix_io.hpp"
+
+struct hid_device_;
+
+namespace rise::io {
+
+struct HidUrl {
+  uint16_t vendor_id = 0;
+  uint16_t product_id = 0;
+  std::string serial;     ///< empty: any
+  std::string name;       ///< substring of the product string; empty: any
+  int interface = -1;     ///< -1: any
+};
+
+/// Parses a hid:// URL; nullopt (and `error` set when given) if malformed.
+std::optional<HidUrl> parse_hid_url(std::string_view url, std::string* error = nullptr);
+
+/// Largest input report read (hidraw caps reports at 4096 bytes).
+constexpr std::size_t max_hid_report_bytes = 4096;
+
+class HidDevice {
+ public:
+  /// Does not open: call reopen(). Throws std::invalid_argument for a bad URL.
+  explicit HidDevice(const std::string& url);
+  ~HidDevice();
+  HidDevice(const HidDevice&) = delete;
+  HidDevice& operator=(const HidDevice&) = delete;
+
+  /// Enumerates the HID devices, opens the first that matches the URL and
+  /// reads its report descriptor from sysfs
+  /// (/sys/class/hidraw/hidrawN/device/report_descriptor: hidapi 0.13 has no
+  /// hid_get_report_descriptor). Ok, or Disconnected when none matches,
+  /// Error when it matches but cannot be opened (permissions). Allocates:
+  /// call from the source's thread, not at the publish rate.
+  IoStatus reopen();
+  void close();
+  bool is_open() const { return device_ != nullptr; }
+
+  /// Reads one input report (with its id byte when the descriptor uses ids)
+  /// into `report`, waiting up to timeout_ms. Ok with `length` set, Timeout,
+  /// or Disconnected (the device went away; the handle is closed). No
+  /// allocation, no throw.
+  IoStatus read(std::span<uint8_t> report, std::size_t& length, int timeout_ms);
+
+  /// Writes an output report (first byte: report id, 0 when ids are unused).
+  IoStatus write(std::span<const uint8_t> report);
+
+  /// The raw report descriptor of the open device (empty when closed).
+  const std::vector<uint8_t>& report_descriptor() const { return descriptor_; }
+  /// The hidraw node of the open device ("/dev/hidraw0").
+  const std::string& path() const { return path_; }
+  const HidUrl& url() const { return url_; }
+  std::string last_error() const { return error_.get(); }
+
+ private:
+  HidUrl url_;
+  hid_device_* device_ = nullptr;
+  std::vector<uint8_t> descriptor_;
+  std::string path_;
+  detail::ErrorText error_;
+};
+
+}  // namespace rise::io
