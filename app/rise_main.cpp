@@ -222,12 +222,14 @@ int run_status(const std::string& lcm_url, const std::string& id, double every_s
                 static_cast<long long>(p.seq), p.failsafe ? "FAILSAFE: " : "ok", p.failsafe_reason.c_str(),
                 p.deadman ? ", dead-man held" : "");
     std::printf("  %-10s %-5s %-5s %9s %10s %8s %6s %8s %6s %6s %5s  %s\n", "source", "conn", "stale", "age ms",
-                "frames ok", "bad", "crc", "counter", "length", "unk id", "reconn", "status / url");
+                "frames ok", "bad", "crc", "counter", "length", "unk id", "reconn", "status / bus / url");
     for (const auto& h : p.sources)
-      std::printf("  %-10s %-5s %-5s %9.1f %10lld %8lld %6d %8d %6d %6d %5d  %s %s\n", h.name.c_str(),
+      std::printf("  %-10s %-5s %-5s %9.1f %10lld %8lld %6d %8d %6d %6d %5d  %s %s %s\n", h.name.c_str(),
                   h.connected ? "yes" : "NO", h.stale ? "YES" : "no", static_cast<double>(h.last_frame_age_us) / 1e3,
                   static_cast<long long>(h.frames_ok), static_cast<long long>(h.frames_bad), h.crc_errors,
-                  h.counter_errors, h.length_errors, h.unknown_ids, h.reconnects, h.status.c_str(), h.url.c_str());
+                  h.counter_errors, h.length_errors, h.unknown_ids, h.reconnects, h.status.c_str(),
+                  h.bus_state.empty() ? "" : (h.bus_state + " (" + std::to_string(h.error_frames) + " error frames)").c_str(),
+                  h.url.c_str());
     std::fflush(stdout);
     ++shown;
   }

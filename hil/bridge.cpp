@@ -156,7 +156,17 @@ void Bridge::source_loop(std::size_t source) {
     const io::IoStatus st = bus.receive(frame, 5);
     if (st == io::IoStatus::Ok) {
       // rise-can-v1 is classic 11-bit only; a DBC device may use FD and 29-bit ids.
-      if (frame.error || frame.remote || (!is_dbc && frame.fd)) continue;
+      if (frame.error) {
+        bool changed;
+        {
+          std::lock_guard lock(mutex_);
+          changed = mapper_.on_bus_error(source, io::describe_can_error(frame), monotonic_us());
+          changed_ = changed_ || changed;
+        }
+        if (changed) wake_.notify_all();  // bus-off is published at once
+        continue;
+      }
+      if (frame.remote || (!is_dbc && frame.fd)) continue;
       bool changed;
       {
         std::lock_guard lock(mutex_);

@@ -106,7 +106,6 @@ bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, s
     b.value = value;
     b.last_us = now_us;
   }
-  const std::size_t index = static_cast<std::size_t>(&s - sources_.data());
   if (!matched) {
     s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
     return false;
@@ -121,9 +120,25 @@ bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, s
   s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
   s.status.frames_ok++;
   s.last_any_valid_us = now_us;
-  if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[index].recovery_frames)
-    s.status.check_failed = false;
+  count_valid(s);
   return changed;
+}
+
+// A valid frame or block: recovery from a failed protection check.
+void PanelMapper::count_valid(SourceState& s) {
+  const uint32_t recovery = definition_.sources[static_cast<std::size_t>(&s - sources_.data())].recovery_frames;
+  if (s.status.check_failed && ++s.ok_in_row >= recovery) s.status.check_failed = false;
+}
+
+bool PanelMapper::on_bus_error(std::size_t source, const io::CanErrorReport& report, int64_t now_us) {
+  (void)now_us;
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  s.status.error_frames++;
+  if (!report.state || *report.state == s.status.bus_state) return false;
+  if (*report.state == io::CanBusState::BusOff) s.status.bus_offs++;
+  s.status.bus_state = *report.state;
+  return true;
 }
 
 bool PanelMapper::attach_hid(std::size_t source, std::span<const uint8_t> descriptor, std::string* error) {
@@ -217,8 +232,7 @@ bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const 
   s.status.frames_ok++;
   s.last_valid_us[type_index(r.type)] = now_us;
   s.last_any_valid_us = now_us;
-  if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[source].recovery_frames)
-    s.status.check_failed = false;
+  count_valid(s);
 
   bool changed = false;
   if (const auto* axes = std::get_if<fp::AxesFrame>(&r.message)) {
@@ -256,8 +270,7 @@ bool PanelMapper::on_inputs(std::size_t source, const fp::ConsoleInputs& in, int
                        fp::FrameType::Heartbeat})
     s.last_valid_us[type_index(t)] = now_us;
   s.last_any_valid_us = now_us;
-  if (s.status.check_failed && ++s.ok_in_row >= definition_.sources[source].recovery_frames)
-    s.status.check_failed = false;
+  count_valid(s);
 
   const bool changed = s.axes != in.axes || s.buttons != in.buttons || s.switches != in.switches ||
                        !s.axes_seen[0] || !s.buttons_seen || !s.switches_seen || !s.status.heartbeat_seen ||
@@ -298,6 +311,8 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   if (s.status.connected == connected) return;
   if (connected && s.last_any_valid_us != 0) s.status.reconnects++;
   s.status.connected = connected;
+  // A transport opened afresh (interface up again) starts error-active.
+  if (connected) s.status.bus_state = io::CanBusState::Active;
   if (!connected) {
     for (auto& b : s.dbc) b.last_us = 0;
     s.hid_last_us = 0;
@@ -315,6 +330,10 @@ bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::stri
   const std::string& name = def.name;
   if (!s.status.connected) {
     *reason = name + ": disconnected";
+    return false;
+  }
+  if (s.status.bus_state == io::CanBusState::BusOff) {
+    *reason = name + ": CAN bus-off";
     return false;
   }
   const int64_t timeout_us = 1000 * static_cast<int64_t>(def.timeout_ms);

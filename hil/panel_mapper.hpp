@@ -14,6 +14,7 @@
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/control_transforms.hpp"
+#include "hil/io/can_error.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "panels/panel_definition.hpp"
 
@@ -33,6 +34,9 @@ struct SourceStatus {
   int64_t exceptions = 0;           ///< polled transports: Modbus exception answers
   firmware_protocol::PanelStatus console_status = firmware_protocol::PanelStatus::Init;
   bool heartbeat_seen = false;
+  int64_t error_frames = 0;         ///< CAN error frames seen on the source's bus
+  io::CanBusState bus_state = io::CanBusState::Active;  ///< last state the controller reported
+  int32_t bus_offs = 0;             ///< times the controller went bus-off
 
   int64_t frames_bad() const;
 };
@@ -85,6 +89,14 @@ class PanelMapper {
   /// value ≠ 0, switches the signal's raw value (a hat's direction index).
   /// Returns true when a bound value changed. No throw; allocates nothing.
   bool on_hid_report(std::size_t source, std::span<const uint8_t> report, int64_t now_us);
+
+  /// Feeds one CAN error frame of `source`'s bus (linux/can/error.h): counts
+  /// it and takes the controller state it reports. Bus-off makes the source
+  /// unsafe until the controller reports its restart or error-active (the
+  /// kernel sends both: can_restart(), can_change_state()) or the interface
+  /// is opened afresh; frames still read meanwhile do not clear it. Returns
+  /// true when the state changed. No throw; allocates nothing.
+  bool on_bus_error(std::size_t source, const io::CanErrorReport& report, int64_t now_us);
 
   /// What went wrong with one poll of a polled source.
   enum class SourceError {
@@ -148,6 +160,7 @@ class PanelMapper {
     bool switches_seen = false;
   };
 
+  void count_valid(SourceState& s);
   bool source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const;
 
   panels::PanelDefinition definition_;

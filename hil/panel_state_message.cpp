@@ -70,6 +70,11 @@ rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
     h.timeouts = static_cast<int32_t>(s.timeouts);
     h.exceptions = static_cast<int32_t>(s.exceptions);
     h.status = s.heartbeat_seen ? fp::to_string(s.console_status) : "unknown";
+    h.error_frames = static_cast<int32_t>(s.error_frames);
+    // Only CAN sources have a controller state.
+    const bool can = i < definition.sources.size() && !definition.sources[i].is_modbus() && !definition.sources[i].is_hid();
+    h.bus_state = can ? std::string(io::to_string(s.bus_state)) : "";
+    h.bus_offs = s.bus_offs;
     m.sources.push_back(h);
   }
   m.num_axes = static_cast<int16_t>(m.axes.size());

@@ -174,9 +174,10 @@ int main(int argc, char** argv) {
       next_status += std::chrono::microseconds(static_cast<int64_t>(status_every_s * 1e6));
       const auto snap = bridge.snapshot();
       for (const auto& s : snap.sources)
-        spdlog::info("source {}: connected={} stale={} ok={} bad={} reconnects={} timeouts={} exceptions={}",
+        spdlog::info("source {}: connected={} stale={} ok={} bad={} reconnects={} timeouts={} exceptions={} "
+                     "error_frames={} bus={}",
                      s.name, s.connected, s.stale, s.frames_ok, s.frames_bad(), s.reconnects, s.timeouts,
-                     s.exceptions);
+                     s.exceptions, s.error_frames, rise::io::to_string(s.bus_state));
     }
   }
   bridge.stop();

@@ -374,3 +374,53 @@ TEST_CASE("transform keys are checked with file:line and the key", "[hil]") {
   CHECK_THAT(error_of(replaced("role: deadman, safe: false", "role: deadman, mode: toggle, safe: false")),
              Catch::StartsWith("t.yaml:6: controls.deadman.mode: the deadman must be mode: direct"));
 }
+
+TEST_CASE("a CAN bus-off makes the source failsafe until the controller reports its restart", "[hil]") {
+  PanelMapper mapper(console());
+  mapper.on_connection(0, true, kT0);
+  Firmware fw{mapper};
+  fw.buttons = 1u << 0;
+  fw.axes[1] = fp::axis_from_unit(0.5f);
+  fw.cycle(kT0);
+  REQUIRE_FALSE(mapper.evaluate(kT0 + 1000).failsafe);
+
+  rise::io::CanErrorReport report;
+  SECTION("error-warning and error-passive are reported, the panel stays usable") {
+    report.classes = 0x004;
+    report.state = rise::io::CanBusState::Passive;
+    CHECK(mapper.on_bus_error(0, report, kT0 + 2000));
+    CHECK_FALSE(mapper.on_bus_error(0, report, kT0 + 2500));  // no change
+    const auto s = mapper.evaluate(kT0 + 3000);
+    CHECK_FALSE(s.failsafe);
+    CHECK(s.sources[0].bus_state == rise::io::CanBusState::Passive);
+    CHECK(s.sources[0].error_frames == 2);
+  }
+  SECTION("bus-off holds through valid frames and ends at the restart") {
+    report.classes = 0x040;
+    report.state = rise::io::CanBusState::BusOff;
+    CHECK(mapper.on_bus_error(0, report, kT0 + 2000));
+    auto s = mapper.evaluate(kT0 + 3000);
+    CHECK(s.failsafe);
+    CHECK(s.failsafe_reason == "console: CAN bus-off");
+    CHECK(axis(mapper, s, "drive_y") == 0.0f);
+    CHECK(s.sources[0].bus_offs == 1);
+    for (int i = 1; i <= 5; ++i) fw.cycle(kT0 + 3000 + i * 10'000);
+    CHECK(mapper.evaluate(kT0 + 55'000).failsafe);
+
+    report.classes = 0x100;  // CAN_ERR_RESTARTED
+    report.state = rise::io::CanBusState::Active;
+    CHECK(mapper.on_bus_error(0, report, kT0 + 56'000));
+    s = mapper.evaluate(kT0 + 57'000);
+    INFO(s.failsafe_reason);
+    CHECK_FALSE(s.failsafe);
+    CHECK(axis(mapper, s, "drive_y") == Approx(0.5).margin(0.05));
+  }
+  SECTION("an error frame without a state (a bus error) is only counted") {
+    report.classes = 0x088;  // protocol violation + bus error
+    CHECK_FALSE(mapper.on_bus_error(0, report, kT0 + 2000));
+    const auto s = mapper.evaluate(kT0 + 3000);
+    CHECK_FALSE(s.failsafe);
+    CHECK(s.sources[0].error_frames == 1);
+    CHECK(s.sources[0].bus_state == rise::io::CanBusState::Active);
+  }
+}
