@@ -620,3 +620,48 @@ TEST_CASE("can-utils candump sees the bridge's feedback frames on the real bus",
   // "(TIME) vcan0 210#LL.." twice; byte 0 = LED bits with power lit.
   CHECK(text.find("vcan0 210#") != std::string::npos);
 }
+
+TEST_CASE("a frame typed into can-utils cansend reaches the PanelState through a dbc source", "[vcan]") {
+  require_vm();
+  // A joystick box described by a DBC of its own: 0x500, a signed 16-bit
+  // stick and a trigger bit (Intel byte order).
+  const std::string dbc = "/tmp/joy_box.dbc";
+  {
+    std::FILE* f = std::fopen(dbc.c_str(), "w");
+    REQUIRE(f);
+    std::fputs("VERSION \"\"\n\nBU_: JOY\n\n"
+               "BO_ 1280 JOY: 8 JOY\n"
+               " SG_ STICK_Y : 0|16@1- (1,0) [-32768|32767] \"\" Vector__XXX\n"
+               " SG_ TRIGGER : 16|1@1+ (1,0) [0|1] \"\" Vector__XXX\n",
+               f);
+    std::fclose(f);
+  }
+  const auto def = rise::panels::parse_panel_definition(
+      "panel: joy-box\n"
+      "sources:\n"
+      "  - {name: box, protocol: dbc, dbc: " + dbc + ", timeout_ms: 10000}\n"
+      "controls:\n"
+      "  - {name: stick_y, kind: axis, signal: JOY.STICK_Y, range: [-32768, 32767], safe: 0}\n"
+      "  - {name: trigger, kind: button, signal: JOY.TRIGGER, safe: false}\n",
+      "/tmp/joy_box.yaml");
+  rise::hil::test::Published published;
+  std::vector<std::unique_ptr<CanBus>> buses;
+  buses.push_back(open_can_bus("socketcan://vcan0"));
+  rise::hil::Bridge bridge(def, std::move(buses), [&](const rise::hil::PanelSnapshot& s) { published.add(s); });
+  bridge.start();
+  const std::size_t stick = *def.find_control("stick_y"), trigger = *def.find_control("trigger");
+
+  REQUIRE(run({"cansend", "vcan0", "500#0040010000000000"}) == 0);  // 0x4000 = 16384, trigger on
+  auto s = published.wait_for([](const rise::hil::PanelSnapshot& p) { return !p.failsafe; }, kPeerTimeoutMs);
+  REQUIRE(s);
+  CHECK(s->controls[stick].axis == Approx(16384.5 / 32767.5).margin(1e-3));
+  CHECK(s->controls[trigger].pressed);
+
+  const std::size_t from = published.size();
+  REQUIRE(run({"cansend", "vcan0", "500#00C0000000000000"}) == 0);  // 0xC000 = -16384, trigger off
+  s = published.wait_for(
+      [&](const rise::hil::PanelSnapshot& p) { return !p.controls[trigger].pressed; }, kPeerTimeoutMs, from);
+  REQUIRE(s);
+  CHECK(s->controls[stick].axis == Approx(-16383.5 / 32767.5).margin(1e-3));
+  bridge.stop();
+}
