@@ -1,5 +1,7 @@
 #include "hil/io/can_log.hpp"
 
+#include <cstring>
+
 #include <algorithm>
 #include <cstdint>
 #include <stdexcept>
@@ -189,15 +191,60 @@ void CanLogReader::reset_state() {
 void CanLogReader::rewind() {
   in_.clear();
   in_.seekg(0);
+  block_begin_ = block_end_ = 0;
+  eof_ = false;
   reset_state();
 }
 
+bool CanLogReader::next_line(std::string_view& line) {
+  constexpr std::size_t kBlock = 1 << 20;
+  for (;;) {
+    const char* begin = block_.data() + block_begin_;
+    const std::size_t left = block_end_ - block_begin_;
+    if (const void* nl = left ? std::memchr(begin, '\n', left) : nullptr) {
+      const auto n = static_cast<std::size_t>(static_cast<const char*>(nl) - begin);
+      line = std::string_view(begin, n);
+      block_begin_ += n + 1;
+      return true;
+    }
+    if (eof_) {
+      if (left == 0) return false;
+      line = std::string_view(begin, left);  // last line without a newline
+      block_begin_ = block_end_;
+      return true;
+    }
+    // Keep the partial line, grow for lines longer than a block, read more.
+    std::memmove(block_.data(), begin, left);
+    block_begin_ = 0;
+    block_end_ = left;
+    if (block_.size() < left + kBlock) block_.resize(left + kBlock);
+    in_.read(block_.data() + block_end_, static_cast<std::streamsize>(block_.size() - block_end_));
+    block_end_ += static_cast<std::size_t>(in_.gcount());
+    if (!in_) eof_ = true;
+  }
+}
+
 bool CanLogReader::next(CanLogRecord& record) {
-  while (std::getline(in_, text_)) {
+  if (format_ == CanLogFormat::Candump) {
+    // The shape candump -l writes, parsed in place; anything else (and a
+    // line cut by the block's end) takes the general path below.
+    std::string_view interface;
+    const char* begin = block_.data() + block_begin_;
+    if (const char* after = parse_candump_fast(begin, block_.data() + block_end_, record.frame, interface)) {
+      block_begin_ += static_cast<std::size_t>(after - begin);
+      record.line = ++line_;
+      record.tx = false;
+      record.channel.assign(interface);
+      return true;
+    }
+  }
+  std::string_view text;
+  while (next_line(text)) {
     ++line_;
-    record = CanLogRecord{};
+    record.channel.clear();
+    record.tx = false;
     record.line = line_;
-    const LineResult result = parse_line(trim(text_), record);
+    const LineResult result = parse_line(trim(text), record);
     if (result == LineResult::Frame) return true;
     if (result == LineResult::Malformed) {
       ++malformed_count_;
@@ -211,14 +258,13 @@ CanLogReader::LineResult CanLogReader::parse_line(std::string_view line, CanLogR
   if (line.empty()) return LineResult::Skip;
   switch (format_) {
     case CanLogFormat::Candump: {
-      CandumpParse parsed = parse_candump_line(line);
-      if (!parsed.ok()) return LineResult::Malformed;
-      record.frame = parsed.record.frame;
-      record.channel = std::move(parsed.record.interface);
+      std::string_view interface;
+      if (parse_candump_line(line, record.frame, interface) != CandumpError::None) return LineResult::Malformed;
+      record.channel.assign(interface);
       return LineResult::Frame;
     }
-    case CanLogFormat::VectorAsc: return parse_asc(line, record);
-    case CanLogFormat::PeakTrc: return parse_trc(line, record);
+    case CanLogFormat::VectorAsc: record.frame = CanFrame{}; return parse_asc(line, record);
+    case CanLogFormat::PeakTrc: record.frame = CanFrame{}; return parse_trc(line, record);
   }
   return LineResult::Malformed;
 }

@@ -33,7 +33,7 @@ struct CanLogRecord {
   bool tx = false;      ///< the logger sent it (ASC/TRC "Tx"); false for candump
 };
 
-/// Reads a log file record by record (one line in memory at a time).
+/// Reads a log file record by record (a block of lines in memory at a time).
 /// Lines that are neither a frame nor a known non-frame line (header,
 /// comment, statistics, chip status, J1939 transport summary, TRC status)
 /// are counted as malformed and skipped; next() never throws.
@@ -67,10 +67,17 @@ class CanLogReader {
   LineResult parse_trc(std::string_view line, CanLogRecord& record);
   void reset_state();
 
+  // The file is read in large blocks, lines are views into them (the
+  // remainder of a block carried to the next): no copy per line.
+  bool next_line(std::string_view& line);
+
   std::string path_;
   std::ifstream in_;
+  std::vector<char> block_;
+  std::size_t block_begin_ = 0;  // first unread byte in block_
+  std::size_t block_end_ = 0;    // end of valid bytes in block_
+  bool eof_ = false;
   CanLogFormat format_ = CanLogFormat::Candump;
-  std::string text_;
   int line_ = 0;
   size_t malformed_count_ = 0;
   std::vector<int> malformed_lines_;

@@ -1,6 +1,8 @@
 #include "hil/io/candump_log.hpp"
 
+#include <array>
 #include <cstdio>
+#include <cstring>
 
 namespace rise::io {
 namespace {
@@ -8,12 +10,7 @@ namespace {
 constexpr uint32_t kErrFlag = 0x20000000u;  // CAN_ERR_FLAG in <linux/can.h>
 constexpr uint32_t kEffMask = 0x1FFFFFFFu;
 
-int hex_value(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
+int hex_value(char c);
 
 bool parse_hex(std::string_view text, uint32_t& out) {
   if (text.empty() || text.size() > 8) return false;
@@ -44,7 +41,70 @@ bool parse_data(std::string_view text, CanFrame& f, std::size_t max_len) {
   return true;
 }
 
+// Hex digit values, -1 for anything else.
+constexpr std::array<int8_t, 256> kHex = [] {
+  std::array<int8_t, 256> t{};
+  t.fill(-1);
+  for (int c = '0'; c <= '9'; ++c) t[static_cast<std::size_t>(c)] = static_cast<int8_t>(c - '0');
+  for (int c = 'a'; c <= 'f'; ++c) t[static_cast<std::size_t>(c)] = static_cast<int8_t>(c - 'a' + 10);
+  for (int c = 'A'; c <= 'F'; ++c) t[static_cast<std::size_t>(c)] = static_cast<int8_t>(c - 'A' + 10);
+  return t;
+}();
+
+inline int hex_at(const char* p) { return kHex[static_cast<unsigned char>(*p)]; }
+int hex_value(char c) { return kHex[static_cast<unsigned char>(c)]; }
+
 }  // namespace
+
+const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std::string_view& interface) {
+  // Every read checks `end`; any surprise hands the line to the general parser.
+  if (p == end || *p != '(') return nullptr;
+  ++p;
+  int64_t sec = 0;
+  const char* digits = p;
+  while (p != end && *p >= '0' && *p <= '9') sec = sec * 10 + (*p++ - '0');
+  if (p == digits || p - digits > 12 || p == end || *p != '.') return nullptr;
+  ++p;
+  if (end - p < 8) return nullptr;
+  int64_t usec = 0;
+  for (int i = 0; i < 6; ++i, ++p) {
+    if (*p < '0' || *p > '9') return nullptr;
+    usec = usec * 10 + (*p - '0');
+  }
+  if (*p++ != ')' || *p++ != ' ') return nullptr;
+  const char* name = p;
+  while (p != end && *p != ' ' && *p != '\n' && *p != '\r') ++p;
+  if (p == name || p == end || *p != ' ') return nullptr;
+  const std::string_view iface(name, static_cast<std::size_t>(p - name));
+  ++p;
+  uint32_t id = 0;
+  const char* id_begin = p;
+  for (int v; p != end && (v = hex_at(p)) >= 0; ++p) id = id << 4 | static_cast<uint32_t>(v);
+  const auto id_digits = p - id_begin;
+  if (p == end || *p != '#' || (id_digits != 3 && id_digits != 8)) return nullptr;
+  if (id_digits == 3 && id > 0x7FF) return nullptr;
+  ++p;
+  uint8_t data[8];
+  uint8_t len = 0;
+  for (int hi, lo; end - p >= 2 && (hi = hex_at(p)) >= 0 && (lo = hex_at(p + 1)) >= 0; p += 2) {
+    if (len == 8) return nullptr;
+    data[len++] = static_cast<uint8_t>(hi << 4 | lo);
+  }
+  if (p != end && *p == '\r') ++p;
+  if (p == end || *p != '\n') return nullptr;
+  f = CanFrame{};
+  f.timestamp_us = sec * 1'000'000 + usec;
+  if (id_digits == 8) {
+    f.error = (id & kErrFlag) != 0;
+    f.extended = !f.error;
+    id &= kEffMask;
+  }
+  f.id = id;
+  f.len = len;
+  std::memcpy(f.data.data(), data, len);
+  interface = iface;
+  return p + 1;
+}
 
 const char* to_string(CandumpError error) {
   switch (error) {
@@ -61,85 +121,94 @@ const char* to_string(CandumpError error) {
 
 CandumpParse parse_candump_line(std::string_view line) {
   CandumpParse r;
+  std::string_view interface;
+  r.error = parse_candump_line(line, r.record.frame, interface);
+  r.record.interface = std::string(interface);
+  return r;
+}
+
+CandumpError parse_candump_line(std::string_view line, CanFrame& frame, std::string_view& interface) {
+  frame = CanFrame{};
+  interface = {};
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
   while (!line.empty() && line.front() == ' ') line.remove_prefix(1);
-  if (line.empty()) return r.error = CandumpError::Empty, r;
-  if (line.front() != '(') return r.error = CandumpError::NoTimestamp, r;
+  if (line.empty()) return CandumpError::Empty;
+  if (line.front() != '(') return CandumpError::NoTimestamp;
   const auto close = line.find(')');
   const auto dot = line.find('.');
   if (close == std::string_view::npos || dot == std::string_view::npos || dot > close)
-    return r.error = CandumpError::NoTimestamp, r;
+    return CandumpError::NoTimestamp;
   int64_t sec = 0, usec = 0;
   // 12 digits of seconds reach year 33658: more is not a time (and would overflow).
-  if (dot - 1 == 0 || dot - 1 > 12) return r.error = CandumpError::NoTimestamp, r;
+  if (dot - 1 == 0 || dot - 1 > 12) return CandumpError::NoTimestamp;
   for (char c : line.substr(1, dot - 1)) {
-    if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
+    if (c < '0' || c > '9') return CandumpError::NoTimestamp;
     sec = sec * 10 + (c - '0');
   }
   const auto frac = line.substr(dot + 1, close - dot - 1);
-  if (frac.empty() || frac.size() > 9) return r.error = CandumpError::NoTimestamp, r;
+  if (frac.empty() || frac.size() > 9) return CandumpError::NoTimestamp;
   int digits = 0;
   for (char c : frac) {
-    if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
+    if (c < '0' || c > '9') return CandumpError::NoTimestamp;
     if (digits++ < 6) usec = usec * 10 + (c - '0');
   }
   for (; digits < 6; ++digits) usec *= 10;
-  r.record.frame.timestamp_us = sec * 1'000'000 + usec;
+  frame.timestamp_us = sec * 1'000'000 + usec;
 
   std::string_view rest = line.substr(close + 1);
   while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
   const auto space = rest.find(' ');
-  if (space == std::string_view::npos || space == 0) return r.error = CandumpError::NoInterface, r;
-  r.record.interface = std::string(rest.substr(0, space));
+  if (space == std::string_view::npos || space == 0) return CandumpError::NoInterface;
+  interface = rest.substr(0, space);
   rest = rest.substr(space + 1);
   while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
   // Anything after the frame (candump -x adds " R" / " T") is ignored.
   if (const auto end = rest.find(' '); end != std::string_view::npos) rest = rest.substr(0, end);
 
   const auto hash = rest.find('#');
-  if (hash == std::string_view::npos) return r.error = CandumpError::BadId, r;
-  CanFrame& f = r.record.frame;
+  if (hash == std::string_view::npos) return CandumpError::BadId;
+  CanFrame& f = frame;
   uint32_t id = 0;
-  if (!parse_hex(rest.substr(0, hash), id)) return r.error = CandumpError::BadId, r;
+  if (!parse_hex(rest.substr(0, hash), id)) return CandumpError::BadId;
   if (hash == 3) {
-    if (id > 0x7FF) return r.error = CandumpError::BadId, r;
+    if (id > 0x7FF) return CandumpError::BadId;
   } else if (hash == 8) {
     f.error = (id & kErrFlag) != 0;  // then the id holds the error class
     f.extended = !f.error;
     id &= kEffMask;
   } else {
-    return r.error = CandumpError::BadId, r;
+    return CandumpError::BadId;
   }
   f.id = id;
 
   std::string_view data = rest.substr(hash + 1);
   if (!data.empty() && data.front() == '#') {  // CAN FD: flags nibble first
     data.remove_prefix(1);
-    if (data.empty()) return r.error = CandumpError::BadData, r;
+    if (data.empty()) return CandumpError::BadData;
     const int flags = hex_value(data.front());
-    if (flags < 0) return r.error = CandumpError::BadData, r;
+    if (flags < 0) return CandumpError::BadData;
     f.fd = true;
     f.brs = flags & 0x1;  // CANFD_BRS
     f.esi = flags & 0x2;  // CANFD_ESI
     data.remove_prefix(1);
-    if (!parse_data(data, f, 64)) return r.error = CandumpError::TooLong, r;
-    if (!is_fd_length(f.len)) return r.error = CandumpError::BadData, r;
-    return r;
+    if (!parse_data(data, f, 64)) return CandumpError::TooLong;
+    if (!is_fd_length(f.len)) return CandumpError::BadData;
+    return CandumpError::None;
   }
   if (!data.empty() && (data.front() == 'R' || data.front() == 'r')) {
     f.remote = true;
     f.len = 0;
     if (data.size() == 2) {
       const int len = hex_value(data[1]);
-      if (len < 0 || len > 8) return r.error = CandumpError::BadData, r;
+      if (len < 0 || len > 8) return CandumpError::BadData;
       f.len = static_cast<uint8_t>(len);
     } else if (data.size() > 2) {
-      return r.error = CandumpError::BadData, r;
+      return CandumpError::BadData;
     }
-    return r;
+    return CandumpError::None;
   }
-  if (!parse_data(data, f, 8)) return r.error = data.size() > 16 ? CandumpError::TooLong : CandumpError::BadData, r;
-  return r;
+  if (!parse_data(data, f, 8)) return data.size() > 16 ? CandumpError::TooLong : CandumpError::BadData;
+  return CandumpError::None;
 }
 
 std::string format_candump_line(const CanFrame& f, std::string_view interface) {

@@ -34,6 +34,19 @@ struct CandumpParse {
 /// ignored). Does not throw.
 CandumpParse parse_candump_line(std::string_view line);
 
+/// The same without allocating: fills `frame` (every field) and points
+/// `interface` into `line`. Safe in the cyclic path.
+CandumpError parse_candump_line(std::string_view line, CanFrame& frame, std::string_view& interface);
+
+/// Fast path for the common shape of a candump line, as candump -l writes
+/// classic frames: "(SEC.USEC) IFACE ID#HEXDATA" with 6 digits of
+/// microseconds, a 3- or 8-digit id and whole data bytes, ended by "\n" (or
+/// "\r\n") before `end`. Returns the position after the newline with
+/// `frame` and `interface` filled exactly as parse_candump_line would, or
+/// nullptr (nothing consumed) for any other line: the caller then takes the
+/// general parser. Safe in the cyclic path.
+const char* parse_candump_fast(const char* p, const char* end, CanFrame& frame, std::string_view& interface);
+
 /// Writes one frame as a log line (without newline), e.g.
 /// "(1700000000.000001) can0 123#DEADBEEF".
 std::string format_candump_line(const CanFrame& frame, std::string_view interface);

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hil/io/can_log.hpp"
+#include "hil/io/candump_log.hpp"
 
 using namespace rise::io;
 
@@ -398,5 +399,52 @@ TEST_CASE("log format is detected from the content, then from the extension", "[
     const auto path = write_temp("what.bin", "hello\n");
     CHECK_THROWS_WITH(CanLogReader(path), Catch::Contains(path));
     CHECK_THROWS_WITH(CanLogReader("/nonexistent/x.log"), Catch::Contains("/nonexistent/x.log"));
+  }
+}
+
+TEST_CASE("the reader's in-place candump path gives what the line parser gives, line by line", "[hil_io]") {
+  // Every shape: the fast path's (classic, 29-bit, error frame, CRLF, empty
+  // data) and those it hands on (FD, remote, trailing candump -x flags, '.'
+  // separators, 3 digits of micros, malformed lines), plus the real captures.
+  std::string text =
+      "(1436509052.249713) can0 123#DEADBEEF\n"
+      "(1436509052.249714) vcan12 12345678#00\r\n"
+      "(1436509052.249715) can0 20000080#0000000000000000\n"
+      "(1436509052.249716) can0 7FF#\n"
+      "(1436509052.249717) can0 123##1112233\n"
+      "(1436509052.249718) can0 123#R4\n"
+      "(1436509052.249719) can0 321#AABB R\n"
+      "(1436509052.249720) can0 321#AA.BB.CC\n"
+      "(1436509052.250) can0 100#01\n"
+      "(1436509052.249721) can0 800#01\n"
+      "(1436509052.249722) can0 100#0102030405060708090A\n"
+      "(1436509052.249723) can0 100#ABC\n"
+      "  (1436509052.249724) can0 100#01  \n"
+      "(1436509052.249725) can0 100#01";  // last line without a newline
+  std::vector<std::string> files{write_temp("shapes.log", text)};
+  for (const char* f : {"ICSim/sample-can.log", "CANBUSlogs-genesis/candump-2021-05-28_164301.log"})
+    if (const auto path = data_file(f); !path.empty()) files.push_back(path);
+
+  for (const auto& path : files) {
+    INFO(path);
+    std::ifstream lines(path);
+    CanLogReader reader(path);
+    CanLogRecord r;
+    std::string line;
+    int number = 0, frames = 0;
+    while (std::getline(lines, line)) {
+      ++number;
+      const CandumpParse expected = parse_candump_line(line);
+      if (!expected.ok()) continue;
+      REQUIRE(reader.next(r));
+      ++frames;
+      INFO("line " << number << ": " << line);
+      CHECK(r.line == number);
+      CHECK(r.channel == expected.record.interface);
+      CHECK(same_content(r.frame, expected.record.frame));
+      CHECK(r.frame.timestamp_us == expected.record.frame.timestamp_us);
+    }
+    CHECK_FALSE(reader.next(r));
+    CHECK(frames > 0);
   }
 }
