@@ -138,6 +138,7 @@ IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
   const int64_t late_us =
       std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - due).count();
   if (late_us > max_lateness_us_) max_lateness_us_ = late_us;
+  last_lateness_us_.store(late_us, std::memory_order_relaxed);
   frame = pending_.frame;
   frame.timestamp_us = wall_clock_us();
   have_pending_ = false;

@@ -45,6 +45,8 @@ class ReplayBus final : public CanBus {
 
   /// Largest (receive time - due time) so far, in microseconds (0 with fast=1).
   int64_t max_lateness_us() const { return max_lateness_us_; }
+  /// (receive time - due time) of the frame the last receive() handed out.
+  int64_t last_lateness_us() const { return last_lateness_us_; }
   /// Frames handed out by receive() since construction.
   uint64_t frames_played() const { return frames_played_; }
   /// Restarts of the log for loop= since the last (re)open.
@@ -84,6 +86,7 @@ class ReplayBus final : public CanBus {
 
   std::atomic<bool> open_{true};
   std::atomic<int64_t> max_lateness_us_{0};
+  std::atomic<int64_t> last_lateness_us_{0};
   std::atomic<uint64_t> frames_played_{0};
   std::atomic<int> loops_done_{0};
   std::atomic<uint64_t> sends_dropped_{0};
