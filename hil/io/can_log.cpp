@@ -1,6 +1,7 @@
 #include "hil/io/can_log.hpp"
 
 #include <cstring>
+#include <filesystem>
 
 #include <algorithm>
 #include <cstdint>
@@ -149,6 +150,9 @@ const char* to_string(CanLogFormat format) {
 
 CanLogReader::CanLogReader(const std::string& path) : path_(path), in_(path) {
   if (!in_) throw std::runtime_error(path + ": cannot open CAN log");
+  std::error_code ec;
+  size_bytes_ = static_cast<uint64_t>(std::filesystem::file_size(path, ec));
+  if (ec) size_bytes_ = 0;
   bool known = false;
   std::string text;
   for (int n = 0; n < kDetectLines && !known && std::getline(in_, text); ++n) {
@@ -192,6 +196,7 @@ void CanLogReader::rewind() {
   in_.clear();
   in_.seekg(0);
   block_begin_ = block_end_ = 0;
+  stream_read_ = 0;
   eof_ = false;
   reset_state();
 }
@@ -220,6 +225,7 @@ bool CanLogReader::next_line(std::string_view& line) {
     if (block_.size() < left + kBlock) block_.resize(left + kBlock);
     in_.read(block_.data() + block_end_, static_cast<std::streamsize>(block_.size() - block_end_));
     block_end_ += static_cast<std::size_t>(in_.gcount());
+    stream_read_ += static_cast<uint64_t>(in_.gcount());
     if (!in_) eof_ = true;
   }
 }

@@ -55,6 +55,9 @@ class CanLogReader {
   void rewind();
 
   CanLogFormat format() const { return format_; }
+  /// Bytes of the file consumed so far in this pass, and its size (progress).
+  uint64_t bytes_consumed() const { return stream_read_ - (block_end_ - block_begin_); }
+  uint64_t size_bytes() const { return size_bytes_; }
   const std::string& path() const { return path_; }
   /// Malformed lines seen so far and the first kMaxMalformedLines of their numbers.
   size_t malformed_count() const { return malformed_count_; }
@@ -77,6 +80,8 @@ class CanLogReader {
   std::size_t block_begin_ = 0;  // first unread byte in block_
   std::size_t block_end_ = 0;    // end of valid bytes in block_
   bool eof_ = false;
+  uint64_t stream_read_ = 0;  // bytes read from the file in this pass
+  uint64_t size_bytes_ = 0;
   CanLogFormat format_ = CanLogFormat::Candump;
   int line_ = 0;
   size_t malformed_count_ = 0;

@@ -308,7 +308,7 @@ ReplayAddress parse_replay(std::string_view url, std::string_view rest) {
   if (address.path.empty()) fail(url, "missing log file path (replay://PATH)");
   if (question == std::string_view::npos) return address;
   const auto items = parse_query(url, rest.substr(question + 1),
-                                 {"speed", "loop", "start", "stop", "ids", "channel", "fast"});
+                                 {"speed", "loop", "start", "stop", "ids", "channel", "fast", "step"});
   for (const auto& [key, value] : items) {
     const std::string what = std::string(key) + " '" + std::string(value) + "'";
     if (key == "speed") {
@@ -333,6 +333,8 @@ ReplayAddress parse_replay(std::string_view url, std::string_view rest) {
     } else if (key == "channel") {
       if (value.empty()) fail(url, "empty channel");
       address.channel = std::string(value);
+    } else if (key == "step") {
+      address.step = parse_flag(url, key, value);
     } else {
       address.fast = parse_flag(url, key, value);
     }

@@ -61,7 +61,8 @@ int slcan_bitrate_code(uint32_t bitrate_bps);
 /// plays a CAN log file (see replay_bus.hpp). speed > 0 scales time (2 =
 /// twice as fast); loop = extra passes (0 = once, -1 = forever); start/stop
 /// in seconds from the first record; ids in hex (frames whose id is one of
-/// them, 11 or 29 bit alike); channel as the log names it ("can0", "1").
+/// them, 11 or 29 bit alike); channel as the log names it ("can0", "1");
+/// step=1: a frame only when ReplayBus::step() allows one (no timing).
 struct ReplayAddress {
   std::string path;
   double speed = 1.0;
@@ -71,6 +72,7 @@ struct ReplayAddress {
   std::vector<uint32_t> ids;  ///< empty: every id
   std::string channel;        ///< empty: every channel
   bool fast = false;
+  bool step = false;
 };
 
 using CanAddress =

@@ -51,6 +51,26 @@ void ReplayBus::restart() {
   loops_done_ = 0;
 }
 
+void ReplayBus::step(int frames) {
+  {
+    std::lock_guard lock(mutex_);
+    steps_ += frames;
+  }
+  step_cv_.notify_all();
+}
+
+ReplayBus::Progress ReplayBus::progress() const {
+  std::lock_guard lock(mutex_);
+  Progress p;
+  const uint64_t size = reader_.size_bytes();
+  p.fraction = size ? static_cast<double>(reader_.bytes_consumed()) / static_cast<double>(size) : 0.0;
+  p.log_time_s = anchored_ || address_.fast || address_.step
+                     ? static_cast<double>(last_played_ts_us_ - ts_first_us_) / 1e6
+                     : 0.0;
+  p.loops_done = loops_done_;
+  return p;
+}
+
 IoStatus ReplayBus::reopen() {
   std::lock_guard lock(mutex_);
   restart();
@@ -103,14 +123,24 @@ bool ReplayBus::fetch_next() {
 }
 
 IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
-  std::lock_guard lock(mutex_);
+  std::unique_lock lock(mutex_);
   if (!open_) return IoStatus::Disconnected;
   if (!have_pending_ && !fetch_next()) {
     open_ = false;
     last_error_ = address_.path + ": end of the log";
     return IoStatus::Disconnected;
   }
-  if (address_.fast) {
+  if (address_.fast || address_.step) {
+    if (!anchored_) {
+      anchored_ = true;
+      ts_first_us_ = pending_ts_us_;
+    }
+    if (address_.step) {
+      if (!step_cv_.wait_for(lock, std::chrono::milliseconds(std::max(timeout_ms, 0)), [&] { return steps_ > 0; }))
+        return IoStatus::Timeout;
+      --steps_;
+    }
+    last_played_ts_us_ = pending_ts_us_;
     frame = pending_.frame;
     frame.timestamp_us = pending_ts_us_;
     have_pending_ = false;
@@ -139,6 +169,7 @@ IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
       std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - due).count();
   if (late_us > max_lateness_us_) max_lateness_us_ = late_us;
   last_lateness_us_.store(late_us, std::memory_order_relaxed);
+  last_played_ts_us_ = pending_ts_us_;
   frame = pending_.frame;
   frame.timestamp_us = wall_clock_us();
   have_pending_ = false;

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <mutex>
 #include <string>
@@ -56,6 +57,17 @@ class ReplayBus final : public CanBus {
   /// Malformed lines the reader skipped in the current pass.
   size_t malformed_lines() const;
 
+  /// step=1: lets `frames` more frames out (each receive() takes one).
+  void step(int frames = 1);
+  /// Where the replay is: the current pass's share of the file read (0..1)
+  /// and the recorded time of the last frame handed out, from the first.
+  struct Progress {
+    double fraction = 0.0;
+    double log_time_s = 0.0;
+    int loops_done = 0;
+  };
+  Progress progress() const;
+
  private:
   using Clock = std::chrono::steady_clock;
 
@@ -90,6 +102,9 @@ class ReplayBus final : public CanBus {
   std::atomic<uint64_t> frames_played_{0};
   std::atomic<int> loops_done_{0};
   std::atomic<uint64_t> sends_dropped_{0};
+  std::condition_variable step_cv_;
+  int64_t steps_ = 0;          // step=1: frames allowed out (under mutex_)
+  int64_t last_played_ts_us_ = 0;
 };
 
 }  // namespace rise::io

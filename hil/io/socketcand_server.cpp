@@ -174,10 +174,12 @@ IoStatus SocketcandServer::receive(CanFrame& frame, int timeout_ms) {
 }
 
 size_t SocketcandServer::client_count() const {
+  const auto now = Clock::now();
+  const auto settle = std::chrono::milliseconds(address_.settle_ms);
   std::lock_guard lock(peers_mutex_);
   size_t count = 0;
   for (const auto& peer : peers_) {
-    if (!peer->dead && peer->state == Peer::State::Raw) ++count;
+    if (!peer->dead && peer->state == Peer::State::Raw && now - peer->raw_since >= settle) ++count;
   }
   return count;
 }

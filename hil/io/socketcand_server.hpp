@@ -55,7 +55,7 @@ class SocketcandServer final : public CanBus {
   /// The bound TCP port (the chosen one when the URL asked for 0); 0 when
   /// not listening.
   uint16_t port() const { return listening_.load() ? port_.load() : 0; }
-  /// Clients connected and in raw mode (the ones send() reaches).
+  /// Clients connected and in raw mode for settle_ms (the ones send() reaches).
   size_t client_count() const;
   /// Frames not written to some client because its socket buffer was full.
   uint64_t dropped_to_clients() const { return dropped_to_clients_.load(); }

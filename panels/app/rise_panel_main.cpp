@@ -10,6 +10,7 @@
 
 #include "hil/io/can_bus.hpp"
 #include "hil/io/modbus_server.hpp"
+#include "panels/app/replay_command.hpp"
 #include "panels/console_emulator.hpp"
 #include "panels/data_path.hpp"
 
@@ -159,8 +160,18 @@ int main(int argc, char** argv) {
   em->add_flag("--start-on-feedback", emulate.start_on_feedback,
                "start the script's clock at the first feedback frame from the host");
 
+  rise::panels::ReplayOptions replay;
+  CLI::App* rp = app.add_subcommand("replay", "play a CAN capture onto a live transport, like canplayer");
+  rise::panels::add_replay_options(*rp, replay);
+
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (em->parsed()) return run_emulate(emulate);
+  if (rp->parsed()) {
+    std::signal(SIGINT, on_signal);
+    std::signal(SIGTERM, on_signal);
+    std::signal(SIGPIPE, SIG_IGN);
+    return rise::panels::run_replay(replay, g_stop);
+  }
   return 1;
 }

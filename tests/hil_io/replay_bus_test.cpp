@@ -229,3 +229,36 @@ TEST_CASE("replay reads ASC and TRC logs too", "[hil_io]") {
   CHECK(frames[0].id == 0x6F9);
   CHECK(frames[0].timestamp_us == 17'876'708);
 }
+
+TEST_CASE("replay in step mode hands out one frame per step and reports its progress", "[hil_io]") {
+  const std::string log = write_log("step", 10, 1000);  // 1 s between frames: timing would show
+  auto bus = open_replay("replay://" + log + "?step=1");
+  CanFrame f;
+  CHECK(bus->receive(f, 20) == IoStatus::Timeout);
+  bus->step(2);
+  REQUIRE(bus->receive(f, 20) == IoStatus::Ok);
+  CHECK(f.id == 0x100);
+  CHECK(f.timestamp_us == kLogStartUs);  // the recorded time: a step has no wall-clock due time
+  REQUIRE(bus->receive(f, 20) == IoStatus::Ok);
+  CHECK(f.id == 0x101);
+  CHECK(bus->receive(f, 20) == IoStatus::Timeout);
+  auto p = bus->progress();
+  CHECK(p.log_time_s == Approx(1.0).margin(1e-6));
+
+  // A step from another thread wakes a receive that waits for it.
+  std::thread stepper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    bus->step(8);
+  });
+  std::vector<uint32_t> ids;
+  for (int i = 0; i < 8; ++i) {
+    REQUIRE(bus->receive(f, 5000) == IoStatus::Ok);
+    ids.push_back(f.id);
+  }
+  stepper.join();
+  CHECK(ids.back() == 0x109);
+  p = bus->progress();
+  CHECK(p.fraction == Approx(1.0));
+  CHECK(p.log_time_s == Approx(9.0).margin(1e-6));
+  CHECK(bus->receive(f, 20) == IoStatus::Disconnected);
+}
