@@ -1,5 +1,7 @@
 #include "hil/io/replay_bus.hpp"
 
+#include <sys/prctl.h>
+
 #include <algorithm>
 #include <cmath>
 #include <thread>
@@ -150,6 +152,9 @@ IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
   }
   if (!anchored_) {
     anchored_ = true;
+    // The default 50 us timer slack of a thread would be most of the
+    // lateness: a replay wants its sleeps to end on time.
+    ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
     t0_ = Clock::now();
     ts_first_us_ = pending_ts_us_;
   }

@@ -21,7 +21,8 @@ namespace rise::io {
 /// fast=1, the recorded time, delivered as fast as asked for). At the end
 /// of the log (after the loops) the bus closes: receive() returns
 /// Disconnected, like an unplugged device; reopen() plays it again from
-/// the start. send() is accepted and dropped (counted). One thread may
+/// the start. The first timed receive() sets its thread's timer slack to
+/// 1 ns (PR_SET_TIMERSLACK), so sleeps end when the frame is due. send() is accepted and dropped (counted). One thread may
 /// send while another receives; reopen() waits for a receive in progress.
 class ReplayBus final : public CanBus {
  public:

@@ -5,6 +5,8 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cstring>
 
@@ -126,9 +128,11 @@ IoStatus SlcanBus::send(const CanFrame& frame) {
   for (int shift = frame.extended ? 28 : 8; shift >= 0; shift -= 4) {
     line[n++] = kHex[(frame.id >> shift) & 0xFu];
   }
-  line[n++] = static_cast<char>('0' + frame.len);
+  // is_well_formed() bounds a classic frame to 8 bytes; say so to the optimiser too.
+  const size_t len = std::min<size_t>(frame.len, 8);
+  line[n++] = static_cast<char>('0' + len);
   if (!frame.remote) {
-    for (size_t i = 0; i < frame.len; ++i) {
+    for (size_t i = 0; i < len; ++i) {
       line[n++] = kHex[frame.data[i] >> 4];
       line[n++] = kHex[frame.data[i] & 0xFu];
     }
