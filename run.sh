@@ -44,7 +44,11 @@ build() {
   local werror=OFF
   [ -n "${CI:-}" ] && werror=ON
   if [ ! -f "$build/build.ninja" ]; then
-    cmake -S "$root" -B "$build" -G Ninja -DRISE_WERROR=$werror >/dev/null
+    # Optimised with debug info: the simulator's real-time factor and the
+    # replay and bridge figures are those of this build (RISE_BUILD_TYPE=Debug
+    # for a debugger build).
+    cmake -S "$root" -B "$build" -G Ninja -DRISE_WERROR=$werror \
+      -DCMAKE_BUILD_TYPE="${RISE_BUILD_TYPE:-RelWithDebInfo}" >/dev/null
   fi
   cmake --build "$build" -j2
 }
