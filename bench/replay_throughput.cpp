@@ -22,7 +22,7 @@ int main(int argc, char** argv) {
   const char* root = std::getenv("RISE_TEST_DATA");
   const std::string data = root ? root : std::string(RISE_SOURCE_DIR) + "/../shared/data";
   const std::string log = argc > 1 && argv[1][0] ? argv[1] : data + "/can/ICSim/sample-can.log";
-  const int passes = argc > 2 ? std::atoi(argv[2]) : 50;
+  const int passes = argc > 2 ? std::atoi(argv[2]) : 200;
   if (!std::filesystem::exists(log)) {
     std::fprintf(stderr, "%s is absent (set RISE_TEST_DATA)\n", log.c_str());
     return 2;

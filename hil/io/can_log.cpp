@@ -240,7 +240,7 @@ bool CanLogReader::next(CanLogRecord& record) {
       block_begin_ += static_cast<std::size_t>(after - begin);
       record.line = ++line_;
       record.tx = false;
-      record.channel.assign(interface);
+      if (record.channel != interface) record.channel.assign(interface);
       return true;
     }
   }

@@ -1,6 +1,7 @@
 #include "hil/io/candump_log.hpp"
 
 #include <array>
+#include <bit>
 #include <cstdio>
 #include <cstring>
 
@@ -52,6 +53,26 @@ constexpr std::array<int8_t, 256> kHex = [] {
 }();
 
 inline int hex_at(const char* p) { return kHex[static_cast<unsigned char>(*p)]; }
+
+// The value of eight ASCII decimal digits (already checked), with three
+// multiplies instead of eight (D. Lemire, "Quickly parsing eight digits",
+// 2018: SWAR on a little-endian load).
+int64_t eight_digits(const char* p) {
+  if constexpr (std::endian::native == std::endian::little) {
+    uint64_t v;
+    std::memcpy(&v, p, 8);
+    v -= 0x3030303030303030ULL;
+    v = v * 10 + (v >> 8);
+    v = (((v & 0x000000FF000000FFULL) * (100 + (1000000ULL << 32))) +
+         (((v >> 16) & 0x000000FF000000FFULL) * (1 + (10000ULL << 32)))) >>
+        32;
+    return static_cast<int64_t>(v & 0xFFFFFFFFULL);
+  } else {
+    int64_t v = 0;
+    for (int i = 0; i < 8; ++i) v = v * 10 + (p[i] - '0');
+    return v;
+  }
+}
 int hex_value(char c) { return kHex[static_cast<unsigned char>(c)]; }
 
 }  // namespace
@@ -60,17 +81,22 @@ const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std:
   // Every read checks `end`; any surprise hands the line to the general parser.
   if (p == end || *p != '(') return nullptr;
   ++p;
-  int64_t sec = 0;
+  // Digit runs are valued in independent pieces, not one long
+  // multiply-add chain: that chain was most of the time per line.
   const char* digits = p;
-  while (p != end && *p >= '0' && *p <= '9') sec = sec * 10 + (*p++ - '0');
-  if (p == digits || p - digits > 12 || p == end || *p != '.') return nullptr;
+  while (p != end && *p >= '0' && *p <= '9') ++p;
+  const auto n = p - digits;
+  if (n == 0 || n > 12 || p == end || *p != '.') return nullptr;
+  int64_t sec = 0;
+  const char* tail = n >= 8 ? p - 8 : digits;
+  for (const char* d = digits; d != tail; ++d) sec = sec * 10 + (*d - '0');
+  if (n >= 8) sec = sec * 100'000'000 + eight_digits(tail);
   ++p;
   if (end - p < 8) return nullptr;
-  int64_t usec = 0;
-  for (int i = 0; i < 6; ++i, ++p) {
-    if (*p < '0' || *p > '9') return nullptr;
-    usec = usec * 10 + (*p - '0');
-  }
+  for (int i = 0; i < 6; ++i)
+    if (p[i] < '0' || p[i] > '9') return nullptr;
+  const int64_t usec = (p[0] * 100 + p[1] * 10 + p[2] - '0' * 111) * 1000 + (p[3] * 100 + p[4] * 10 + p[5] - '0' * 111);
+  p += 6;
   if (*p++ != ')' || *p++ != ' ') return nullptr;
   const char* name = p;
   while (p != end && *p != ' ' && *p != '\n' && *p != '\r') ++p;
@@ -84,7 +110,7 @@ const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std:
   if (p == end || *p != '#' || (id_digits != 3 && id_digits != 8)) return nullptr;
   if (id_digits == 3 && id > 0x7FF) return nullptr;
   ++p;
-  uint8_t data[8];
+  uint8_t data[8] = {};
   uint8_t len = 0;
   for (int hi, lo; end - p >= 2 && (hi = hex_at(p)) >= 0 && (lo = hex_at(p + 1)) >= 0; p += 2) {
     if (len == 8) return nullptr;
@@ -92,16 +118,16 @@ const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std:
   }
   if (p != end && *p == '\r') ++p;
   if (p == end || *p != '\n') return nullptr;
-  f = CanFrame{};
+  // Field by field, not `f = CanFrame{}`: clearing all 64 data bytes
+  // (rep stos) cost more than the rest of the line.
+  if (f.len > 8) std::memset(f.data.data() + 8, 0, f.data.size() - 8);
   f.timestamp_us = sec * 1'000'000 + usec;
-  if (id_digits == 8) {
-    f.error = (id & kErrFlag) != 0;
-    f.extended = !f.error;
-    id &= kEffMask;
-  }
-  f.id = id;
+  f.error = id_digits == 8 && (id & kErrFlag) != 0;
+  f.extended = id_digits == 8 && !f.error;
+  f.remote = f.fd = f.brs = f.esi = false;
+  f.id = id_digits == 8 ? id & kEffMask : id;
   f.len = len;
-  std::memcpy(f.data.data(), data, len);
+  std::memcpy(f.data.data(), data, 8);
   interface = iface;
   return p + 1;
 }

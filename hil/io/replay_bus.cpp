@@ -26,7 +26,11 @@ int64_t wall_clock_us() {
 }  // namespace
 
 ReplayBus::ReplayBus(std::string url, ReplayAddress address)
-    : url_(std::move(url)), address_(std::move(address)), reader_(address_.path) {}
+    : url_(std::move(url)),
+      address_(std::move(address)),
+      reader_(address_.path),
+      start_us_(seconds_to_us(address_.start_s)),
+      stop_us_(address_.stop_s < 0.0 ? -1 : seconds_to_us(address_.stop_s)) {}
 
 IoStatus ReplayBus::send(const CanFrame&) {
   ++sends_dropped_;
@@ -82,8 +86,8 @@ IoStatus ReplayBus::reopen() {
 }
 
 bool ReplayBus::fetch_next() {
-  const int64_t start_us = seconds_to_us(address_.start_s);
-  const int64_t stop_us = address_.stop_s < 0.0 ? -1 : seconds_to_us(address_.stop_s);
+  const int64_t start_us = start_us_;
+  const int64_t stop_us = stop_us_;
   for (;;) {
     bool end_of_pass = !reader_.next(pending_);
     if (!end_of_pass) {

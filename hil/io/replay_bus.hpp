@@ -79,6 +79,8 @@ class ReplayBus final : public CanBus {
   ReplayAddress address_;
   mutable std::mutex mutex_;
   CanLogReader reader_;
+  int64_t start_us_;  // the window in microseconds from the first record (stop -1: none)
+  int64_t stop_us_;
   std::string last_error_;
 
   CanLogRecord pending_;
