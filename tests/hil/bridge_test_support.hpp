@@ -59,7 +59,17 @@ class EmulatorThread {
  private:
   void run() {
     io::CanFrame f;
+    int64_t next_reopen_us = 0;
     while (running_) {
+      // Like rise-panel emulate: a lost transport is reopened (every 100 ms).
+      if (!bus_->is_open()) {
+        if (monotonic_us() >= next_reopen_us) {
+          bus_->reopen();
+          next_reopen_us = monotonic_us() + 100'000;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));  // the firmware's idle loop, not a sync
+        continue;
+      }
       {
         std::lock_guard lock(mutex_);
         emulator_.tick(*bus_, monotonic_us());

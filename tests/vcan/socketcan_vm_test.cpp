@@ -665,3 +665,39 @@ TEST_CASE("a frame typed into can-utils cansend reaches the PanelState through a
   CHECK(s->controls[stick].axis == Approx(-16383.5 / 32767.5).margin(1e-3));
   bridge.stop();
 }
+
+TEST_CASE("the bridge fails safe within a publish period when the interface goes down and recovers when it is up",
+          "[vcan]") {
+  require_vm();
+  LinkUpGuard restore("vcan0");
+  VcanBridge b;
+  using rise::hil::PanelSnapshot;
+  using rise::hil::test::set;
+  b.console.apply(set(b.def, "deadman", 0, true));
+  b.console.apply(set(b.def, "drive_y", 0.5f, false));
+  REQUIRE(b.published.wait_for(
+      [&](const PanelSnapshot& s) { return !s.failsafe && b.value(s, "drive_y").axis > 0.3f; }, kPeerTimeoutMs));
+
+  const std::size_t from = b.published.size();
+  const int64_t before_us = rise::hil::monotonic_us();
+  REQUIRE(run({"ip", "link", "set", "vcan0", "down"}) == 0);
+  const int64_t after_us = rise::hil::monotonic_us();
+  auto down = b.published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, kPeerTimeoutMs, from);
+  REQUIRE(down);
+  const int64_t period_us = b.def.publish_period_us();
+  WARN("link down -> failsafe PanelState: " << static_cast<double>(down->time_us - after_us) / 1000.0 << " ms after `ip link set down` "
+       << "returned (it ran " << static_cast<double>(after_us - before_us) / 1000.0 << " ms)");
+  // The kernel drops the link inside the command: the failsafe message is
+  // due within one publish period of its return (plus the guest's scheduling).
+  CHECK(down->time_us - after_us <= period_us + 5000);
+  CHECK(down->failsafe_reason == "console: disconnected");
+  CHECK(b.value(*down, "drive_y").axis == 0.0f);
+  CHECK_FALSE(down->sources[0].connected);
+
+  const std::size_t later = b.published.size();
+  REQUIRE(run({"ip", "link", "set", "vcan0", "up"}) == 0);
+  auto up = b.published.wait_for(
+      [&](const PanelSnapshot& s) { return !s.failsafe && b.value(s, "drive_y").axis > 0.3f; }, kPeerTimeoutMs, later);
+  REQUIRE(up);
+  CHECK(up->sources[0].reconnects >= 1);
+}
