@@ -1,16 +1,21 @@
 // hid:// against the real kernel HID stack: a gamepad created through uhid
-// (/dev/uhid, the kernel's user-space HID transport) is found by hidapi's
-// hidraw enumeration, opened by HidDevice, decoded by the bridge, unplugged
-// (UHID_DESTROY) and plugged in again. Runs only inside the VM of
-// run_in_vcan_vm.sh (modules hid, uhid, hid-generic), as root.
+// (/dev/uhid, the kernel's user-space HID transport, driven by
+// io::UhidDevice) is found by hidapi's hidraw enumeration, opened by
+// HidDevice, decoded by the bridge, unplugged (UHID_DESTROY) and plugged in
+// again; the host's feature and output reports reach the device side. Runs
+// only inside the VM of run_in_vcan_vm.sh (modules hid, uhid, hid-generic),
+// as root.
 
 #include <catch2/catch.hpp>
 
 #include <fcntl.h>
-#include <linux/uhid.h>
+#include <linux/hidraw.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <mutex>
 #include <cstring>
 #include <functional>
 #include <thread>
@@ -18,6 +23,7 @@
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/bridge.hpp"
 #include "hil/io/hid_device.hpp"
+#include "hil/io/uhid_device.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace io = rise::io;
@@ -33,49 +39,81 @@ const uint8_t gravis_descriptor[] = {
     0x00, 0x26, 0xff, 0x00, 0x75, 0x08, 0x95, 0x02, 0x81, 0x02, 0xc0, 0x05, 0x09, 0x19, 0x01, 0x29, 0x0a,
     0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x0a, 0x81, 0x02, 0x95, 0x01, 0x75, 0x06, 0x81, 0x01, 0xc0};
 
-// One virtual device on /dev/uhid: created in the constructor, destroyed
-// (unplugged) by destroy() or the destructor.
+// One virtual Gravis pad on /dev/uhid, plugged in by the constructor and
+// unplugged by destroy() or the destructor.
 class UhidGamepad {
  public:
-  UhidGamepad() {
-    fd_ = ::open("/dev/uhid", O_RDWR | O_CLOEXEC);
-    REQUIRE(fd_ >= 0);
-    uhid_event ev{};
-    ev.type = UHID_CREATE2;
-    std::strcpy(reinterpret_cast<char*>(ev.u.create2.name), "Gravis GamePad Pro (uhid)");
-    std::strcpy(reinterpret_cast<char*>(ev.u.create2.uniq), "rise-uhid-1");
-    ev.u.create2.rd_size = sizeof(gravis_descriptor);
-    // Bluetooth, not USB: hidapi's hidraw backend looks for a USB parent
-    // device for BUS_USB, and a uhid device has none.
-    ev.u.create2.bus = 0x05;  // BUS_BLUETOOTH
-    ev.u.create2.vendor = 0x0428;
-    ev.u.create2.product = 0x4001;
-    std::memcpy(ev.u.create2.rd_data, gravis_descriptor, sizeof(gravis_descriptor));
-    REQUIRE(::write(fd_, &ev, sizeof(ev)) == static_cast<ssize_t>(sizeof(ev)));
-  }
-  ~UhidGamepad() { destroy(); }
+  UhidGamepad() : device_(settings()) { REQUIRE(device_.create() == io::IoStatus::Ok); }
   UhidGamepad(const UhidGamepad&) = delete;
   UhidGamepad& operator=(const UhidGamepad&) = delete;
 
   void send(std::initializer_list<uint8_t> report) {
-    uhid_event ev{};
-    ev.type = UHID_INPUT2;
-    ev.u.input2.size = static_cast<uint16_t>(report.size());
-    std::copy(report.begin(), report.end(), ev.u.input2.data);
-    REQUIRE(::write(fd_, &ev, sizeof(ev)) == static_cast<ssize_t>(sizeof(ev)));
+    const std::vector<uint8_t> bytes(report);
+    REQUIRE(device_.send_input(bytes) == io::IoStatus::Ok);
   }
-  void destroy() {
-    if (fd_ < 0) return;
-    uhid_event ev{};
-    ev.type = UHID_DESTROY;
-    (void)::write(fd_, &ev, sizeof(ev));
-    ::close(fd_);
-    fd_ = -1;
-  }
+  void destroy() { device_.destroy(); }
 
  private:
-  int fd_ = -1;
+  static io::UhidSettings settings() {
+    io::UhidSettings s;
+    s.name = "Gravis GamePad Pro (uhid)";
+    s.uniq = "rise-uhid-1";
+    s.vendor_id = 0x0428;
+    s.product_id = 0x4001;
+    s.descriptor.assign(std::begin(gravis_descriptor), std::end(gravis_descriptor));
+    return s;  // bus: Bluetooth, UhidSettings' default (see there)
+  }
+  io::UhidDevice device_;
 };
+
+// A test pad with all three report kinds and report ids (pid.codes' test
+// VID:PID 1209:0001), written for these tests:
+const uint8_t led_pad_descriptor[] = {
+    0x05, 0x01,        // Usage Page (Generic Desktop)
+    0x09, 0x05,        // Usage (Game Pad)
+    0xA1, 0x01,        // Collection (Application)
+    0x85, 0x01,        //   Report ID (1): input, 3 bytes after the id
+    0x09, 0x30,        //   Usage (X)
+    0x09, 0x31,        //   Usage (Y)
+    0x15, 0x00,        //   Logical Minimum (0)
+    0x26, 0xFF, 0x00,  //   Logical Maximum (255)
+    0x75, 0x08,        //   Report Size (8)
+    0x95, 0x02,        //   Report Count (2)
+    0x81, 0x02,        //   Input (Data, Variable, Absolute): x, y
+    0x05, 0x09,        //   Usage Page (Button)
+    0x19, 0x01,        //   Usage Minimum (1)
+    0x29, 0x08,        //   Usage Maximum (8)
+    0x25, 0x01,        //   Logical Maximum (1)
+    0x75, 0x01,        //   Report Size (1)
+    0x95, 0x08,        //   Report Count (8)
+    0x81, 0x02,        //   Input (Data, Variable, Absolute): button_1..button_8
+    0x85, 0x02,        //   Report ID (2): output, 1 byte after the id
+    0x05, 0x08,        //   Usage Page (LEDs)
+    0x19, 0x01,        //   Usage Minimum (1: Num Lock)
+    0x29, 0x04,        //   Usage Maximum (4: Compose)
+    0x95, 0x04,        //   Report Count (4)
+    0x91, 0x02,        //   Output (Data, Variable, Absolute): usage_0008_0001..usage_0008_0004, bits 0..3
+    0x95, 0x01,        //   Report Count (1)
+    0x75, 0x04,        //   Report Size (4)
+    0x91, 0x01,        //   Output (Constant): padding, bits 4..7
+    0x85, 0x03,        //   Report ID (3): feature, 1 byte after the id
+    0x06, 0x00, 0xFF,  //   Usage Page (Vendor 0xFF00)
+    0x09, 0x01,        //   Usage (1)
+    0x75, 0x08,        //   Report Size (8)
+    0x95, 0x01,        //   Report Count (1)
+    0xB1, 0x02,        //   Feature (Data, Variable, Absolute): vendor_ff00_0001
+    0xC0,              // End Collection
+};
+
+io::UhidSettings led_pad_settings() {
+  io::UhidSettings s;
+  s.name = "rise LED test pad (uhid)";
+  s.uniq = "rise-led-pad";
+  s.vendor_id = 0x1209;
+  s.product_id = 0x0001;
+  s.descriptor.assign(std::begin(led_pad_descriptor), std::end(led_pad_descriptor));
+  return s;
+}
 
 // Polls `done` until it holds or `timeout` passes (the VM runs under TCG:
 // generous deadlines, never fixed sleeps).
@@ -131,6 +169,113 @@ TEST_CASE("HidDevice finds a uhid gamepad by VID:PID and reads its descriptor an
     CHECK(other.reopen() == io::IoStatus::Disconnected);
     io::HidDevice other_serial("hid://0428:4001?serial=nope");
     CHECK(other_serial.reopen() == io::IoStatus::Disconnected);
+  }
+}
+
+// Reads the device's events on a thread of its own, as an emulator does.
+class UhidPoller {
+ public:
+  explicit UhidPoller(io::UhidDevice& device) : device_(device), thread_([this] { run(); }) {}
+  ~UhidPoller() {
+    stop_ = true;
+    thread_.join();
+  }
+  UhidPoller(const UhidPoller&) = delete;
+  UhidPoller& operator=(const UhidPoller&) = delete;
+
+  struct Seen {
+    io::UhidEvent::Kind kind;
+    io::UhidReportType type;
+    uint8_t report_id;
+    std::vector<uint8_t> data;
+    bool answered;
+  };
+  std::vector<Seen> events() const {
+    std::lock_guard lock(mutex_);
+    return events_;
+  }
+  bool saw(io::UhidEvent::Kind kind) const {
+    for (const Seen& e : events())
+      if (e.kind == kind) return true;
+    return false;
+  }
+
+ private:
+  void run() {
+    io::UhidEvent event;
+    while (!stop_) {
+      if (device_.poll(event, 5) != io::IoStatus::Ok) continue;
+      std::lock_guard lock(mutex_);
+      events_.push_back({event.kind, event.report_type, event.report_id,
+                         std::vector<uint8_t>(event.data.begin(), event.data.end()), event.answered});
+    }
+  }
+  io::UhidDevice& device_;
+  mutable std::mutex mutex_;
+  std::vector<Seen> events_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+TEST_CASE("uhid device answers the host's feature requests at once and passes its output reports on", "[vcan]") {
+  io::UhidDevice pad(led_pad_settings());
+  const uint8_t feature[] = {0x03, 0x42};
+  pad.set_report(io::UhidReportType::Feature, 3, feature);
+  REQUIRE(pad.create() == io::IoStatus::Ok);
+  UhidPoller poller(pad);
+  REQUIRE(wait_for([&] { return pad.is_started(); }));
+  io::HidDevice host("hid://1209:0001");
+  REQUIRE(wait_for([&] { return host.reopen() == io::IoStatus::Ok; }));
+  // Open: the kernel's own input-leds handler (CONFIG_INPUT_LEDS=y) opens
+  // every input device with LEDs as soon as it appears, and holds it open,
+  // so no Close follows our reader's.
+  REQUIRE(wait_for([&] { return pad.is_open_by_host(); }));
+  CHECK(host.report_descriptor() ==
+        std::vector<uint8_t>(std::begin(led_pad_descriptor), std::end(led_pad_descriptor)));
+  // The hidraw ioctls as any HID tool uses them (hidapi's feature reports are these).
+  const int fd = ::open(host.path().c_str(), O_RDWR | O_CLOEXEC);
+  REQUIRE(fd >= 0);
+  using Clock = std::chrono::steady_clock;
+
+  // GetReport: the stored feature report, without the kernel's 5 s wait.
+  uint8_t buffer[2] = {0x03, 0x00};
+  auto t0 = Clock::now();
+  CHECK(::ioctl(fd, HIDIOCGFEATURE(sizeof buffer), buffer) == 2);
+  const auto get_ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
+  WARN("feature GetReport answered in " << get_ms << " ms");
+  CHECK(get_ms < 1000);
+  CHECK(buffer[1] == 0x42);
+
+  // SetReport: acknowledged, seen as an event, and read back by the next GetReport.
+  uint8_t set[2] = {0x03, 0x99};
+  CHECK(::ioctl(fd, HIDIOCSFEATURE(sizeof set), set) == 2);
+  REQUIRE(wait_for([&] { return poller.saw(io::UhidEvent::Kind::SetReport); }));
+  buffer[0] = 0x03;
+  CHECK(::ioctl(fd, HIDIOCGFEATURE(sizeof buffer), buffer) == 2);
+  CHECK(buffer[1] == 0x99);
+
+  // A report nobody stored: an error at once, not a timeout.
+  uint8_t unknown[2] = {0x07, 0x00};
+  t0 = Clock::now();
+  CHECK(::ioctl(fd, HIDIOCGFEATURE(sizeof unknown), unknown) < 0);
+  CHECK(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count() < 1000);
+  ::close(fd);
+
+  // An output report written through hidapi arrives whole, id byte first.
+  const uint8_t leds[] = {0x02, 0x05};
+  REQUIRE(host.write(leds) == io::IoStatus::Ok);
+  REQUIRE(wait_for([&] { return poller.saw(io::UhidEvent::Kind::Output); }));
+  for (const auto& e : poller.events()) {
+    if (e.kind == io::UhidEvent::Kind::SetReport) {
+      CHECK(e.type == io::UhidReportType::Feature);
+      CHECK(e.report_id == 3);
+      CHECK(e.data == std::vector<uint8_t>{0x03, 0x99});
+    }
+    if (e.kind == io::UhidEvent::Kind::GetReport) CHECK(e.answered == (e.report_id == 3));
+    if (e.kind == io::UhidEvent::Kind::Output) {
+      CHECK(e.type == io::UhidReportType::Output);
+      CHECK(e.data == std::vector<uint8_t>{0x02, 0x05});
+    }
   }
 }
 
