@@ -15,10 +15,14 @@
 #include "firmware_protocol/hid_text.hpp"
 #include "hil/io/hid_device.hpp"
 #include "hil/panel_mapper.hpp"
+#include "panels/hid_emulator.hpp"
+#include "panels/timeline.hpp"
 #include "panels/panel_definition.hpp"
+#include "tests/hid_test_devices.hpp"
 
 using rise::hil::PanelMapper;
 using rise::hil::PanelSnapshot;
+using rise::test::gravis_descriptor;
 
 namespace {
 
@@ -92,13 +96,6 @@ std::string gamepad_definition(int timeout_ms) {
             ", safe: false}\n";
   return text;
 }
-
-// Bytes of android-cts/gravis_gamepadprousb_register.json (so the mapper
-// tests that need no oracle run without the shared data).
-const std::vector<uint8_t> gravis_descriptor = {
-    0x05, 0x01, 0x09, 0x05, 0xa1, 0x01, 0x05, 0x01, 0x09, 0x01, 0xa1, 0x00, 0x09, 0x30, 0x09, 0x31, 0x15,
-    0x00, 0x26, 0xff, 0x00, 0x75, 0x08, 0x95, 0x02, 0x81, 0x02, 0xc0, 0x05, 0x09, 0x19, 0x01, 0x29, 0x0a,
-    0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x0a, 0x81, 0x02, 0x95, 0x01, 0x75, 0x06, 0x81, 0x01, 0xc0};
 
 std::size_t control(const PanelMapper& m, const std::string& name) { return *m.definition().find_control(name); }
 
@@ -288,4 +285,39 @@ TEST_CASE("hid URLs parse VID:PID and the match options", "[hil]") {
                                    "hid://1:2?interface=x", "socketcan://can0");
   INFO(bad);
   CHECK_FALSE(rise::io::parse_hid_url(bad));
+}
+
+TEST_CASE("hid emulator's reports put the mapper's controls at the timeline's values", "[hil]") {
+  const auto definition = rise::panels::parse_panel_definition(gamepad_definition(0), "gravis.yaml");
+  const auto descriptor = rise::firmware_protocol::parse_hid_descriptor(gravis_descriptor);
+  REQUIRE(descriptor);
+  rise::panels::HidEmulator emulator(definition, 0, descriptor.descriptor);
+  PanelMapper mapper(definition);
+  mapper.on_connection(0, true, 0);
+  REQUIRE(mapper.attach_hid(0, gravis_descriptor));
+  const auto timeline = rise::panels::parse_timeline(
+      "0 hat_x -1\n0 hat_y 1\n0 BUTTON_A pressed\n0 BUTTON_START pressed\n1 hat_x 0\n1 BUTTON_A released\n",
+      "script.txt", definition);
+  int64_t now = 1000;
+  std::size_t next = 0;
+  const auto feed = [&](std::span<const uint8_t> report) {
+    mapper.on_hid_report(0, report, now);
+    return true;
+  };
+  while (next < timeline.events.size() && timeline.events[next].time_s == 0.0) emulator.apply(timeline.events[next++]);
+  REQUIRE(emulator.tick(now, feed) == 1);
+  PanelSnapshot snap = mapper.evaluate(now);
+  REQUIRE_FALSE(snap.failsafe);
+  CHECK(snap.controls[control(mapper, "hat_x")].axis == Approx(-1.0).margin(1e-6));
+  CHECK(snap.controls[control(mapper, "hat_y")].axis == Approx(1.0).margin(1e-6));
+  CHECK(snap.controls[control(mapper, "BUTTON_A")].pressed);
+  CHECK(snap.controls[control(mapper, "BUTTON_START")].pressed);
+  CHECK_FALSE(snap.controls[control(mapper, "BUTTON_B")].pressed);
+  while (next < timeline.events.size()) emulator.apply(timeline.events[next++]);
+  now += 2000;
+  REQUIRE(emulator.tick(now, feed) == 1);
+  snap = mapper.evaluate(now);
+  CHECK(snap.controls[control(mapper, "hat_x")].axis == Approx(0.0).margin(0.01));
+  CHECK_FALSE(snap.controls[control(mapper, "BUTTON_A")].pressed);
+  CHECK(snap.controls[control(mapper, "BUTTON_START")].pressed);
 }
