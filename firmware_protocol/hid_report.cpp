@@ -245,6 +245,13 @@ std::size_t find_hid_signal(std::span<const HidSignal> signals, std::string_view
   return signals.size();
 }
 
+std::string hid_signal_names(std::span<const HidSignal> signals, std::size_t most) {
+  std::string out;
+  for (std::size_t i = 0; i < signals.size() && i < most; ++i) out += (i ? ", " : "") + signals[i].name;
+  if (signals.size() > most) out += ", ...";
+  return out;
+}
+
 HidReportSignals::HidReportSignals(HidDescriptor descriptor, HidReportKind kind)
     : descriptor_(std::move(descriptor)), kind_(kind), signals_(hid_signals(descriptor_, kind)) {
   for (const HidReportLayout& r : descriptor_.reports) {

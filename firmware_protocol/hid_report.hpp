@@ -97,6 +97,10 @@ int64_t hid_raw_from_value(const HidSignal& signal, double value);
 /// Index of the signal called `name`, or signals.size() when none. Cyclic-path safe.
 std::size_t find_hid_signal(std::span<const HidSignal> signals, std::string_view name);
 
+/// "x, y, button_1, ..." : the first `most` names, for messages that say
+/// what a device has; empty when there are none. Allocates.
+std::string hid_signal_names(std::span<const HidSignal> signals, std::size_t most = 24);
+
 /// The signals of one direction of a descriptor, grouped by report id: the
 /// part the decoder and the encoders share.
 class HidReportSignals {

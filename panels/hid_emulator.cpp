@@ -30,13 +30,6 @@ std::optional<int64_t> null_raw(const fp::HidSignal& s) {
   return std::nullopt;
 }
 
-std::string signal_list(const std::vector<fp::HidSignal>& signals) {
-  std::string out;
-  for (std::size_t i = 0; i < signals.size() && i < 24; ++i) out += (i ? ", " : "") + signals[i].name;
-  if (signals.size() > 24) out += ", ...";
-  return out.empty() ? "none" : out;
-}
-
 }  // namespace
 
 HidEmulator::HidEmulator(const PanelDefinition& definition, std::size_t source, fp::HidDescriptor descriptor,
@@ -61,7 +54,7 @@ HidEmulator::HidEmulator(const PanelDefinition& definition, std::size_t source, 
     if (index >= input_.signals().size())
       throw std::runtime_error(definition_.file + ":" + std::to_string(c.line) + ": controls." + c.name +
                                ".signal: the descriptor has no input signal '" + c.hid_signal +
-                               "' (it has: " + signal_list(input_.signals()) + ")");
+                               "' (it has: " + fp::hid_signal_names(input_.signals()) + ")");
     signal_of_control_.push_back(index);
     const fp::HidSignal& s = input_.signals()[index];
     // At power-up a switch rests where it is; the script starts it safe.
@@ -177,10 +170,30 @@ std::span<const uint8_t> HidEmulator::report(uint8_t report_id) const {
 }
 
 std::string HidEmulator::feedback_text() const {
+  // LEDs by the definition's names, then every output signal no LED binds.
   std::ostringstream out;
-  out << "outputs";
-  if (outputs_.empty()) out << " none";
-  for (std::size_t i = 0; i < outputs_.size(); ++i) out << ' ' << output_.signals()[i].name << '=' << outputs_[i].raw;
+  std::vector<bool> shown(outputs_.size(), false);
+  bool any_led = false;
+  for (const LedDefinition& led : definition_.leds) {
+    if (led.source != source_ || led.hid_signal.empty()) continue;
+    out << (any_led ? " " : "leds ") << led.name << '=';
+    any_led = true;
+    const std::size_t i = output_.find(led.hid_signal);
+    if (i >= outputs_.size()) {
+      out << '-';  // the device has no such output
+      continue;
+    }
+    shown[i] = true;
+    out << (outputs_[i].value != 0.0 ? "on" : "off");
+  }
+  bool any_output = false;
+  for (std::size_t i = 0; i < outputs_.size(); ++i) {
+    if (shown[i]) continue;
+    out << (any_output ? " " : any_led ? "; outputs " : "outputs ") << output_.signals()[i].name << '='
+        << outputs_[i].raw;
+    any_output = true;
+  }
+  if (!any_led && !any_output) out << "outputs none";
   return out.str();
 }
 

@@ -72,8 +72,10 @@ class HidEmulator {
   /// The decoded output signals, indexed like output_signals().
   const std::vector<firmware_protocol::HidSignalValue>& outputs() const { return outputs_; }
   const std::vector<firmware_protocol::HidSignal>& output_signals() const { return output_.signals(); }
-  /// "outputs usage_0008_0001=1 usage_0008_0002=0" (raw values); "outputs
-  /// none" when the device has no output report.
+  /// The definition's LEDs of this source, then the raw value of every
+  /// output signal no LED binds: "leds power=on fault=off; outputs
+  /// usage_0008_0003=0 usage_0008_0004=1" ("-" for an LED the device lacks,
+  /// "outputs none" when it has no output report).
   std::string feedback_text() const;
 
   int64_t reports_sent() const { return reports_sent_; }

@@ -170,6 +170,7 @@ int main(int argc, char** argv) {
   while (!g_stop) {
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     if (::poll(&pfd, 1, 50) > 0) lcm.handle();
+    for (const std::string& note : bridge.take_notes()) spdlog::warn("{}", note);
     if (status_every_s > 0 && std::chrono::steady_clock::now() >= next_status) {
       next_status += std::chrono::microseconds(static_cast<int64_t>(status_every_s * 1e6));
       const auto snap = bridge.snapshot();

@@ -235,3 +235,16 @@ TEST_CASE("hid emulator refuses a control bound to a name the descriptor lacks",
   CHECK_THROWS_WITH(HidEmulator(can, 0, parse(rise::test::gravis_descriptor)),
                     "c.yaml: source 'console' is protocol rise-can-v1, not hid");
 }
+
+TEST_CASE("hid emulator shows the definition's LEDs by name", "[panels]") {
+  const PanelDefinition definition = rise::panels::parse_panel_definition(
+      "panel: led-pad\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n"
+      "  - {name: a, kind: button, signal: button_1, safe: false}\n"
+      "feedback:\n  leds: [{name: power, signal: usage_0008_0001}, {name: fault, signal: usage_0008_0002},\n"
+      "         {name: horn, signal: usage_0008_0009}]\n",
+      "led_pad.yaml");
+  HidEmulator emulator(definition, 0, parse(rise::test::led_pad_descriptor));
+  CHECK(emulator.feedback_text() == "leds power=off fault=off horn=-; outputs usage_0008_0003=0 usage_0008_0004=0");
+  CHECK(emulator.on_output(std::vector<uint8_t>{0x02, 0x09}));
+  CHECK(emulator.feedback_text() == "leds power=on fault=off horn=-; outputs usage_0008_0003=0 usage_0008_0004=1");
+}
