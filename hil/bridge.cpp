@@ -320,6 +320,10 @@ void Bridge::hid_source_loop(std::size_t source) {
   for (const auto& led : definition.leds) has_leds = has_leds || led.source == source;
   std::array<uint8_t, io::max_hid_report_bytes> report{};
   int64_t next_enumerate_us = 0;
+  int64_t fast_until_us = 0;
+  if (!device.hotplug_active())
+    note(definition.sources[source].name + ": no USB hot-plug (" + device.hotplug_error() + "): enumerating every " +
+         std::to_string(settings_.hid_enumerate_ms) + " ms");
   // Feedback: the LEDs' output reports, written on (re)open, when the
   // request changes and, checked every feedback period, when the panel's
   // own LEDs (fault, estop) change.
@@ -337,9 +341,11 @@ void Bridge::hid_source_loop(std::size_t source) {
       }
       wake_.notify_all();
       // Hot-plug by enumeration: cheap (a sysfs walk), so a fixed period
-      // rather than the CAN back-off.
+      // rather than the CAN back-off; after a USB arrival every 20 ms for a
+      // second, as the hidraw node appears only once the kernel's HID driver
+      // has bound the new device's interface.
       if (now >= next_enumerate_us) {
-        next_enumerate_us = now + settings_.hid_enumerate_ms * 1000;
+        next_enumerate_us = now + (now < fast_until_us ? 20'000 : settings_.hid_enumerate_ms * 1000);
         if (device.reopen() == io::IoStatus::Ok) {
           {
             std::lock_guard lock(mutex_);
@@ -359,7 +365,10 @@ void Bridge::hid_source_loop(std::size_t source) {
         }
       }
       if (!device.is_open()) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        if (device.wait_for_arrival(5)) {
+          next_enumerate_us = 0;
+          fast_until_us = monotonic_us() + 1'000'000;
+        }
         continue;
       }
     }

@@ -102,6 +102,8 @@ int main(int argc, char** argv) {
       if (hid_url) {
         rise::hil::SourceTransport t;
         t.hid = std::make_unique<rise::io::HidDevice>(source_urls[i]);
+        // Without hot-plug the bridge notes it once (Bridge::take_notes).
+        if (t.hid->hotplug_active()) spdlog::info("source '{}': USB hot-plug through libusb", source.name);
         transports.push_back(std::move(t));
         continue;
       }
