@@ -96,6 +96,11 @@ std::vector<std::string> Bridge::take_notes() {
   return std::exchange(notes_, {});
 }
 
+Bridge::FeedbackState Bridge::feedback_state(int64_t now_us) {
+  std::lock_guard lock(mutex_);
+  return {mapper_.evaluate(now_us), feedback_, feedback_version_};
+}
+
 void Bridge::note(std::string text) {
   std::lock_guard lock(mutex_);
   if (std::find(notes_seen_.begin(), notes_seen_.end(), text) != notes_seen_.end()) return;
@@ -378,24 +383,17 @@ void Bridge::hid_source_loop(std::size_t source) {
       feedback_due = !have_written || now >= next_feedback_us || written_version != feedback_version_;
     }
     if (feedback_due) {
-      PanelSnapshot snap;
-      FeedbackRequest request;
-      uint64_t version;
-      {
-        std::lock_guard lock(mutex_);
-        snap = mapper_.evaluate(now);
-        request = feedback_;
-        version = feedback_version_;
-      }
+      const FeedbackState state = feedback_state(now);
       next_feedback_us = now + settings_.feedback_period_ms * 1000;
-      std::vector<std::vector<uint8_t>> reports = build_hid_feedback(definition, source, request, snap, *encoder);
+      std::vector<std::vector<uint8_t>> reports =
+          build_hid_feedback(definition, source, state.request, state.snapshot, *encoder);
       if (!have_written || reports != last_written) {
         bool ok = true;
         for (const auto& r : reports) ok = device.write(r) == io::IoStatus::Ok && ok;
         have_written = ok;  // a failed write is tried again at the next check
         last_written = std::move(reports);
       }
-      written_version = version;
+      written_version = state.version;
     }
     std::size_t length = 0;
     const io::IoStatus st = device.read(report, length, 5);

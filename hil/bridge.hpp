@@ -79,6 +79,14 @@ class Bridge {
   void publish_loop();
   void send_feedback(std::size_t source, const PanelSnapshot& snap, bool force);
   void note(std::string text);
+  /// What feedback needs, taken together under the lock: the state at
+  /// now_us, the request and its version.
+  struct FeedbackState {
+    PanelSnapshot snapshot;
+    FeedbackRequest request;
+    uint64_t version = 0;
+  };
+  FeedbackState feedback_state(int64_t now_us);
 
   PanelMapper mapper_;
   std::vector<std::unique_ptr<io::CanBus>> buses_;            // null for a Modbus source

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <span>
+#include <string>
 #include <vector>
 
 #include "firmware_protocol/hid_report.hpp"
@@ -22,6 +23,15 @@ fp::HidDescriptor parse(std::span<const uint8_t> bytes) {
   fp::HidParseResult parsed = fp::parse_hid_descriptor(bytes);
   REQUIRE(parsed);
   return parsed.descriptor;
+}
+
+// A panel of one hid source "pad": its controls' and feedback's YAML lines
+// (the controls start at line 5).
+PanelDefinition pad_panel(const std::string& controls, const std::string& feedback = "") {
+  return rise::panels::parse_panel_definition(
+      "panel: p\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n" + controls +
+          (feedback.empty() ? "" : "feedback:\n" + feedback),
+      "p.yaml");
 }
 
 PanelDefinition led_pad_definition() {
@@ -148,11 +158,9 @@ TEST_CASE("hid emulator sets switches by position and @invalid sends the null st
   const std::vector<uint8_t> descriptor = {0x05, 0x01, 0x09, 0x05, 0xA1, 0x01, 0x09, 0x39, 0x15, 0x00, 0x25,
                                            0x07, 0x75, 0x04, 0x95, 0x01, 0x81, 0x42, 0x05, 0x09, 0x19, 0x01,
                                            0x29, 0x04, 0x25, 0x01, 0x75, 0x01, 0x95, 0x04, 0x81, 0x02, 0xC0};
-  const PanelDefinition definition = rise::panels::parse_panel_definition(
-      "panel: h\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n"
+  const PanelDefinition definition = pad_panel(
       "  - {name: view, kind: switch, signal: hat_switch, positions: [n, ne, e, se, s, sw, w, nw], safe: n}\n"
-      "  - {name: a, kind: button, signal: button_2, safe: false}\n",
-      "h.yaml");
+      "  - {name: a, kind: button, signal: button_2, safe: false}\n");
   HidEmulator emulator(definition, 0, parse(descriptor));
   const fp::HidReportDecoder decoder(parse(descriptor));
   Sent sent;
@@ -191,10 +199,7 @@ TEST_CASE("hid emulator decodes the output reports the host writes", "[panels]")
     CHECK(emulator.bad_outputs() == 2);
   }
   SECTION("a device without output reports has none to show") {
-    const PanelDefinition gravis = rise::panels::parse_panel_definition(
-        "panel: g\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n"
-        "  - {name: a, kind: button, signal: button_10, safe: false}\n",
-        "g.yaml");
+    const PanelDefinition gravis = pad_panel("  - {name: a, kind: button, signal: button_10, safe: false}\n");
     HidEmulator plain(gravis, 0, parse(rise::test::gravis_descriptor));
     CHECK(plain.feedback_text() == "outputs none");
     CHECK_FALSE(plain.on_output(std::vector<uint8_t>{0x00, 0x01}));
@@ -208,10 +213,7 @@ TEST_CASE("hid emulator takes hidraw's leading 0 of a report without ids", "[pan
                                            0x02, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x02, 0x81, 0x02,
                                            0x95, 0x06, 0x81, 0x01, 0x05, 0x08, 0x19, 0x01, 0x29, 0x05, 0x95,
                                            0x05, 0x91, 0x02, 0x95, 0x03, 0x91, 0x01, 0xC0};
-  const PanelDefinition definition = rise::panels::parse_panel_definition(
-      "panel: k\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n"
-      "  - {name: a, kind: button, signal: button_1, safe: false}\n",
-      "k.yaml");
+  const PanelDefinition definition = pad_panel("  - {name: a, kind: button, signal: button_1, safe: false}\n");
   HidEmulator emulator(definition, 0, parse(descriptor));
   const std::vector<uint8_t> report = GENERATE(std::vector<uint8_t>{0x00, 0x12}, std::vector<uint8_t>{0x12});
   CHECK(emulator.on_output(report));
@@ -220,13 +222,11 @@ TEST_CASE("hid emulator takes hidraw's leading 0 of a report without ids", "[pan
 }
 
 TEST_CASE("hid emulator refuses a control bound to a name the descriptor lacks", "[panels]") {
-  const PanelDefinition definition = rise::panels::parse_panel_definition(
-      "panel: g\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n"
+  const PanelDefinition definition = pad_panel(
       "  - {name: a, kind: button, signal: button_1, safe: false}\n"
-      "  - {name: throttle, kind: axis, signal: slider, safe: 0}\n",
-      "g.yaml");
+      "  - {name: throttle, kind: axis, signal: slider, safe: 0}\n");
   CHECK_THROWS_WITH(HidEmulator(definition, 0, parse(rise::test::gravis_descriptor)),
-                    Catch::StartsWith("g.yaml:6: controls.throttle.signal: the descriptor has no input signal "
+                    Catch::StartsWith("p.yaml:6: controls.throttle.signal: the descriptor has no input signal "
                                       "'slider' (it has: x, y, button_1, button_2"));
   const PanelDefinition can = rise::panels::parse_panel_definition(
       "panel: c\nsources:\n  - {name: console, protocol: rise-can-v1}\ncontrols:\n"
@@ -237,12 +237,10 @@ TEST_CASE("hid emulator refuses a control bound to a name the descriptor lacks",
 }
 
 TEST_CASE("hid emulator shows the definition's LEDs by name", "[panels]") {
-  const PanelDefinition definition = rise::panels::parse_panel_definition(
-      "panel: led-pad\nsources:\n  - {name: pad, protocol: hid}\ncontrols:\n"
-      "  - {name: a, kind: button, signal: button_1, safe: false}\n"
-      "feedback:\n  leds: [{name: power, signal: usage_0008_0001}, {name: fault, signal: usage_0008_0002},\n"
-      "         {name: horn, signal: usage_0008_0009}]\n",
-      "led_pad.yaml");
+  const PanelDefinition definition =
+      pad_panel("  - {name: a, kind: button, signal: button_1, safe: false}\n",
+                "  leds: [{name: power, signal: usage_0008_0001}, {name: fault, signal: usage_0008_0002},\n"
+                "         {name: horn, signal: usage_0008_0009}]\n");
   HidEmulator emulator(definition, 0, parse(rise::test::led_pad_descriptor));
   CHECK(emulator.feedback_text() == "leds power=off fault=off horn=-; outputs usage_0008_0003=0 usage_0008_0004=0");
   CHECK(emulator.on_output(std::vector<uint8_t>{0x02, 0x09}));
