@@ -238,8 +238,27 @@ int64_t hid_raw_from_value(const HidSignal& signal, double value) {
   return lo;
 }
 
-HidReportDecoder::HidReportDecoder(HidDescriptor descriptor)
-    : descriptor_(std::move(descriptor)), signals_(hid_signals(descriptor_, HidReportKind::Input)) {
+std::size_t find_hid_signal(std::span<const HidSignal> signals, std::string_view name) {
+  for (std::size_t i = 0; i < signals.size(); ++i) {
+    if (signals[i].name == name) return i;
+  }
+  return signals.size();
+}
+
+std::string hid_signal_names(std::span<const HidSignal> signals, std::size_t most) {
+  std::string out;
+  for (std::size_t i = 0; i < signals.size() && i < most; ++i) out += (i ? ", " : "") + signals[i].name;
+  if (signals.size() > most) out += ", ...";
+  return out;
+}
+
+HidReportSignals::HidReportSignals(HidDescriptor descriptor, HidReportKind kind)
+    : descriptor_(std::move(descriptor)), kind_(kind), signals_(hid_signals(descriptor_, kind)) {
+  for (const HidReportLayout& r : descriptor_.reports) {
+    if (r.kind == kind) report_ids_.push_back(r.report_id);
+  }
+  std::sort(report_ids_.begin(), report_ids_.end());
+  report_ids_.erase(std::unique(report_ids_.begin(), report_ids_.end()), report_ids_.end());
   // A counting sort by report id keeps each report's signals in descriptor order.
   for (const HidSignal& s : signals_) ++report_begin_[s.report_id + 1u];
   for (std::size_t k = 1; k < report_begin_.size(); ++k) report_begin_[k] += report_begin_[k - 1];
@@ -249,63 +268,61 @@ HidReportDecoder::HidReportDecoder(HidDescriptor descriptor)
   for (std::size_t i = 0; i < signals_.size(); ++i) by_report_[next[signals_[i].report_id]++] = static_cast<uint32_t>(i);
 }
 
-std::size_t HidReportDecoder::find(std::string_view name) const {
-  for (std::size_t i = 0; i < signals_.size(); ++i) {
-    if (signals_[i].name == name) return i;
-  }
-  return signals_.size();
+std::span<const uint32_t> HidReportSignals::signals_of(uint8_t report_id) const {
+  return std::span<const uint32_t>(by_report_).subspan(report_begin_[report_id],
+                                                        report_begin_[report_id + 1u] - report_begin_[report_id]);
 }
 
 HidDecodeStatus HidReportDecoder::decode(std::span<const uint8_t> report,
                                          std::span<HidSignalValue> values) const {
-  if (values.size() < signals_.size()) return HidDecodeStatus::BufferTooSmall;
+  if (values.size() < signals().size()) return HidDecodeStatus::BufferTooSmall;
   uint8_t id = 0;
   std::span<const uint8_t> data = report;
-  if (descriptor_.uses_report_ids) {
+  if (descriptor().uses_report_ids) {
     if (report.empty()) return HidDecodeStatus::TooShort;
     id = report[0];
     data = report.subspan(1);
   }
-  const std::size_t length = descriptor_.report_length(id, HidReportKind::Input);
+  const std::size_t length = report_length(id);
   if (length == 0) return HidDecodeStatus::UnknownReportId;
   if (report.size() < length) return HidDecodeStatus::TooShort;
-  for (uint32_t k = report_begin_[id]; k < report_begin_[id + 1u]; ++k) {
-    const HidSignal& s = signals_[by_report_[k]];
-    values[by_report_[k]] = hid_normalise(s, descriptor_.fields[s.field_index], hid_extract(s, data));
+  for (const uint32_t k : signals_of(id)) {
+    const HidSignal& s = signals()[k];
+    values[k] = hid_normalise(s, descriptor().fields[s.field_index], hid_extract(s, data));
   }
   return HidDecodeStatus::Ok;
 }
 
 std::vector<HidSignalValue> HidReportDecoder::decode(std::span<const uint8_t> report) const {
-  std::vector<HidSignalValue> values(signals_.size());
+  std::vector<HidSignalValue> values(signals().size());
   decode(report, values);
   return values;
 }
 
-HidOutputEncoder::HidOutputEncoder(HidDescriptor descriptor)
-    : descriptor_(std::move(descriptor)), signals_(hid_signals(descriptor_, HidReportKind::Output)) {}
-
-std::size_t HidOutputEncoder::find(std::string_view name) const {
-  for (std::size_t i = 0; i < signals_.size(); ++i) {
-    if (signals_[i].name == name) return i;
-  }
-  return signals_.size();
-}
-
-std::size_t HidOutputEncoder::report_length(uint8_t report_id) const {
-  return descriptor_.report_length(report_id, HidReportKind::Output);
-}
-
-bool HidOutputEncoder::encode(std::size_t index, int64_t raw, std::span<uint8_t> report) const {
-  if (index >= signals_.size()) return false;
-  const HidSignal& s = signals_[index];
+bool HidReportEncoder::encode(std::size_t index, int64_t raw, std::span<uint8_t> report) const {
+  if (index >= signals().size()) return false;
+  const HidSignal& s = signals()[index];
   if (report.size() < report_length(s.report_id)) return false;
   std::span<uint8_t> data = report;
-  if (descriptor_.uses_report_ids) {
+  if (descriptor().uses_report_ids) {
     report[0] = s.report_id;
     data = report.subspan(1);
   }
   return hid_insert(s, raw, data);
+}
+
+std::size_t HidReportEncoder::encode_report(uint8_t report_id, std::span<const int64_t> raw,
+                                            std::span<uint8_t> report) const {
+  const std::size_t length = report_length(report_id);
+  if (length == 0 || report.size() < length || raw.size() < signals().size()) return 0;
+  std::fill(report.begin(), report.begin() + static_cast<std::ptrdiff_t>(length), uint8_t{0});
+  std::span<uint8_t> data = report.first(length);
+  if (descriptor().uses_report_ids) {
+    report[0] = report_id;
+    data = data.subspan(1);
+  }
+  for (const uint32_t k : signals_of(report_id)) hid_insert(signals()[k], raw[k], data);
+  return length;
 }
 
 }  // namespace rise::firmware_protocol

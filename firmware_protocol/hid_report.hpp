@@ -19,6 +19,8 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "firmware_protocol/hid_descriptor.hpp"
@@ -92,44 +94,66 @@ HidSignalValue hid_normalise(const HidSignal& signal, const HidField& field, int
 /// buttons; hats take degrees), clamped to the logical range. Cyclic-path safe.
 int64_t hid_raw_from_value(const HidSignal& signal, double value);
 
-/// Decodes input reports of one descriptor into a caller-owned buffer.
-class HidReportDecoder {
+/// Index of the signal called `name`, or signals.size() when none. Cyclic-path safe.
+std::size_t find_hid_signal(std::span<const HidSignal> signals, std::string_view name);
+
+/// "x, y, button_1, ..." : the first `most` names, for messages that say
+/// what a device has; empty when there are none. Allocates.
+std::string hid_signal_names(std::span<const HidSignal> signals, std::size_t most = 24);
+
+/// The signals of one direction of a descriptor, grouped by report id: the
+/// part the decoder and the encoders share.
+class HidReportSignals {
  public:
-  explicit HidReportDecoder(HidDescriptor descriptor);
+  /// Allocates: call once at start-up (or when a device is opened).
+  HidReportSignals(HidDescriptor descriptor, HidReportKind kind);
 
   const HidDescriptor& descriptor() const { return descriptor_; }
+  HidReportKind kind() const { return kind_; }
   const std::vector<HidSignal>& signals() const { return signals_; }
   /// Index of the signal called `name`, or signals().size() when none.
-  std::size_t find(std::string_view name) const;
-
-  /// Decodes one input report as read from the device (with its id byte when
-  /// the descriptor uses ids) into `values` (indexed like signals()). Only
-  /// the signals of that report are written. No allocation, no throw.
-  HidDecodeStatus decode(std::span<const uint8_t> report, std::span<HidSignalValue> values) const;
-
-  /// Convenience: decode into a fresh buffer of zeroed values. Allocates.
-  std::vector<HidSignalValue> decode(std::span<const uint8_t> report) const;
+  std::size_t find(std::string_view name) const { return find_hid_signal(signals_, name); }
+  /// Report length on the wire (id byte included when ids are used); 0 when
+  /// this direction has no report `report_id`. Cyclic-path safe.
+  std::size_t report_length(uint8_t report_id) const { return descriptor_.report_length(report_id, kind_); }
+  /// The ids of this direction's reports, ascending (one 0 when ids are unused).
+  const std::vector<uint8_t>& report_ids() const { return report_ids_; }
+  /// Indices into signals() of the signals of report `report_id`, in
+  /// descriptor order. Cyclic-path safe.
+  std::span<const uint32_t> signals_of(uint8_t report_id) const;
 
  private:
   HidDescriptor descriptor_;
+  HidReportKind kind_;
   std::vector<HidSignal> signals_;
+  std::vector<uint8_t> report_ids_;
   // Signal indices grouped by report id: those of id k are
   // by_report_[report_begin_[k] .. report_begin_[k + 1]).
   std::vector<uint32_t> by_report_;
   std::array<uint32_t, 257> report_begin_{};
 };
 
-/// Builds output reports (LEDs, rumble / force feedback) from signal values.
-class HidOutputEncoder {
+/// Decodes the reports of one direction (input: what the host reads; output:
+/// what a device receives) into a caller-owned buffer.
+class HidReportDecoder : public HidReportSignals {
  public:
-  explicit HidOutputEncoder(HidDescriptor descriptor);
+  explicit HidReportDecoder(HidDescriptor descriptor, HidReportKind kind = HidReportKind::Input)
+      : HidReportSignals(std::move(descriptor), kind) {}
 
-  const std::vector<HidSignal>& signals() const { return signals_; }
-  std::size_t find(std::string_view name) const;
+  /// Decodes one report as it travels (with its id byte when the descriptor
+  /// uses ids) into `values` (indexed like signals()). Only the signals of
+  /// that report are written. No allocation, no throw.
+  HidDecodeStatus decode(std::span<const uint8_t> report, std::span<HidSignalValue> values) const;
 
-  /// Report length on the wire (id byte included when ids are used); 0 when
-  /// there is no output report `report_id`.
-  std::size_t report_length(uint8_t report_id) const;
+  /// Convenience: decode into a fresh buffer of zeroed values. Allocates.
+  std::vector<HidSignalValue> decode(std::span<const uint8_t> report) const;
+};
+
+/// Builds the reports of one direction from raw signal values
+/// (hid_raw_from_value turns normalised values into raw ones).
+class HidReportEncoder : public HidReportSignals {
+ public:
+  HidReportEncoder(HidDescriptor descriptor, HidReportKind kind) : HidReportSignals(std::move(descriptor), kind) {}
 
   /// Writes signal `index` as `raw` into `report` (a buffer of
   /// report_length() bytes for that signal's report, id byte first when ids
@@ -137,9 +161,26 @@ class HidOutputEncoder {
   /// the index or the buffer does not fit.
   bool encode(std::size_t index, int64_t raw, std::span<uint8_t> report) const;
 
- private:
-  HidDescriptor descriptor_;
-  std::vector<HidSignal> signals_;
+  /// Builds the whole report `report_id` from `raw` (one value per signal,
+  /// indexed like signals()): id byte first when ids are used, constant
+  /// (padding) bits 0. Returns its length on the wire; 0 (nothing written)
+  /// when there is no such report or `raw` or `report` is too short. No
+  /// allocation, no throw.
+  std::size_t encode_report(uint8_t report_id, std::span<const int64_t> raw, std::span<uint8_t> report) const;
+};
+
+/// Builds input reports from signal values: what a device sends (the HID
+/// emulator's side).
+class HidInputEncoder : public HidReportEncoder {
+ public:
+  explicit HidInputEncoder(HidDescriptor descriptor) : HidReportEncoder(std::move(descriptor), HidReportKind::Input) {}
+};
+
+/// Builds output reports (LEDs, rumble / force feedback) from signal values:
+/// what the host writes.
+class HidOutputEncoder : public HidReportEncoder {
+ public:
+  explicit HidOutputEncoder(HidDescriptor descriptor) : HidReportEncoder(std::move(descriptor), HidReportKind::Output) {}
 };
 
 }  // namespace rise::firmware_protocol

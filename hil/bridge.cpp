@@ -1,10 +1,13 @@
 #include "hil/bridge.hpp"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <optional>
+#include <utility>
 
 #include "firmware_protocol/console_modbus.hpp"
+#include "firmware_protocol/hid_report.hpp"
 
 namespace rise::hil {
 namespace {
@@ -86,6 +89,23 @@ void Bridge::set_feedback(FeedbackRequest request) {
 PanelSnapshot Bridge::snapshot() const {
   std::lock_guard lock(mutex_);
   return mapper_.evaluate(monotonic_us());
+}
+
+std::vector<std::string> Bridge::take_notes() {
+  std::lock_guard lock(mutex_);
+  return std::exchange(notes_, {});
+}
+
+Bridge::FeedbackState Bridge::feedback_state(int64_t now_us) {
+  std::lock_guard lock(mutex_);
+  return {mapper_.evaluate(now_us), feedback_, feedback_version_};
+}
+
+void Bridge::note(std::string text) {
+  std::lock_guard lock(mutex_);
+  if (std::find(notes_seen_.begin(), notes_seen_.end(), text) != notes_seen_.end()) return;
+  notes_seen_.push_back(text);
+  notes_.push_back(std::move(text));
 }
 
 void Bridge::source_loop(std::size_t source) {
@@ -310,8 +330,23 @@ void Bridge::modbus_source_loop(std::size_t source) {
 
 void Bridge::hid_source_loop(std::size_t source) {
   io::HidDevice& device = *hid_devices_[source];
+  const panels::PanelDefinition& definition = mapper_.definition();
+  bool has_leds = false;
+  for (const auto& led : definition.leds) has_leds = has_leds || led.source == source;
   std::array<uint8_t, io::max_hid_report_bytes> report{};
   int64_t next_enumerate_us = 0;
+  int64_t fast_until_us = 0;
+  if (!device.hotplug_active())
+    note(definition.sources[source].name + ": no USB hot-plug (" + device.hotplug_error() + "): enumerating every " +
+         std::to_string(settings_.hid_enumerate_ms) + " ms");
+  // Feedback: the LEDs' output reports, written on (re)open, when the
+  // request changes and, checked every feedback period, when the panel's
+  // own LEDs (fault, estop) change.
+  std::optional<fp::HidOutputEncoder> encoder;
+  std::vector<std::vector<uint8_t>> last_written;
+  bool have_written = false;
+  uint64_t written_version = ~0ull;
+  int64_t next_feedback_us = 0;
   while (running_) {
     const int64_t now = monotonic_us();
     if (!device.is_open()) {
@@ -321,21 +356,54 @@ void Bridge::hid_source_loop(std::size_t source) {
       }
       wake_.notify_all();
       // Hot-plug by enumeration: cheap (a sysfs walk), so a fixed period
-      // rather than the CAN back-off.
+      // rather than the CAN back-off; after a USB arrival every 20 ms for a
+      // second, as the hidraw node appears only once the kernel's HID driver
+      // has bound the new device's interface.
       if (now >= next_enumerate_us) {
-        next_enumerate_us = now + settings_.hid_enumerate_ms * 1000;
+        next_enumerate_us = now + (now < fast_until_us ? 20'000 : settings_.hid_enumerate_ms * 1000);
         if (device.reopen() == io::IoStatus::Ok) {
-          std::lock_guard lock(mutex_);
-          // A descriptor without a bound name keeps the source failsafe
-          // with the mapper's reason; it is checked again on the next plug.
-          mapper_.attach_hid(source, device.report_descriptor());
-          mapper_.on_connection(source, true, monotonic_us());
+          {
+            std::lock_guard lock(mutex_);
+            // A descriptor without a bound name keeps the source failsafe
+            // with the mapper's reason; it is checked again on the next plug.
+            mapper_.attach_hid(source, device.report_descriptor());
+            mapper_.on_connection(source, true, monotonic_us());
+          }
+          encoder.reset();
+          have_written = false;
+          const fp::HidParseResult parsed = fp::parse_hid_descriptor(device.report_descriptor());
+          if (has_leds && parsed) {
+            encoder.emplace(parsed.descriptor);
+            for (std::string& problem : hid_feedback_problems(definition, source, *encoder))
+              note(std::move(problem) + ": not shown");
+          }
         }
       }
       if (!device.is_open()) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        if (device.wait_for_arrival(5)) {
+          next_enumerate_us = 0;
+          fast_until_us = monotonic_us() + 1'000'000;
+        }
         continue;
       }
+    }
+    bool feedback_due = false;
+    if (encoder) {
+      std::lock_guard lock(mutex_);
+      feedback_due = !have_written || now >= next_feedback_us || written_version != feedback_version_;
+    }
+    if (feedback_due) {
+      const FeedbackState state = feedback_state(now);
+      next_feedback_us = now + settings_.feedback_period_ms * 1000;
+      std::vector<std::vector<uint8_t>> reports =
+          build_hid_feedback(definition, source, state.request, state.snapshot, *encoder);
+      if (!have_written || reports != last_written) {
+        bool ok = true;
+        for (const auto& r : reports) ok = device.write(r) == io::IoStatus::Ok && ok;
+        have_written = ok;  // a failed write is tried again at the next check
+        last_written = std::move(reports);
+      }
+      written_version = state.version;
     }
     std::size_t length = 0;
     const io::IoStatus st = device.read(report, length, 5);

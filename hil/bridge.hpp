@@ -12,6 +12,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -64,6 +65,10 @@ class Bridge {
   void set_feedback(FeedbackRequest request);
   /// Thread-safe: the state right now.
   PanelSnapshot snapshot() const;
+  /// Thread-safe: what the bridge noticed since the last call that is worth
+  /// a line in the log but is no failsafe (a hid source's LED its device
+  /// cannot show), each once. The program logs them; allocates.
+  std::vector<std::string> take_notes();
   const panels::PanelDefinition& definition() const { return mapper_.definition(); }
 
  private:
@@ -73,6 +78,15 @@ class Bridge {
   bool report_modbus(std::size_t source, const io::ModbusResult& result);
   void publish_loop();
   void send_feedback(std::size_t source, const PanelSnapshot& snap, bool force);
+  void note(std::string text);
+  /// What feedback needs, taken together under the lock: the state at
+  /// now_us, the request and its version.
+  struct FeedbackState {
+    PanelSnapshot snapshot;
+    FeedbackRequest request;
+    uint64_t version = 0;
+  };
+  FeedbackState feedback_state(int64_t now_us);
 
   PanelMapper mapper_;
   std::vector<std::unique_ptr<io::CanBus>> buses_;            // null for a Modbus source
@@ -86,6 +100,8 @@ class Bridge {
   bool changed_ = false;
   FeedbackRequest feedback_;
   uint64_t feedback_version_ = 0;
+  std::vector<std::string> notes_;       // not yet taken
+  std::vector<std::string> notes_seen_;  // every note once
 
   std::atomic<bool> running_{false};
   std::vector<std::thread> threads_;

@@ -13,24 +13,37 @@ int32_t display_raw(float value, uint8_t decimals) {
   return static_cast<int32_t>(std::fmin(std::fmax(scaled, lo), hi));
 }
 
-FeedbackFrames build_feedback(const panels::PanelDefinition& definition, std::size_t source,
-                              const FeedbackRequest& request, const PanelSnapshot& snapshot) {
-  FeedbackFrames out;
-  bool estop = false;
+namespace {
+
+// The e-stop as the panel reads it: pressed by a person, not forced safe.
+bool estop_pressed(const panels::PanelDefinition& definition, const PanelSnapshot& snapshot) {
   for (std::size_t i = 0; i < definition.controls.size() && i < snapshot.controls.size(); ++i)
     if (definition.controls[i].role == panels::ControlRole::Estop && snapshot.controls[i].pressed &&
         !snapshot.controls[i].forced_safe)
-      estop = true;
+      return true;
+  return false;
+}
 
+bool lit(const panels::LedDefinition& led, const FeedbackRequest& request, const PanelSnapshot& snapshot,
+         bool estop) {
+  bool on = false;
+  if (led.name == "power") on = true;
+  else if (led.name == "fault") on = snapshot.failsafe;
+  else if (led.name == "estop") on = estop;
+  for (const auto& [name, value] : request.leds)
+    if (name == led.name) on = value;
+  return on;
+}
+
+}  // namespace
+
+FeedbackFrames build_feedback(const panels::PanelDefinition& definition, std::size_t source,
+                              const FeedbackRequest& request, const PanelSnapshot& snapshot) {
+  FeedbackFrames out;
+  const bool estop = estop_pressed(definition, snapshot);
   for (const auto& led : definition.leds) {
     if (led.source != source) continue;
-    bool on = false;
-    if (led.name == "power") on = true;
-    else if (led.name == "fault") on = snapshot.failsafe;
-    else if (led.name == "estop") on = estop;
-    for (const auto& [name, value] : request.leds)
-      if (name == led.name) on = value;
-    if (on) out.indicators.leds_on |= 1u << led.bit;
+    if (lit(led, request, snapshot, estop)) out.indicators.leds_on |= 1u << led.bit;
   }
   if (definition.buzzer_source && *definition.buzzer_source == source)
     out.indicators.buzzer = request.buzzer;
@@ -45,6 +58,47 @@ FeedbackFrames build_feedback(const panels::PanelDefinition& definition, std::si
     out.displays.push_back(frame);
   }
   return out;
+}
+
+std::vector<std::vector<uint8_t>> build_hid_feedback(const panels::PanelDefinition& definition, std::size_t source,
+                                                     const FeedbackRequest& request, const PanelSnapshot& snapshot,
+                                                     const firmware_protocol::HidOutputEncoder& encoder) {
+  const bool estop = estop_pressed(definition, snapshot);
+  const bool ids = encoder.descriptor().uses_report_ids;
+  std::vector<std::vector<uint8_t>> reports;
+  std::vector<uint8_t> report_ids;  // of reports[i]
+  for (const auto& led : definition.leds) {
+    if (led.source != source || led.hid_signal.empty()) continue;
+    const std::size_t signal = encoder.find(led.hid_signal);
+    if (signal >= encoder.signals().size()) continue;
+    const firmware_protocol::HidSignal& s = encoder.signals()[signal];
+    std::size_t r = 0;
+    while (r < report_ids.size() && report_ids[r] != s.report_id) ++r;
+    if (r == report_ids.size()) {
+      // hidraw takes the report id first; 0 stands first when there are none.
+      reports.emplace_back(encoder.report_length(s.report_id) + (ids ? 0 : 1), uint8_t{0});
+      report_ids.push_back(s.report_id);
+    }
+    const std::span<uint8_t> data = ids ? std::span<uint8_t>(reports[r]) : std::span<uint8_t>(reports[r]).subspan(1);
+    const double on = lit(led, request, snapshot, estop) ? 1.0 : 0.0;
+    encoder.encode(signal, firmware_protocol::hid_raw_from_value(s, on), data);
+  }
+  return reports;
+}
+
+std::vector<std::string> hid_feedback_problems(const panels::PanelDefinition& definition, std::size_t source,
+                                               const firmware_protocol::HidOutputEncoder& encoder) {
+  std::vector<std::string> problems;
+  for (const auto& led : definition.leds) {
+    if (led.source != source || led.hid_signal.empty()) continue;
+    if (encoder.find(led.hid_signal) < encoder.signals().size()) continue;
+    const std::string known = firmware_protocol::hid_signal_names(encoder.signals());
+    problems.push_back(definition.file + ":" + std::to_string(led.line) + ": feedback.leds." + led.name +
+                       ".signal: the device has no output signal '" + led.hid_signal + "' (" +
+                       (known.empty() ? std::string("it has no output report") : "its output signals: " + known) +
+                       ")");
+  }
+  return problems;
 }
 
 }  // namespace rise::hil

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/hid_report.hpp"
 #include "hil/panel_mapper.hpp"
 #include "panels/panel_definition.hpp"
 
@@ -31,6 +32,25 @@ struct FeedbackFrames {
 /// name. Names the definition does not know are ignored.
 FeedbackFrames build_feedback(const panels::PanelDefinition& definition, std::size_t source,
                               const FeedbackRequest& request, const PanelSnapshot& snapshot);
+
+/// The output reports that show a hid source's LEDs: every LED of `source`
+/// bound to an output signal (`signal:`) lit or dark as build_feedback
+/// decides for the LEDs of a CAN console, every
+/// other output field 0. One report per output report that carries such an
+/// LED, as HidDevice::write takes it (id byte first; 0 when the device uses
+/// no report ids). LEDs whose signal the device lacks are left out (see
+/// hid_feedback_problems); a device without output reports gets none.
+/// Allocates: call at the feedback rate, not per input report.
+std::vector<std::vector<uint8_t>> build_hid_feedback(const panels::PanelDefinition& definition, std::size_t source,
+                                                     const FeedbackRequest& request, const PanelSnapshot& snapshot,
+                                                     const firmware_protocol::HidOutputEncoder& encoder);
+
+/// One line per LED of `source` that this device cannot show
+/// ("panel.yaml:12: feedback.leds.power.signal: the device has no output
+/// signal 'usage_0008_0009' (its output signals: ...)"); empty when it can
+/// show them all. Allocates: call when the device is opened.
+std::vector<std::string> hid_feedback_problems(const panels::PanelDefinition& definition, std::size_t source,
+                                               const firmware_protocol::HidOutputEncoder& encoder);
 
 /// value → raw display units: round(value · 10^decimals), saturated to int32.
 int32_t display_raw(float value, uint8_t decimals);

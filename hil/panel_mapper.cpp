@@ -162,11 +162,8 @@ bool PanelMapper::attach_hid(std::size_t source, std::span<const uint8_t> descri
     if (c.source != source || c.hid_signal.empty()) continue;
     const std::size_t index = decoder->find(c.hid_signal);
     if (index >= decoder->signals().size()) {
-      std::string known;
-      for (std::size_t k = 0; k < decoder->signals().size() && k < 24; ++k)
-        known += (k ? ", " : "") + decoder->signals()[k].name;
-      if (decoder->signals().size() > 24) known += ", ...";
-      return fail("control '" + c.name + "': the device has no signal '" + c.hid_signal + "' (it has: " + known + ")");
+      return fail("control '" + c.name + "': the device has no signal '" + c.hid_signal +
+                  "' (it has: " + fp::hid_signal_names(decoder->signals()) + ")");
     }
     DbcBinding& b = s.dbc[static_cast<std::size_t>(binding_of_control_[i])];
     b.hid_signal = index;

@@ -350,15 +350,30 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
   if (const YAML::Node leds = node["leds"]) {
     if (!leds.IsSequence()) ctx.fail(leds, "feedback.leds", "expected a list");
     std::set<std::pair<std::size_t, int>> bits;
+    std::set<std::pair<std::size_t, std::string>> hid_signals;
     for (std::size_t i = 0; i < leds.size(); ++i) {
       const YAML::Node n = leds[i];
       std::string where = "feedback.leds[" + std::to_string(i) + "]";
-      ctx.only_keys(n, where, {"name", "source", "bit"});
+      ctx.only_keys(n, where, {"name", "source", "bit", "signal"});
       LedDefinition led;
       led.name = ctx.require<std::string>(n, "name", where);
+      led.line = n.Mark().line + 1;
       where = "feedback.leds." + led.name;
       if (!names.insert(led.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
       led.source = resolve_source(ctx, def, n, where);
+      if (def.sources[led.source].is_hid()) {
+        // A HID device's LEDs are fields of its output reports, named like its inputs.
+        if (n["bit"])
+          ctx.fail(n["bit"], where + ".bit",
+                   "a hid source's LED is an output signal of the device: signal: NAME (e.g. usage_0008_0001)");
+        led.hid_signal = ctx.require<std::string>(n, "signal", where);
+        if (led.hid_signal.empty()) ctx.fail(n["signal"], where + ".signal", "must not be empty");
+        if (!hid_signals.insert({led.source, led.hid_signal}).second)
+          ctx.fail(n["signal"], where + ".signal", "output signal already bound to another LED");
+        def.leds.push_back(led);
+        continue;
+      }
+      if (n["signal"]) ctx.fail(n["signal"], where + ".signal", "only for an LED of a hid source (here: bit: 0..31)");
       const int bit = ctx.require<int>(n, "bit", where);
       if (bit < 0 || bit >= static_cast<int>(fp::kMaxLeds))
         ctx.fail(n["bit"], where + ".bit", "must be 0..31");
@@ -379,6 +394,7 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
       where = "feedback.displays." + d.name;
       if (!names.insert(d.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
       d.source = resolve_source(ctx, def, n, where);
+      if (def.sources[d.source].is_hid()) ctx.fail(n, where + ".source", "a hid source has no displays");
       const int index = ctx.require<int>(n, "index", where);
       if (index < 0 || index > 255) ctx.fail(n["index"], where + ".index", "must be 0..255");
       d.index = static_cast<uint8_t>(index);
@@ -391,6 +407,7 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
   if (const YAML::Node buzzer = node["buzzer"]) {
     ctx.only_keys(buzzer, "feedback.buzzer", {"source"});
     def.buzzer_source = resolve_source(ctx, def, buzzer, "feedback.buzzer");
+    if (def.sources[*def.buzzer_source].is_hid()) ctx.fail(buzzer, "feedback.buzzer.source", "a hid source has no buzzer");
   }
 }
 

@@ -114,7 +114,12 @@ struct SourceDefinition {
 struct LedDefinition {
   std::string name;
   std::size_t source = 0;
-  uint8_t bit = 0;
+  uint8_t bit = 0;  ///< rise-can-v1 / rise-modbus-v1: bit of the indicators frame
+  /// hid sources: the output signal of the device's report descriptor that
+  /// lights it (firmware_protocol::hid_signals, e.g. usage_0008_0001 for the
+  /// LED page's first usage); known only once the device is open.
+  std::string hid_signal;
+  int line = 0;  ///< line in the definition file (for messages)
 };
 struct DisplayDefinition {
   std::string name;

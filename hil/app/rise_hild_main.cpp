@@ -102,6 +102,8 @@ int main(int argc, char** argv) {
       if (hid_url) {
         rise::hil::SourceTransport t;
         t.hid = std::make_unique<rise::io::HidDevice>(source_urls[i]);
+        // Without hot-plug the bridge notes it once (Bridge::take_notes).
+        if (t.hid->hotplug_active()) spdlog::info("source '{}': USB hot-plug through libusb", source.name);
         transports.push_back(std::move(t));
         continue;
       }
@@ -170,6 +172,7 @@ int main(int argc, char** argv) {
   while (!g_stop) {
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     if (::poll(&pfd, 1, 50) > 0) lcm.handle();
+    for (const std::string& note : bridge.take_notes()) spdlog::warn("{}", note);
     if (status_every_s > 0 && std::chrono::steady_clock::now() >= next_status) {
       next_status += std::chrono::microseconds(static_cast<int64_t>(status_every_s * 1e6));
       const auto snap = bridge.snapshot();

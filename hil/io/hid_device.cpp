@@ -101,6 +101,7 @@ HidDevice::HidDevice(const std::string& url) {
   const auto parsed = parse_hid_url(url, &error);
   if (!parsed) throw std::invalid_argument(error);
   url_ = *parsed;
+  hotplug_ = std::make_unique<UsbHotplug>(url_.vendor_id, url_.product_id);
 }
 
 HidDevice::~HidDevice() { close(); }

@@ -7,12 +7,14 @@
 //
 // VID and PID in hex (`hid://0428:4001`); `serial` matches the serial number
 // exactly, `name` is a substring of the product string, `interface` the USB
-// interface number. Hot-plug is by enumeration: reopen() enumerates (the
-// bridge calls it every reopen period while the device is away); libusb
-// hotplug callbacks are not used.
+// interface number. Hot-plug: reopen() enumerates; while the device is away
+// the bridge waits in wait_for_arrival(), which libusb's hot-plug callback
+// for the VID:PID ends at once when a USB device arrives (UsbHotplug), and
+// otherwise enumerates every period (Bluetooth and uhid devices, no libusb).
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -21,6 +23,7 @@
 
 #include "hil/io/can_bus.hpp"
 #include "hil/io/posix_io.hpp"
+#include "hil/io/usb_hotplug.hpp"
 
 struct hid_device_;
 
@@ -67,6 +70,18 @@ class HidDevice {
   /// Writes an output report (first byte: report id, 0 when ids are unused).
   IoStatus write(std::span<const uint8_t> report);
 
+  /// Waits up to timeout_ms for the URL's VID:PID to arrive on USB; true
+  /// when it did (enumerate now). Without libusb hot-plug it only waits.
+  /// No allocation, no throw: cyclic-path safe.
+  bool wait_for_arrival(int timeout_ms) { return hotplug_->wait_for_arrival(timeout_ms); }
+  /// Ends a wait_for_arrival() as an arrival does (for callers who learn of
+  /// one otherwise, and tests). Thread-safe.
+  void notify_arrival() { hotplug_->notify_arrival(); }
+  /// Whether libusb's hot-plug callbacks watch for the device; if not,
+  /// hotplug_error() says why.
+  bool hotplug_active() const { return hotplug_->available(); }
+  const std::string& hotplug_error() const { return hotplug_->error(); }
+
   /// The raw report descriptor of the open device (empty when closed).
   const std::vector<uint8_t>& report_descriptor() const { return descriptor_; }
   /// The hidraw node of the open device ("/dev/hidraw0").
@@ -76,6 +91,7 @@ class HidDevice {
 
  private:
   HidUrl url_;
+  std::unique_ptr<UsbHotplug> hotplug_;
   hid_device_* device_ = nullptr;
   std::vector<uint8_t> descriptor_;
   std::string path_;

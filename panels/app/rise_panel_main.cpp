@@ -1,5 +1,5 @@
-// rise-panel: the console's firmware emulated on a real transport, played
-// from a scripted timeline.
+// rise-panel: the console's firmware emulated on a real transport (CAN,
+// Modbus, or a HID device through uhid), played from a scripted timeline.
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
@@ -9,9 +9,13 @@
 #include <thread>
 
 #include "hil/io/can_bus.hpp"
+#include "firmware_protocol/hid_text.hpp"
+#include "hil/io/hid_device.hpp"
 #include "hil/io/modbus_server.hpp"
+#include "hil/io/uhid_device.hpp"
 #include "panels/app/replay_command.hpp"
 #include "panels/console_emulator.hpp"
+#include "panels/hid_emulator.hpp"
 #include "panels/data_path.hpp"
 
 namespace {
@@ -29,11 +33,138 @@ struct EmulateOptions {
   std::string source;
   std::string can_url = "socketcand+listen://127.0.0.1:29536/can0";
   std::string modbus_url;  ///< set: serve rise-modbus-v1 instead of CAN
+  std::string hid_file;    ///< set: be a HID device (uhid) described by this report descriptor
+  std::string hid_id;      ///< VID:PID (hex); default: the descriptor file's, else the source's device URL
+  std::string hid_name;    ///< product string; default: the descriptor file's name
+  double hid_period_ms = 8.0;
   std::string script;
   bool loop = false;
   bool hold = false;
   bool start_on_feedback = false;
 };
+
+// The scripted person: plays the timeline against the wall clock, from the
+// moment start() is called (at once, or when the host is there).
+class ScriptClock {
+ public:
+  ScriptClock(const rise::panels::Timeline& timeline, const EmulateOptions& o) : timeline_(timeline), o_(o) {}
+
+  void start(int64_t now_us) { start_us_ = now_us; }
+  /// Applies the events due at now_us; false once the script is over.
+  template <typename Apply>
+  bool step(int64_t now_us, const rise::panels::PanelDefinition& definition, Apply&& apply) {
+    const double t = static_cast<double>(now_us - start_us_) * 1e-6;
+    const auto& events = timeline_.events;
+    while (next_ < events.size() && events[next_].time_s <= t) {
+      const auto& e = events[next_++];
+      apply(e);
+      if (e.kind == rise::panels::TimelineEvent::Kind::Set)
+        spdlog::debug("t={:.2f} {} set", t, definition.controls[e.control].name);
+      else
+        spdlog::info("t={:.2f} {}:{} directive", t, timeline_.file, e.line);
+    }
+    if (events.empty() || next_ < events.size()) return true;
+    if (o_.loop) {
+      start_us_ = now_us;
+      next_ = 0;
+      return true;
+    }
+    return o_.hold || t <= timeline_.end_time_s() + 0.5;
+  }
+
+ private:
+  const rise::panels::Timeline& timeline_;
+  const EmulateOptions& o_;
+  int64_t start_us_ = 0;
+  std::size_t next_ = 0;
+};
+
+// HID mode: a uhid device that the host's HID stack sees as plugged in.
+int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition& definition, std::size_t source,
+                    const rise::panels::Timeline& timeline) {
+  using namespace rise;
+  namespace fp = rise::firmware_protocol;
+  io::UhidSettings settings;
+  std::unique_ptr<panels::HidEmulator> emulator;
+  try {
+    const fp::HidDescriptorSource file = fp::read_hid_descriptor_file(o.hid_file);
+    const fp::HidParseResult parsed = fp::parse_hid_descriptor(file.bytes);
+    if (!parsed)
+      throw std::runtime_error(o.hid_file + ": " + std::string(fp::to_string(parsed.error)) + " at byte " +
+                               std::to_string(parsed.error_offset));
+    std::string id = o.hid_id;
+    if (id.empty() && (file.vendor_id != 0 || file.product_id != 0))
+      id = fmt::format("{:04x}:{:04x}", file.vendor_id, file.product_id);
+    std::string url = id.empty() ? definition.sources[source].device : "hid://" + id;
+    if (url.empty())
+      throw std::runtime_error(o.hid_file + " gives no VID:PID and source '" + definition.sources[source].name +
+                               "' no device: give --hid-id VID:PID");
+    std::string error;
+    const auto parsed_url = io::parse_hid_url(url, &error);
+    if (!parsed_url) throw std::runtime_error("--hid-id: " + error);
+    settings.vendor_id = parsed_url->vendor_id;
+    settings.product_id = parsed_url->product_id;
+    settings.uniq = parsed_url->serial;
+    settings.name = !o.hid_name.empty() ? o.hid_name
+                    : !file.name.empty() ? file.name
+                                         : "rise-panel " + definition.name + " " + definition.sources[source].name;
+    settings.descriptor = file.bytes;
+    panels::HidEmulatorSettings emulator_settings;
+    emulator_settings.report_period_us = static_cast<int64_t>(o.hid_period_ms * 1000.0);
+    emulator = std::make_unique<panels::HidEmulator>(definition, source, parsed.descriptor, emulator_settings);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  std::unique_ptr<io::UhidDevice> device;
+  try {
+    device = std::make_unique<io::UhidDevice>(settings);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  if (device->create() != io::IoStatus::Ok) {
+    spdlog::error("{}", device->last_error());
+    return 2;
+  }
+  spdlog::info("rise-panel ready: emulating '{}' source '{}' as HID device {:04x}:{:04x} '{}' on /dev/uhid",
+               definition.name, definition.sources[source].name, settings.vendor_id, settings.product_id,
+               settings.name);
+
+  ScriptClock script(timeline, o);
+  bool started = !o.start_on_feedback;
+  script.start(monotonic_us());
+  io::UhidEvent event;
+  while (!g_stop) {
+    const int64_t now = monotonic_us();
+    // The scripted person starts once the host has opened the device.
+    if (!started) {
+      script.start(now);
+      if (device->is_open_by_host()) {
+        started = true;
+        spdlog::info("host opened the device: script starts");
+      }
+    }
+    if (!script.step(now, definition, [&](const panels::TimelineEvent& e) { emulator->apply(e); })) break;
+    if (emulator->ended()) break;
+    emulator->tick(*device, now);
+    // Host events until the next millisecond tick.
+    io::IoStatus st;
+    while ((st = device->poll(event, 1)) == io::IoStatus::Ok) {
+      if (event.kind == io::UhidEvent::Kind::Output && emulator->on_output(event.data))
+        spdlog::info("feedback: {}", emulator->feedback_text());
+      if (event.kind == io::UhidEvent::Kind::Start) spdlog::info("the kernel bound the device");
+    }
+    if (st == io::IoStatus::Disconnected) {
+      spdlog::error("{}", device->last_error());
+      return 1;
+    }
+  }
+  device->destroy();
+  spdlog::info("rise-panel stopped: {} reports sent, {} output reports received ({} bad)", emulator->reports_sent(),
+               emulator->outputs_received(), emulator->bad_outputs());
+  return 0;
+}
 
 int run_emulate(const EmulateOptions& o) {
   using namespace rise;
@@ -52,6 +183,10 @@ int run_emulate(const EmulateOptions& o) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  std::signal(SIGPIPE, SIG_IGN);
+  if (!o.hid_file.empty()) return run_emulate_hid(o, definition, source, timeline);
 
   std::unique_ptr<io::CanBus> bus;
   std::unique_ptr<io::ModbusServer> server;
@@ -65,17 +200,14 @@ int run_emulate(const EmulateOptions& o) {
     return 2;
   }
   panels::ConsoleEmulator emulator(definition, source);
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-  std::signal(SIGPIPE, SIG_IGN);
 
   const uint16_t port = server ? server->port() : io::listening_port(*bus);
   spdlog::info("rise-panel ready: emulating '{}' source '{}' (node {}) on {}{}{}", definition.name,
                definition.sources[source].name, definition.sources[source].node,
                server ? o.modbus_url : o.can_url, port ? " port " : "", port ? std::to_string(port) : "");
 
-  int64_t start_us = monotonic_us();
-  std::size_t next_event = 0;
+  ScriptClock script(timeline, o);
+  script.start(monotonic_us());
   io::CanFrame frame;
   int64_t next_reopen_us = 0;
   bool started = !o.start_on_feedback;
@@ -84,31 +216,14 @@ int run_emulate(const EmulateOptions& o) {
     // The firmware runs from power-up; the scripted person starts once the
     // host is there (its first feedback frame), so runs are repeatable.
     if (!started) {
-      start_us = now;
+      script.start(now);
       if (emulator.feedback().frames > 0) {
         started = true;
         spdlog::info("host connected: script starts");
       }
     }
-    const double t = static_cast<double>(now - start_us) * 1e-6;
-    while (next_event < timeline.events.size() && timeline.events[next_event].time_s <= t) {
-      const auto& e = timeline.events[next_event++];
-      emulator.apply(e);
-      if (e.kind == panels::TimelineEvent::Kind::Set) {
-        const auto& c = definition.controls[e.control];
-        spdlog::debug("t={:.2f} {} set", t, c.name);
-      } else {
-        spdlog::info("t={:.2f} {}:{} directive", t, timeline.file, e.line);
-      }
-    }
+    if (!script.step(now, definition, [&](const panels::TimelineEvent& e) { emulator.apply(e); })) break;
     if (emulator.ended()) break;
-    if (next_event >= timeline.events.size() && !timeline.events.empty() && o.loop) {
-      start_us = now;
-      next_event = 0;
-    } else if (next_event >= timeline.events.size() && !o.hold && !timeline.events.empty() &&
-               !o.loop && t > timeline.end_time_s() + 0.5) {
-      break;
-    }
     if (server) {
       // Modbus: the firmware cycle writes the registers; the host's writes
       // are read back as the console's feedback.
@@ -143,7 +258,8 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
 
   EmulateOptions emulate;
-  CLI::App* em = app.add_subcommand("emulate", "act as the console's firmware on a CAN transport or as a Modbus slave");
+  CLI::App* em = app.add_subcommand(
+      "emulate", "act as the console's firmware on a CAN transport, as a Modbus slave, or as a HID device (uhid)");
   em->add_option("--panel", emulate.panel, "panel definition (YAML)")->capture_default_str();
   em->add_option("--source", emulate.source, "which source of the panel to emulate (default: the first)");
   CLI::Option* can_option = em->add_option("--can", emulate.can_url,
@@ -154,11 +270,28 @@ int main(int argc, char** argv) {
                  "serve rise-modbus-v1 instead: modbus+tcp-listen://HOST:PORT?unit=N (PORT 0: any free port), "
                  "modbus+rtu-listen:///dev/pts/N?baud=B&unit=N")
       ->excludes(can_option);
+  em->add_option("--hid", emulate.hid_file,
+                 "be a HID device through /dev/uhid, described by this report descriptor (hex dump, C array, "
+                 "hid-recorder R: lines, Android CTS register JSON, xpadneo markdown, binary); the source must be "
+                 "protocol hid, its controls' signals names of the descriptor's input reports")
+      ->excludes(can_option)
+      ->excludes("--modbus");
+  em->add_option("--hid-id", emulate.hid_id,
+                 "VID:PID in hex (default: the descriptor file's, else the source's device: URL)")
+      ->needs("--hid");
+  em->add_option("--hid-name", emulate.hid_name, "product string (default: the descriptor file's name)")
+      ->needs("--hid");
+  em->add_option("--hid-period-ms", emulate.hid_period_ms,
+                 "input reports are repeated at this period, and sent at once on change (0: only on change)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1000.0))
+      ->needs("--hid");
   em->add_option("--script", emulate.script, "timeline file: 'time control value' lines");
   em->add_flag("--loop", emulate.loop, "repeat the script");
   em->add_flag("--hold", emulate.hold, "keep sending the last state after the script ends");
   em->add_flag("--start-on-feedback", emulate.start_on_feedback,
-               "start the script's clock at the first feedback frame from the host");
+               "start the script's clock at the first feedback frame from the host (HID: when the host opens "
+               "the device)");
 
   rise::panels::ReplayOptions replay;
   CLI::App* rp = app.add_subcommand("replay", "play a CAN capture onto a live transport, like canplayer");

@@ -1,6 +1,7 @@
 #include "firmware_protocol/hid_report.hpp"
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 #include <span>
@@ -347,6 +348,162 @@ TEST_CASE("output report fields round-trip through encode and decode", "[firmwar
   CHECK((report[0] & 0x1D) == 0x1D);  // the other LEDs untouched
   std::vector<uint8_t> short_report(2);
   CHECK_FALSE(encoder.encode(force, raw, short_report));
+}
+
+namespace {
+
+// Bits of report `id` (wire bytes, id byte included) that its data fields
+// carry: only these are determined by the signal values.
+std::vector<uint8_t> data_mask(const fp::HidDescriptor& d, fp::HidReportKind kind, uint8_t id) {
+  std::vector<uint8_t> mask(d.report_length(id, kind), 0);
+  const std::size_t skip = d.uses_report_ids ? 1 : 0;
+  if (skip) mask[0] = 0xFF;
+  for (const fp::HidField& f : d.fields) {
+    if (f.kind != kind || f.report_id != id || f.is_constant()) continue;
+    for (uint64_t b = f.bit_offset; b < uint64_t{f.bit_offset} + uint64_t{f.bit_size} * f.count; ++b)
+      mask[skip + b / 8] = static_cast<uint8_t>(mask[skip + b / 8] | (1u << (b % 8)));
+  }
+  return mask;
+}
+
+// The raw value a device would send for a decoded value: the inverse of the
+// decoder, except array slots, whose value is a usage, not an index.
+int64_t raw_for(const fp::HidSignal& s, const fp::HidSignalValue& v) {
+  if (s.kind == fp::HidSignalKind::Array) return v.raw;
+  if (s.kind == fp::HidSignalKind::Hat && v.is_null) return fp::hid_raw_from_value(s, -1.0);
+  return fp::hid_raw_from_value(s, v.value);
+}
+
+// Decodes every CTS report of `tests_file`, turns the values back into raw
+// ones and encodes the report again: the bytes its fields carry must be the
+// CTS bytes. Returns the number of reports checked.
+std::size_t check_cts_reencoding(const std::string& register_file, const std::string& tests_file) {
+  const fp::HidDescriptor descriptor = fp::load_hid_descriptor_file(register_file);
+  const fp::HidReportDecoder decoder(descriptor);
+  const fp::HidInputEncoder encoder(descriptor);
+  REQUIRE(encoder.signals().size() == decoder.signals().size());
+  std::vector<fp::HidSignalValue> values(decoder.signals().size());
+  std::vector<int64_t> raw(encoder.signals().size());
+  std::vector<uint8_t> out(64);
+  std::size_t checked = 0;
+  for (const Json& test : read_json(tests_file).array) {
+    INFO(test["name"].string);
+    for (const Json& report : test["reports"].array) {
+      const std::vector<uint8_t> bytes = bytes_of(report);
+      REQUIRE(decoder.decode(bytes, values) == fp::HidDecodeStatus::Ok);
+      for (std::size_t i = 0; i < raw.size(); ++i) raw[i] = raw_for(encoder.signals()[i], values[i]);
+      const uint8_t id = descriptor.uses_report_ids ? bytes[0] : 0;
+      const std::size_t length = encoder.encode_report(id, raw, out);
+      REQUIRE(length == bytes.size());
+      const std::vector<uint8_t> mask = data_mask(descriptor, fp::HidReportKind::Input, id);
+      for (std::size_t b = 0; b < length; ++b) {
+        INFO("byte " << b);
+        CHECK((out[b] & mask[b]) == (bytes[b] & mask[b]));
+        CHECK((out[b] & ~mask[b]) == 0);  // padding is sent as 0
+      }
+      ++checked;
+    }
+  }
+  return checked;
+}
+
+}  // namespace
+
+TEST_CASE("input encoder reproduces the Android CTS raw reports from their decoded values", "[firmware_protocol]") {
+  const auto [device, register_name, tests_name, reports] = GENERATE(table<std::string, std::string, std::string, std::size_t>({
+      {"Gravis", "gravis_gamepadprousb_register.json", "gravis_gamepadprousb_keyeventtests.json", 20},
+      {"Gravis", "gravis_gamepadprousb_register.json", "gravis_gamepadprousb_motioneventtests.json", 9},
+      {"Xbox One S", "microsoft_xboxones_register.json", "microsoft_xboxones_keyeventtests.json", 24},
+  }));
+  const std::string reg = data_file("hid/android-cts/" + register_name);
+  const std::string tests = data_file("hid/android-cts/" + tests_name);
+  if (reg.empty() || tests.empty()) {
+    WARN(device << " CTS files not found: skipped");
+    return;
+  }
+  INFO(tests_name);
+  CHECK(check_cts_reencoding(reg, tests) == reports);
+}
+
+TEST_CASE("input encoder and decoder round-trip every signal of real descriptors", "[firmware_protocol]") {
+  const std::string file = GENERATE(as<std::string>{}, "android-cts/gravis_gamepadprousb_register.json",
+                                    "android-cts/microsoft_xboxones_register.json", "hid-tools_SaitekGamepad.hid",
+                                    "hid-tools_PS4ControllerUSB.hid", "hid-tools_PS3Controller.hid",
+                                    "045E_02FF_0005_0001_real.rpt_desc", "xb1s_linux.md");
+  const std::string path = data_file("hid/" + file);
+  if (path.empty()) {
+    WARN(file << " not found: skipped");
+    return;
+  }
+  INFO(file);
+  const fp::HidDescriptor descriptor = fp::load_hid_descriptor_file(path);
+  const fp::HidInputEncoder encoder(descriptor);
+  const fp::HidReportDecoder decoder(descriptor);
+  REQUIRE_FALSE(encoder.signals().empty());
+  // Patterns: every signal at its minimum, its maximum, the middle, and a
+  // pattern that differs between neighbours (catches bits bleeding over).
+  const int pattern = GENERATE(0, 1, 2, 3);
+  std::vector<int64_t> raw(encoder.signals().size());
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    const fp::HidSignal& s = encoder.signals()[i];
+    // Within the logical range and what the field's bits hold: a real
+    // descriptor (045E:02FF) declares 1-bit buttons with a maximum of 65535.
+    const int64_t top = s.logical_min < 0 ? (int64_t{1} << (s.bit_size - 1)) - 1 : (int64_t{1} << s.bit_size) - 1;
+    const int64_t bottom = s.logical_min < 0 ? -(int64_t{1} << (s.bit_size - 1)) : 0;
+    const int64_t lo = std::max(s.logical_min, bottom), hi = std::max(std::min(s.logical_max, top), lo);
+    const int64_t choice[] = {lo, hi, lo + (hi - lo) / 2, i % 2 == 0 ? lo : hi};
+    raw[i] = choice[pattern];
+  }
+  std::size_t longest = 0;
+  for (const uint8_t id : encoder.report_ids()) longest = std::max(longest, encoder.report_length(id));
+  std::vector<uint8_t> report(longest);
+  std::vector<fp::HidSignalValue> values(decoder.signals().size());
+  std::size_t decoded = 0;
+  for (const uint8_t id : encoder.report_ids()) {
+    INFO("report " << int{id});
+    const std::size_t length = encoder.encode_report(id, raw, report);
+    REQUIRE(length == descriptor.report_length(id, fp::HidReportKind::Input));
+    if (descriptor.uses_report_ids) CHECK(report[0] == id);
+    REQUIRE(decoder.decode(std::span<const uint8_t>(report.data(), length), values) == fp::HidDecodeStatus::Ok);
+    for (const uint32_t k : encoder.signals_of(id)) {
+      INFO(encoder.signals()[k].name);
+      CHECK(values[k].raw == raw[k]);
+      ++decoded;
+    }
+  }
+  CHECK(decoded == encoder.signals().size());
+}
+
+TEST_CASE("input encoder refuses unknown report ids and short buffers", "[firmware_protocol]") {
+  // Report id 1: x, y 8 bits; report id 2: 4 buttons + 4 padding bits.
+  const std::vector<uint8_t> descriptor = {
+      0x05, 0x01, 0x09, 0x05, 0xA1, 0x01, 0x85, 0x01, 0x09, 0x30, 0x09, 0x31, 0x15, 0x00, 0x26, 0xFF, 0x00,
+      0x75, 0x08, 0x95, 0x02, 0x81, 0x02, 0x85, 0x02, 0x05, 0x09, 0x19, 0x01, 0x29, 0x04, 0x25, 0x01, 0x75,
+      0x01, 0x95, 0x04, 0x81, 0x02, 0x95, 0x01, 0x75, 0x04, 0x81, 0x01, 0xC0};
+  const fp::HidParseResult parsed = fp::parse_hid_descriptor(descriptor);
+  REQUIRE(parsed);
+  const fp::HidInputEncoder encoder(parsed.descriptor);
+  REQUIRE(encoder.report_ids() == std::vector<uint8_t>{1, 2});
+  std::vector<int64_t> raw(encoder.signals().size(), 1);
+  raw[encoder.find("x")] = 0x12;
+  raw[encoder.find("y")] = 0xFE;
+  std::vector<uint8_t> report(8, 0xAA);
+  SECTION("good: each report carries only its own signals, padding 0") {
+    REQUIRE(encoder.encode_report(1, raw, report) == 3);
+    CHECK(std::vector<uint8_t>(report.begin(), report.begin() + 3) == std::vector<uint8_t>{0x01, 0x12, 0xFE});
+    REQUIRE(encoder.encode_report(2, raw, report) == 2);
+    CHECK(std::vector<uint8_t>(report.begin(), report.begin() + 2) == std::vector<uint8_t>{0x02, 0x0F});
+    CHECK(report[2] == 0xFE);  // beyond the report: untouched
+  }
+  SECTION("bad: nothing is written") {
+    CHECK(encoder.encode_report(3, raw, report) == 0);
+    std::vector<uint8_t> short_report(2, 0xAA);
+    CHECK(encoder.encode_report(1, raw, short_report) == 0);
+    CHECK(short_report == std::vector<uint8_t>{0xAA, 0xAA});
+    std::vector<int64_t> few(1);
+    CHECK(encoder.encode_report(1, few, report) == 0);
+    CHECK(report[0] == 0xAA);
+  }
 }
 
 TEST_CASE("the README's Gravis worked example decodes as documented", "[firmware_protocol]") {

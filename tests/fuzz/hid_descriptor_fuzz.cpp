@@ -38,6 +38,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   } else if (elements <= 1024) {
     const fp::HidDescriptor& d = result.descriptor;
     const fp::HidReportDecoder decoder(d);
+    const fp::HidInputEncoder input_encoder(d);
     std::vector<fp::HidSignalValue> values(decoder.signals().size());
     std::vector<uint8_t> report(64);
     for (std::size_t i = 0; i < report.size(); ++i) report[i] = size > 0 ? data[(i * 7) % size] : 0;
@@ -48,6 +49,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
       for (std::size_t i = 0; i < length; ++i) input[i] = report[i % report.size()];
       if (d.uses_report_ids) input[0] = r.report_id;
       check(decoder.decode(input, values) == fp::HidDecodeStatus::Ok);
+      // Re-encoding what was decoded gives a report that decodes the same.
+      std::vector<int64_t> raw(values.size());
+      for (std::size_t i = 0; i < raw.size(); ++i) raw[i] = values[i].raw;
+      std::vector<uint8_t> again(length);
+      check(input_encoder.encode_report(r.report_id, raw, again) == length);
+      std::vector<fp::HidSignalValue> again_values(values.size());
+      check(decoder.decode(again, again_values) == fp::HidDecodeStatus::Ok);
+      for (const uint32_t k : decoder.signals_of(r.report_id)) check(again_values[k].raw == values[k].raw);
       if (length > 0) {
         check(decoder.decode(std::span<const uint8_t>(input).first(length - 1), values) !=
               fp::HidDecodeStatus::Ok);

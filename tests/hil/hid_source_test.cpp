@@ -14,11 +14,16 @@
 
 #include "firmware_protocol/hid_text.hpp"
 #include "hil/io/hid_device.hpp"
+#include "hil/feedback.hpp"
 #include "hil/panel_mapper.hpp"
+#include "panels/hid_emulator.hpp"
+#include "panels/timeline.hpp"
 #include "panels/panel_definition.hpp"
+#include "tests/hid_test_devices.hpp"
 
 using rise::hil::PanelMapper;
 using rise::hil::PanelSnapshot;
+using rise::test::gravis_descriptor;
 
 namespace {
 
@@ -92,13 +97,6 @@ std::string gamepad_definition(int timeout_ms) {
             ", safe: false}\n";
   return text;
 }
-
-// Bytes of android-cts/gravis_gamepadprousb_register.json (so the mapper
-// tests that need no oracle run without the shared data).
-const std::vector<uint8_t> gravis_descriptor = {
-    0x05, 0x01, 0x09, 0x05, 0xa1, 0x01, 0x05, 0x01, 0x09, 0x01, 0xa1, 0x00, 0x09, 0x30, 0x09, 0x31, 0x15,
-    0x00, 0x26, 0xff, 0x00, 0x75, 0x08, 0x95, 0x02, 0x81, 0x02, 0xc0, 0x05, 0x09, 0x19, 0x01, 0x29, 0x0a,
-    0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x0a, 0x81, 0x02, 0x95, 0x01, 0x75, 0x06, 0x81, 0x01, 0xc0};
 
 std::size_t control(const PanelMapper& m, const std::string& name) { return *m.definition().find_control(name); }
 
@@ -288,4 +286,126 @@ TEST_CASE("hid URLs parse VID:PID and the match options", "[hil]") {
                                    "hid://1:2?interface=x", "socketcan://can0");
   INFO(bad);
   CHECK_FALSE(rise::io::parse_hid_url(bad));
+}
+
+TEST_CASE("hid emulator's reports put the mapper's controls at the timeline's values", "[hil]") {
+  const auto definition = rise::panels::parse_panel_definition(gamepad_definition(0), "gravis.yaml");
+  const auto descriptor = rise::firmware_protocol::parse_hid_descriptor(gravis_descriptor);
+  REQUIRE(descriptor);
+  rise::panels::HidEmulator emulator(definition, 0, descriptor.descriptor);
+  PanelMapper mapper(definition);
+  mapper.on_connection(0, true, 0);
+  REQUIRE(mapper.attach_hid(0, gravis_descriptor));
+  const auto timeline = rise::panels::parse_timeline(
+      "0 hat_x -1\n0 hat_y 1\n0 BUTTON_A pressed\n0 BUTTON_START pressed\n1 hat_x 0\n1 BUTTON_A released\n",
+      "script.txt", definition);
+  int64_t now = 1000;
+  std::size_t next = 0;
+  const auto feed = [&](std::span<const uint8_t> report) {
+    mapper.on_hid_report(0, report, now);
+    return true;
+  };
+  while (next < timeline.events.size() && timeline.events[next].time_s == 0.0) emulator.apply(timeline.events[next++]);
+  REQUIRE(emulator.tick(now, feed) == 1);
+  PanelSnapshot snap = mapper.evaluate(now);
+  REQUIRE_FALSE(snap.failsafe);
+  CHECK(snap.controls[control(mapper, "hat_x")].axis == Approx(-1.0).margin(1e-6));
+  CHECK(snap.controls[control(mapper, "hat_y")].axis == Approx(1.0).margin(1e-6));
+  CHECK(snap.controls[control(mapper, "BUTTON_A")].pressed);
+  CHECK(snap.controls[control(mapper, "BUTTON_START")].pressed);
+  CHECK_FALSE(snap.controls[control(mapper, "BUTTON_B")].pressed);
+  while (next < timeline.events.size()) emulator.apply(timeline.events[next++]);
+  now += 2000;
+  REQUIRE(emulator.tick(now, feed) == 1);
+  snap = mapper.evaluate(now);
+  CHECK(snap.controls[control(mapper, "hat_x")].axis == Approx(0.0).margin(0.01));
+  CHECK_FALSE(snap.controls[control(mapper, "BUTTON_A")].pressed);
+  CHECK(snap.controls[control(mapper, "BUTTON_START")].pressed);
+}
+
+TEST_CASE("panel definition binds a hid source's LEDs to output signals and refuses bad ones", "[hil]") {
+  const std::string head =
+      "panel: p\nsources:\n  - {name: pad, protocol: hid}\n  - {name: console, protocol: rise-can-v1}\n"
+      "controls:\n  - {name: a, kind: button, source: pad, signal: button_1, safe: false}\nfeedback:\n";
+  SECTION("good") {
+    const auto def = rise::panels::parse_panel_definition(
+        head + "  leds: [{name: power, source: pad, signal: usage_0008_0001},\n"
+               "         {name: fault, source: console, bit: 1}]\n",
+        "p.yaml");
+    REQUIRE(def.leds.size() == 2);
+    CHECK(def.leds[0].hid_signal == "usage_0008_0001");
+    CHECK(def.leds[0].source == 0);
+    CHECK(def.leds[0].line == 8);
+    CHECK(def.leds[1].hid_signal.empty());
+    CHECK(def.leds[1].bit == 1);
+  }
+  SECTION("bad") {
+    const auto [feedback, message] = GENERATE(table<std::string, std::string>({
+        {"  leds: [{name: power, source: pad, bit: 0}]\n",
+         "p.yaml:8: feedback.leds.power.bit: a hid source's LED is an output signal of the device: signal: NAME"},
+        {"  leds: [{name: power, source: console, signal: usage_0008_0001}]\n",
+         "p.yaml:8: feedback.leds.power.signal: only for an LED of a hid source (here: bit: 0..31)"},
+        {"  leds: [{name: power, source: pad}]\n", "p.yaml:8: feedback.leds.power.signal: missing"},
+        {"  leds: [{name: power, source: pad, signal: ''}]\n", "p.yaml:8: feedback.leds.power.signal: must not be empty"},
+        {"  leds: [{name: a1, source: pad, signal: usage_0008_0001}, {name: a2, source: pad, signal: usage_0008_0001}]\n",
+         "p.yaml:8: feedback.leds.a2.signal: output signal already bound to another LED"},
+        {"  displays: [{name: speed, source: pad, index: 0}]\n", "p.yaml:8: feedback.displays.speed.source: a hid source has no displays"},
+        {"  buzzer: {source: pad}\n", "p.yaml:8: feedback.buzzer.source: a hid source has no buzzer"},
+    }));
+    INFO(feedback);
+    CHECK_THROWS_WITH(rise::panels::parse_panel_definition(head + feedback, "p.yaml"), Catch::StartsWith(message));
+  }
+}
+
+TEST_CASE("hid feedback sets the LEDs' bits of the device's output report", "[hil]") {
+  using rise::hil::build_hid_feedback;
+  namespace fp = rise::firmware_protocol;
+  const auto definition = rise::panels::parse_panel_definition(
+      "panel: p\nsources:\n  - {name: pad, protocol: hid}\n"
+      "controls:\n  - {name: stop, kind: button, signal: button_2, role: estop, safe: false}\n"
+      "feedback:\n  leds: [{name: power, signal: usage_0008_0001}, {name: fault, signal: usage_0008_0002},\n"
+      "         {name: estop, signal: usage_0008_0003}, {name: lamp, signal: usage_0008_0004}]\n",
+      "p.yaml");
+  const auto parsed = fp::parse_hid_descriptor(rise::test::led_pad_descriptor);
+  REQUIRE(parsed);
+  const fp::HidOutputEncoder encoder(parsed.descriptor);
+  CHECK(rise::hil::hid_feedback_problems(definition, 0, encoder).empty());
+  PanelSnapshot snap;
+  snap.controls.resize(1);
+  rise::hil::FeedbackRequest request;
+  SECTION("the bridge's own LEDs: power on, fault while failsafe, estop while pressed") {
+    snap.failsafe = false;
+    CHECK(build_hid_feedback(definition, 0, request, snap, encoder) == std::vector<std::vector<uint8_t>>{{0x02, 0x01}});
+    snap.failsafe = true;
+    snap.controls[0].pressed = true;
+    CHECK(build_hid_feedback(definition, 0, request, snap, encoder) == std::vector<std::vector<uint8_t>>{{0x02, 0x07}});
+  }
+  SECTION("a request wins over the bridge's own LEDs") {
+    request.leds = {{"lamp", true}, {"power", false}};
+    snap.failsafe = false;
+    CHECK(build_hid_feedback(definition, 0, request, snap, encoder) == std::vector<std::vector<uint8_t>>{{0x02, 0x08}});
+  }
+  SECTION("a device without those outputs gets no report, and a line that says why") {
+    const auto gravis = fp::parse_hid_descriptor(gravis_descriptor);
+    REQUIRE(gravis);
+    const fp::HidOutputEncoder none(gravis.descriptor);
+    CHECK(build_hid_feedback(definition, 0, request, snap, none).empty());
+    const auto problems = rise::hil::hid_feedback_problems(definition, 0, none);
+    REQUIRE(problems.size() == 4);
+    CHECK(problems[0] ==
+          "p.yaml:7: feedback.leds.power.signal: the device has no output signal 'usage_0008_0001' "
+          "(it has no output report)");
+  }
+  SECTION("without report ids the report starts with hidraw's 0") {
+    // 2 buttons in, 5 LEDs out (the HID 1.11 appendix E.6 keyboard's LEDs), no report id.
+    const std::vector<uint8_t> keyboard_leds = {0x05, 0x01, 0x09, 0x05, 0xA1, 0x01, 0x05, 0x09, 0x19, 0x01, 0x29,
+                                                0x02, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x02, 0x81, 0x02,
+                                                0x95, 0x06, 0x81, 0x01, 0x05, 0x08, 0x19, 0x01, 0x29, 0x05, 0x95,
+                                                0x05, 0x91, 0x02, 0x95, 0x03, 0x91, 0x01, 0xC0};
+    const auto k = fp::parse_hid_descriptor(keyboard_leds);
+    REQUIRE(k);
+    snap.failsafe = true;
+    CHECK(build_hid_feedback(definition, 0, request, snap, fp::HidOutputEncoder(k.descriptor)) ==
+          std::vector<std::vector<uint8_t>>{{0x00, 0x03}});
+  }
 }

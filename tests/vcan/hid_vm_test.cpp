@@ -1,81 +1,81 @@
 // hid:// against the real kernel HID stack: a gamepad created through uhid
-// (/dev/uhid, the kernel's user-space HID transport) is found by hidapi's
-// hidraw enumeration, opened by HidDevice, decoded by the bridge, unplugged
-// (UHID_DESTROY) and plugged in again. Runs only inside the VM of
-// run_in_vcan_vm.sh (modules hid, uhid, hid-generic), as root.
+// (/dev/uhid, the kernel's user-space HID transport, driven by
+// io::UhidDevice) is found by hidapi's hidraw enumeration, opened by
+// HidDevice, decoded by the bridge, unplugged (UHID_DESTROY) and plugged in
+// again; the host's feature and output reports reach the device side. Runs
+// only inside the VM of run_in_vcan_vm.sh (modules hid, uhid, hid-generic),
+// as root.
 
 #include <catch2/catch.hpp>
 
 #include <fcntl.h>
-#include <linux/uhid.h>
+#include <linux/hidraw.h>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
-#include <cstring>
+#include <fstream>
 #include <functional>
+#include <iterator>
+#include <mutex>
+#include <span>
 #include <thread>
 
+#include "app/child_process.hpp"
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/bridge.hpp"
 #include "hil/io/hid_device.hpp"
+#include "hil/io/uhid_device.hpp"
+#include "panels/hid_emulator.hpp"
 #include "panels/panel_definition.hpp"
+#include "panels/timeline.hpp"
+#include "tests/hid_test_devices.hpp"
 
 namespace io = rise::io;
 using rise::hil::Bridge;
 using rise::hil::PanelSnapshot;
+using rise::test::gravis_descriptor;
+using rise::test::led_pad_descriptor;
 
 namespace {
 
-// Gravis GamePad Pro USB (0428:4001), the descriptor of Android's CTS test
-// gravis_gamepadprousb_register.json: x, y (8 bits each), buttons 1..10.
-const uint8_t gravis_descriptor[] = {
-    0x05, 0x01, 0x09, 0x05, 0xa1, 0x01, 0x05, 0x01, 0x09, 0x01, 0xa1, 0x00, 0x09, 0x30, 0x09, 0x31, 0x15,
-    0x00, 0x26, 0xff, 0x00, 0x75, 0x08, 0x95, 0x02, 0x81, 0x02, 0xc0, 0x05, 0x09, 0x19, 0x01, 0x29, 0x0a,
-    0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x0a, 0x81, 0x02, 0x95, 0x01, 0x75, 0x06, 0x81, 0x01, 0xc0};
+// The bus is UhidSettings' default, Bluetooth (see there).
+io::UhidSettings uhid_settings(const char* name, const char* uniq, uint16_t vendor_id, uint16_t product_id,
+                               std::span<const uint8_t> descriptor) {
+  io::UhidSettings s;
+  s.name = name;
+  s.uniq = uniq;
+  s.vendor_id = vendor_id;
+  s.product_id = product_id;
+  s.descriptor.assign(descriptor.begin(), descriptor.end());
+  return s;
+}
 
-// One virtual device on /dev/uhid: created in the constructor, destroyed
-// (unplugged) by destroy() or the destructor.
+// One virtual Gravis pad on /dev/uhid, plugged in by the constructor and
+// unplugged by destroy() or the destructor.
 class UhidGamepad {
  public:
-  UhidGamepad() {
-    fd_ = ::open("/dev/uhid", O_RDWR | O_CLOEXEC);
-    REQUIRE(fd_ >= 0);
-    uhid_event ev{};
-    ev.type = UHID_CREATE2;
-    std::strcpy(reinterpret_cast<char*>(ev.u.create2.name), "Gravis GamePad Pro (uhid)");
-    std::strcpy(reinterpret_cast<char*>(ev.u.create2.uniq), "rise-uhid-1");
-    ev.u.create2.rd_size = sizeof(gravis_descriptor);
-    // Bluetooth, not USB: hidapi's hidraw backend looks for a USB parent
-    // device for BUS_USB, and a uhid device has none.
-    ev.u.create2.bus = 0x05;  // BUS_BLUETOOTH
-    ev.u.create2.vendor = 0x0428;
-    ev.u.create2.product = 0x4001;
-    std::memcpy(ev.u.create2.rd_data, gravis_descriptor, sizeof(gravis_descriptor));
-    REQUIRE(::write(fd_, &ev, sizeof(ev)) == static_cast<ssize_t>(sizeof(ev)));
-  }
-  ~UhidGamepad() { destroy(); }
+  UhidGamepad() : device_(settings()) { REQUIRE(device_.create() == io::IoStatus::Ok); }
   UhidGamepad(const UhidGamepad&) = delete;
   UhidGamepad& operator=(const UhidGamepad&) = delete;
 
   void send(std::initializer_list<uint8_t> report) {
-    uhid_event ev{};
-    ev.type = UHID_INPUT2;
-    ev.u.input2.size = static_cast<uint16_t>(report.size());
-    std::copy(report.begin(), report.end(), ev.u.input2.data);
-    REQUIRE(::write(fd_, &ev, sizeof(ev)) == static_cast<ssize_t>(sizeof(ev)));
+    const std::vector<uint8_t> bytes(report);
+    REQUIRE(device_.send_input(bytes) == io::IoStatus::Ok);
   }
-  void destroy() {
-    if (fd_ < 0) return;
-    uhid_event ev{};
-    ev.type = UHID_DESTROY;
-    (void)::write(fd_, &ev, sizeof(ev));
-    ::close(fd_);
-    fd_ = -1;
-  }
+  void destroy() { device_.destroy(); }
 
  private:
-  int fd_ = -1;
+  static io::UhidSettings settings() {
+    return uhid_settings("Gravis GamePad Pro (uhid)", "rise-uhid-1", 0x0428, 0x4001, gravis_descriptor);
+  }
+  io::UhidDevice device_;
 };
+
+io::UhidSettings led_pad_settings() {
+  return uhid_settings("rise LED test pad (uhid)", "rise-led-pad", 0x1209, 0x0001, led_pad_descriptor);
+}
 
 // Polls `done` until it holds or `timeout` passes (the VM runs under TCG:
 // generous deadlines, never fixed sleeps).
@@ -131,6 +131,113 @@ TEST_CASE("HidDevice finds a uhid gamepad by VID:PID and reads its descriptor an
     CHECK(other.reopen() == io::IoStatus::Disconnected);
     io::HidDevice other_serial("hid://0428:4001?serial=nope");
     CHECK(other_serial.reopen() == io::IoStatus::Disconnected);
+  }
+}
+
+// Reads the device's events on a thread of its own, as an emulator does.
+class UhidPoller {
+ public:
+  explicit UhidPoller(io::UhidDevice& device) : device_(device), thread_([this] { run(); }) {}
+  ~UhidPoller() {
+    stop_ = true;
+    thread_.join();
+  }
+  UhidPoller(const UhidPoller&) = delete;
+  UhidPoller& operator=(const UhidPoller&) = delete;
+
+  struct Seen {
+    io::UhidEvent::Kind kind;
+    io::UhidReportType type;
+    uint8_t report_id;
+    std::vector<uint8_t> data;
+    bool answered;
+  };
+  std::vector<Seen> events() const {
+    std::lock_guard lock(mutex_);
+    return events_;
+  }
+  bool saw(io::UhidEvent::Kind kind) const {
+    for (const Seen& e : events())
+      if (e.kind == kind) return true;
+    return false;
+  }
+
+ private:
+  void run() {
+    io::UhidEvent event;
+    while (!stop_) {
+      if (device_.poll(event, 5) != io::IoStatus::Ok) continue;
+      std::lock_guard lock(mutex_);
+      events_.push_back({event.kind, event.report_type, event.report_id,
+                         std::vector<uint8_t>(event.data.begin(), event.data.end()), event.answered});
+    }
+  }
+  io::UhidDevice& device_;
+  mutable std::mutex mutex_;
+  std::vector<Seen> events_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+TEST_CASE("uhid device answers the host's feature requests at once and passes its output reports on", "[vcan]") {
+  io::UhidDevice pad(led_pad_settings());
+  const uint8_t feature[] = {0x03, 0x42};
+  pad.set_report(io::UhidReportType::Feature, 3, feature);
+  REQUIRE(pad.create() == io::IoStatus::Ok);
+  UhidPoller poller(pad);
+  REQUIRE(wait_for([&] { return pad.is_started(); }));
+  io::HidDevice host("hid://1209:0001");
+  REQUIRE(wait_for([&] { return host.reopen() == io::IoStatus::Ok; }));
+  // Open: the kernel's own input-leds handler (CONFIG_INPUT_LEDS=y) opens
+  // every input device with LEDs as soon as it appears, and holds it open,
+  // so no Close follows our reader's.
+  REQUIRE(wait_for([&] { return pad.is_open_by_host(); }));
+  CHECK(host.report_descriptor() ==
+        std::vector<uint8_t>(std::begin(led_pad_descriptor), std::end(led_pad_descriptor)));
+  // The hidraw ioctls as any HID tool uses them (hidapi's feature reports are these).
+  const int fd = ::open(host.path().c_str(), O_RDWR | O_CLOEXEC);
+  REQUIRE(fd >= 0);
+  using Clock = std::chrono::steady_clock;
+
+  // GetReport: the stored feature report, without the kernel's 5 s wait.
+  uint8_t buffer[2] = {0x03, 0x00};
+  auto t0 = Clock::now();
+  CHECK(::ioctl(fd, HIDIOCGFEATURE(sizeof buffer), buffer) == 2);
+  const auto get_ms = std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count();
+  WARN("feature GetReport answered in " << get_ms << " ms");
+  CHECK(get_ms < 1000);
+  CHECK(buffer[1] == 0x42);
+
+  // SetReport: acknowledged, seen as an event, and read back by the next GetReport.
+  uint8_t set[2] = {0x03, 0x99};
+  CHECK(::ioctl(fd, HIDIOCSFEATURE(sizeof set), set) == 2);
+  REQUIRE(wait_for([&] { return poller.saw(io::UhidEvent::Kind::SetReport); }));
+  buffer[0] = 0x03;
+  CHECK(::ioctl(fd, HIDIOCGFEATURE(sizeof buffer), buffer) == 2);
+  CHECK(buffer[1] == 0x99);
+
+  // A report nobody stored: an error at once, not a timeout.
+  uint8_t unknown[2] = {0x07, 0x00};
+  t0 = Clock::now();
+  CHECK(::ioctl(fd, HIDIOCGFEATURE(sizeof unknown), unknown) < 0);
+  CHECK(std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - t0).count() < 1000);
+  ::close(fd);
+
+  // An output report written through hidapi arrives whole, id byte first.
+  const uint8_t leds[] = {0x02, 0x05};
+  REQUIRE(host.write(leds) == io::IoStatus::Ok);
+  REQUIRE(wait_for([&] { return poller.saw(io::UhidEvent::Kind::Output); }));
+  for (const auto& e : poller.events()) {
+    if (e.kind == io::UhidEvent::Kind::SetReport) {
+      CHECK(e.type == io::UhidReportType::Feature);
+      CHECK(e.report_id == 3);
+      CHECK(e.data == std::vector<uint8_t>{0x03, 0x99});
+    }
+    if (e.kind == io::UhidEvent::Kind::GetReport) CHECK(e.answered == (e.report_id == 3));
+    if (e.kind == io::UhidEvent::Kind::Output) {
+      CHECK(e.type == io::UhidReportType::Output);
+      CHECK(e.data == std::vector<uint8_t>{0x02, 0x05});
+    }
   }
 }
 
@@ -193,4 +300,225 @@ TEST_CASE("bridge decodes a uhid gamepad, goes failsafe when it is unplugged and
   CHECK(snap.controls[control("stick_x")].axis == Approx(0.0).margin(0.01));
   CHECK(snap.sources[0].reconnects == 1);
   bridge.stop();
+}
+
+namespace {
+
+// rise-panel emulate --hid in a thread: the HidEmulator plays a timeline
+// over a real UhidDevice and takes the host's output reports, as the
+// program's loop does.
+class EmulatedPad {
+ public:
+  EmulatedPad(const rise::panels::PanelDefinition& definition, const std::string& script)
+      : timeline_(rise::panels::parse_timeline(script, "script.txt", definition)),
+        emulator_(definition, 0, parsed_led_pad()),
+        device_(led_pad_settings()) {
+    plug();
+    thread_ = std::thread([this] { run(); });
+  }
+  ~EmulatedPad() {
+    stop_ = true;
+    thread_.join();
+  }
+  EmulatedPad(const EmulatedPad&) = delete;
+  EmulatedPad& operator=(const EmulatedPad&) = delete;
+
+  // The script's clock starts at the first call.
+  void start_script() {
+    std::lock_guard lock(mutex_);
+    script_start_ = std::chrono::steady_clock::now();
+    started_ = true;
+  }
+  bool script_done() const {
+    std::lock_guard lock(mutex_);
+    return next_ == timeline_.events.size();
+  }
+  void unplug() {
+    std::lock_guard lock(mutex_);
+    device_.destroy();
+  }
+  void plug() {
+    std::lock_guard lock(mutex_);
+    REQUIRE(device_.create() == io::IoStatus::Ok);
+  }
+  std::string feedback_text() const {
+    std::lock_guard lock(mutex_);
+    return emulator_.feedback_text();
+  }
+  int64_t outputs_received() const {
+    std::lock_guard lock(mutex_);
+    return emulator_.outputs_received();
+  }
+  int64_t reports_sent() const {
+    std::lock_guard lock(mutex_);
+    return emulator_.reports_sent();
+  }
+
+ private:
+  static rise::firmware_protocol::HidDescriptor parsed_led_pad() {
+    auto parsed = rise::firmware_protocol::parse_hid_descriptor(led_pad_descriptor);
+    REQUIRE(parsed);
+    return parsed.descriptor;
+  }
+  void run() {
+    io::UhidEvent event;
+    while (!stop_) {
+      {
+        std::lock_guard lock(mutex_);
+        const auto now = std::chrono::steady_clock::now();
+        const double t = std::chrono::duration<double>(now - script_start_).count();
+        while (started_ && next_ < timeline_.events.size() && timeline_.events[next_].time_s <= t)
+          emulator_.apply(timeline_.events[next_++]);
+        if (device_.is_created())
+          emulator_.tick(device_, std::chrono::duration_cast<std::chrono::microseconds>(now.time_since_epoch()).count());
+        while (device_.poll(event, 0) == io::IoStatus::Ok)
+          if (event.kind == io::UhidEvent::Kind::Output) emulator_.on_output(event.data);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  }
+
+  rise::panels::Timeline timeline_;
+  rise::panels::HidEmulator emulator_;
+  io::UhidDevice device_;
+  mutable std::mutex mutex_;
+  std::chrono::steady_clock::time_point script_start_;
+  bool started_ = false;
+  std::size_t next_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+const char* led_pad_panel =
+    "panel: led-pad\n"
+    "sources:\n"
+    "  - {name: pad, protocol: hid, device: 'hid://1209:0001', timeout_ms: 200}\n"
+    "controls:\n"
+    "  - {name: drive_x, kind: axis, signal: x, safe: 0}\n"
+    "  - {name: drive_y, kind: axis, signal: y, safe: 0}\n"
+    "  - {name: deadman, kind: button, signal: button_1, role: deadman, safe: false}\n"
+    "  - {name: horn, kind: button, signal: button_8, safe: false}\n"
+    "feedback:\n"
+    "  leds: [{name: power, signal: usage_0008_0001}, {name: fault, signal: usage_0008_0002},\n"
+    "         {name: lamp, signal: usage_0008_0004}]\n";
+
+std::string fmt_hex(uint8_t b) {
+  const char* digits = "0123456789abcdef";
+  return {digits[b >> 4], digits[b & 15]};
+}
+
+int64_t ms_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t).count();
+}
+
+}  // namespace
+
+TEST_CASE("the HID emulator's timeline reaches the bridge through uhid, and the bridge's LEDs come back", "[vcan]") {
+  const auto definition = rise::panels::parse_panel_definition(led_pad_panel, "led_pad.yaml");
+  EmulatedPad pad(definition,
+                  "0.0 drive_x 0.5\n0.0 drive_y -1\n0.0 deadman pressed\n"
+                  "0.3 horn pressed\n0.3 drive_x -0.25\n");
+  std::vector<rise::hil::SourceTransport> transports(1);
+  transports[0].hid = std::make_unique<io::HidDevice>("hid://1209:0001");
+  Bridge bridge(definition, std::move(transports), [](const PanelSnapshot&) {});
+  bridge.start();
+  const auto control = [&](const char* name) { return *bridge.definition().find_control(name); };
+
+  // The emulator sends its resting state every 8 ms: the panel is healthy
+  // before the script starts, sticks centred.
+  REQUIRE(wait_for([&] { return !bridge.snapshot().failsafe; }));
+  PanelSnapshot snap = bridge.snapshot();
+  CHECK(snap.controls[control("drive_x")].axis == Approx(0.0).margin(0.005));
+  CHECK_FALSE(snap.controls[control("deadman")].pressed);
+  // On open the bridge wrote the LEDs' output report; once the panel is ok
+  // the fault LED goes dark (checked every feedback period, 100 ms).
+  REQUIRE(wait_for([&] { return pad.feedback_text() == "leds power=on fault=off lamp=off; outputs usage_0008_0003=0"; }));
+
+  const auto script_started = std::chrono::steady_clock::now();
+  pad.start_script();
+  REQUIRE(wait_for([&] { return bridge.snapshot().controls[control("deadman")].pressed; }));
+  WARN("emulator timeline -> bridge snapshot (first event): " << ms_since(script_started) << " ms");
+  snap = bridge.snapshot();
+  CHECK(snap.controls[control("drive_x")].axis == Approx(0.5).margin(1.0 / 255));
+  CHECK(snap.controls[control("drive_y")].axis == Approx(-1.0).margin(1e-6));
+  REQUIRE(wait_for([&] { return pad.script_done() && bridge.snapshot().controls[control("horn")].pressed; }));
+  snap = bridge.snapshot();
+  CHECK(snap.controls[control("drive_x")].axis == Approx(-0.25).margin(1.0 / 255));
+  CHECK(snap.controls[control("drive_y")].axis == Approx(-1.0).margin(1e-6));
+  CHECK(snap.controls[control("deadman")].pressed);
+  CHECK_FALSE(snap.failsafe);
+
+  // A feedback request: the lamp's bit arrives in the next output report.
+  const auto requested = std::chrono::steady_clock::now();
+  rise::hil::FeedbackRequest request;
+  request.leds = {{"lamp", true}};
+  bridge.set_feedback(request);
+  REQUIRE(wait_for([&] { return pad.feedback_text() == "leds power=on fault=off lamp=on; outputs usage_0008_0003=0"; }));
+  WARN("feedback request -> output report at the device: " << ms_since(requested) << " ms");
+  CHECK(bridge.take_notes().empty());  // every LED has its output signal
+
+  // Unplug: failsafe, the fault LED cannot be shown any more (the device is
+  // gone). Plug again: reopened by enumeration, the LEDs written at once.
+  const auto unplugged = std::chrono::steady_clock::now();
+  pad.unplug();
+  REQUIRE(wait_for([&] { return bridge.snapshot().failsafe; }));
+  WARN("emulator unplugged -> failsafe: " << ms_since(unplugged) << " ms");
+  snap = bridge.snapshot();
+  CHECK(snap.failsafe_reason == "pad: disconnected");
+  CHECK(snap.controls[control("horn")].forced_safe);
+  CHECK_FALSE(snap.controls[control("deadman")].pressed);
+  const int64_t outputs_before = pad.outputs_received();
+  const auto plugged = std::chrono::steady_clock::now();
+  pad.plug();
+  REQUIRE(wait_for([&] { return !bridge.snapshot().failsafe; }));
+  WARN("emulator plugged -> bridge ok again: " << ms_since(plugged) << " ms");
+  snap = bridge.snapshot();
+  CHECK(snap.sources[0].reconnects == 1);
+  CHECK(snap.controls[control("horn")].pressed);  // the emulator kept its state, as a pad's firmware would
+  CHECK(snap.controls[control("drive_x")].axis == Approx(-0.25).margin(1.0 / 255));
+  REQUIRE(wait_for([&] { return pad.outputs_received() > outputs_before; }));
+  REQUIRE(wait_for([&] { return pad.feedback_text() == "leds power=on fault=off lamp=on; outputs usage_0008_0003=0"; }));
+  CHECK(pad.reports_sent() > 0);
+  bridge.stop();
+}
+
+TEST_CASE("rise-panel emulate --hid is a HID device the bridge reads and lights", "[vcan]") {
+  // The program as a user runs it, its files written here.
+  {
+    std::ofstream("/tmp/led_pad.yaml") << led_pad_panel;
+    std::ofstream("/tmp/led_pad_script.txt") << "0.0 drive_y 1\n0.0 deadman pressed\n0.2 horn pressed\n";
+    std::ofstream hex("/tmp/led_pad.hex");
+    hex << "# the LED test pad of tests/hid_test_devices.hpp\n";
+    for (const uint8_t b : led_pad_descriptor) hex << fmt_hex(b) << ' ';
+  }
+  rise::app::ChildProcess panel({RISE_PANEL_BIN, "emulate", "--hid", "/tmp/led_pad.hex", "--hid-id", "1209:0003",
+                                 "--hid-name", "rise-panel LED pad", "--panel", "/tmp/led_pad.yaml", "--script",
+                                 "/tmp/led_pad_script.txt", "--hold"},
+                                "/tmp/rise-panel.log");
+  const auto log = [] {
+    std::ifstream in("/tmp/rise-panel.log");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  std::vector<rise::hil::SourceTransport> transports(1);
+  transports[0].hid = std::make_unique<io::HidDevice>("hid://1209:0003?name=rise-panel LED pad");
+  Bridge bridge(rise::panels::parse_panel_definition(led_pad_panel, "led_pad.yaml"), std::move(transports),
+                [](const PanelSnapshot&) {});
+  bridge.start();
+  const auto control = [&](const char* name) { return *bridge.definition().find_control(name); };
+  INFO(log());
+  REQUIRE(wait_for([&] { return bridge.snapshot().controls[control("horn")].pressed; }));
+  PanelSnapshot snap = bridge.snapshot();
+  CHECK_FALSE(snap.failsafe);
+  CHECK(snap.controls[control("drive_y")].axis == Approx(1.0).margin(1e-6));
+  CHECK(snap.controls[control("deadman")].pressed);
+  CHECK(snap.controls[control("drive_x")].axis == Approx(0.0).margin(0.005));
+  rise::hil::FeedbackRequest request;
+  request.leds = {{"lamp", true}};
+  bridge.set_feedback(request);
+  REQUIRE(wait_for([&] {
+    return log().find("feedback: leds power=on fault=off lamp=on; outputs usage_0008_0003=0") != std::string::npos;
+  }));
+  bridge.stop();
+  CHECK(panel.stop() == 0);  // SIGTERM: a clean stop that unplugs the device
+  CHECK(log().find("rise-panel stopped: ") != std::string::npos);
 }
