@@ -14,8 +14,10 @@ build=${RISE_BUILD_DIR:-$root/build}
 # tests talk to (python3-can for socketcand, socat for pty pairs, clang's
 # libFuzzer runtime for the fuzz targets, Debian's own kernel + qemu +
 # can-utils for the SocketCAN tests under a real CAN stack, mbpoll and
-# pymodbus as Modbus peers). Installing linux-image-amd64 only adds files
-# under /boot and /lib/modules; it does not change how the machine boots.
+# pymodbus as Modbus peers, hidapi + libusb for HID devices, udev's
+# systemd-udevd for the USB hot-plug test inside the VM). Installing
+# linux-image-amd64 only adds files under /boot and /lib/modules; it does not
+# change how the machine boots.
 packages=(
   cmake ninja-build g++ pkg-config
   libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2
@@ -23,7 +25,7 @@ packages=(
   clang libclang-rt-14-dev
   qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
-  libhidapi-dev libusb-1.0-0-dev
+  libhidapi-dev libusb-1.0-0-dev udev
 )
 
 setup() {
