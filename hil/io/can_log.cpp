@@ -215,6 +215,7 @@ CanLogReader::LineResult CanLogReader::parse_line(std::string_view line, CanLogR
       if (!parsed.ok()) return LineResult::Malformed;
       record.frame = parsed.record.frame;
       record.channel = std::move(parsed.record.interface);
+      record.tx = parsed.record.tx;
       return LineResult::Frame;
     }
     case CanLogFormat::VectorAsc: return parse_asc(line, record);

@@ -59,42 +59,61 @@ const char* to_string(CandumpError error) {
   return "?";
 }
 
+std::optional<int64_t> parse_log_time(std::string_view line, std::string_view* rest) {
+  if (line.empty() || line.front() != '(') return std::nullopt;
+  const auto close = line.find(')');
+  const auto dot = line.find('.');
+  if (close == std::string_view::npos || dot == std::string_view::npos || dot > close) return std::nullopt;
+  int64_t sec = 0, usec = 0;
+  // 12 digits of seconds reach year 33658: more is not a time (and would overflow).
+  if (dot - 1 == 0 || dot - 1 > 12) return std::nullopt;
+  for (char c : line.substr(1, dot - 1)) {
+    if (c < '0' || c > '9') return std::nullopt;
+    sec = sec * 10 + (c - '0');
+  }
+  const auto frac = line.substr(dot + 1, close - dot - 1);
+  if (frac.empty() || frac.size() > 9) return std::nullopt;
+  int digits = 0;
+  for (char c : frac) {
+    if (c < '0' || c > '9') return std::nullopt;
+    if (digits++ < 6) usec = usec * 10 + (c - '0');
+  }
+  for (; digits < 6; ++digits) usec *= 10;
+  if (rest) *rest = line.substr(close + 1);
+  return sec * 1'000'000 + usec;
+}
+
+void append_log_time(std::string& out, int64_t time_us) {
+  char text[48];
+  const int n = std::snprintf(text, sizeof text, "(%lld.%06lld)", static_cast<long long>(time_us / 1'000'000),
+                              static_cast<long long>(time_us % 1'000'000));
+  out.append(text, static_cast<std::size_t>(n));
+}
+
 CandumpParse parse_candump_line(std::string_view line) {
   CandumpParse r;
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
   while (!line.empty() && line.front() == ' ') line.remove_prefix(1);
   if (line.empty()) return r.error = CandumpError::Empty, r;
-  if (line.front() != '(') return r.error = CandumpError::NoTimestamp, r;
-  const auto close = line.find(')');
-  const auto dot = line.find('.');
-  if (close == std::string_view::npos || dot == std::string_view::npos || dot > close)
-    return r.error = CandumpError::NoTimestamp, r;
-  int64_t sec = 0, usec = 0;
-  // 12 digits of seconds reach year 33658: more is not a time (and would overflow).
-  if (dot - 1 == 0 || dot - 1 > 12) return r.error = CandumpError::NoTimestamp, r;
-  for (char c : line.substr(1, dot - 1)) {
-    if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
-    sec = sec * 10 + (c - '0');
-  }
-  const auto frac = line.substr(dot + 1, close - dot - 1);
-  if (frac.empty() || frac.size() > 9) return r.error = CandumpError::NoTimestamp, r;
-  int digits = 0;
-  for (char c : frac) {
-    if (c < '0' || c > '9') return r.error = CandumpError::NoTimestamp, r;
-    if (digits++ < 6) usec = usec * 10 + (c - '0');
-  }
-  for (; digits < 6; ++digits) usec *= 10;
-  r.record.frame.timestamp_us = sec * 1'000'000 + usec;
+  std::string_view rest;
+  const std::optional<int64_t> time_us = parse_log_time(line, &rest);
+  if (!time_us) return r.error = CandumpError::NoTimestamp, r;
+  r.record.frame.timestamp_us = *time_us;
 
-  std::string_view rest = line.substr(close + 1);
   while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
   const auto space = rest.find(' ');
   if (space == std::string_view::npos || space == 0) return r.error = CandumpError::NoInterface, r;
   r.record.interface = std::string(rest.substr(0, space));
   rest = rest.substr(space + 1);
   while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
-  // Anything after the frame (candump -x adds " R" / " T") is ignored.
-  if (const auto end = rest.find(' '); end != std::string_view::npos) rest = rest.substr(0, end);
+  // After the frame candump -x and python-can write the direction (" R" /
+  // " T"); anything else there is ignored.
+  if (const auto end = rest.find(' '); end != std::string_view::npos) {
+    std::string_view after = rest.substr(end);
+    while (!after.empty() && after.front() == ' ') after.remove_prefix(1);
+    r.record.tx = after == "T" || after == "t";
+    rest = rest.substr(0, end);
+  }
 
   const auto hash = rest.find('#');
   if (hash == std::string_view::npos) return r.error = CandumpError::BadId, r;
@@ -142,32 +161,38 @@ CandumpParse parse_candump_line(std::string_view line) {
   return r;
 }
 
-std::string format_candump_line(const CanFrame& f, std::string_view interface) {
-  char head[64];
-  std::snprintf(head, sizeof head, "(%lld.%06lld) ", static_cast<long long>(f.timestamp_us / 1'000'000),
-                static_cast<long long>(f.timestamp_us % 1'000'000));
-  std::string out = head;
+std::string format_candump_line(const CanFrame& f, std::string_view interface, CandumpDirection direction) {
+  std::string out;
+  append_candump_line(out, f, interface, direction);
+  return out;
+}
+
+void append_candump_line(std::string& out, const CanFrame& f, std::string_view interface,
+                         CandumpDirection direction) {
+  append_log_time(out, f.timestamp_us);
+  out += ' ';
   out += interface;
   char id[16];
-  if (f.error) std::snprintf(id, sizeof id, " %08X#", f.id | kErrFlag);
-  else if (f.extended) std::snprintf(id, sizeof id, " %08X#", f.id);
-  else std::snprintf(id, sizeof id, " %03X#", f.id);
-  out += id;
+  const int id_len = f.error      ? std::snprintf(id, sizeof id, " %08X#", f.id | kErrFlag)
+                     : f.extended ? std::snprintf(id, sizeof id, " %08X#", f.id)
+                                  : std::snprintf(id, sizeof id, " %03X#", f.id);
+  out.append(id, static_cast<std::size_t>(id_len));
   static const char* digits = "0123456789ABCDEF";
   if (f.remote) {
     out += 'R';
     if (f.len) out += digits[f.len & 0xF];
-    return out;
+  } else {
+    if (f.fd) {
+      out += '#';
+      out += digits[(f.brs ? 1 : 0) | (f.esi ? 2 : 0)];
+    }
+    for (std::size_t i = 0; i < f.len; ++i) {
+      out += digits[f.data[i] >> 4];
+      out += digits[f.data[i] & 0xF];
+    }
   }
-  if (f.fd) {
-    out += '#';
-    out += digits[(f.brs ? 1 : 0) | (f.esi ? 2 : 0)];
-  }
-  for (std::size_t i = 0; i < f.len; ++i) {
-    out += digits[f.data[i] >> 4];
-    out += digits[f.data[i] & 0xF];
-  }
-  return out;
+  if (direction == CandumpDirection::Received) out += " R";
+  if (direction == CandumpDirection::Sent) out += " T";
 }
 
 }  // namespace rise::io
