@@ -136,10 +136,13 @@ VerifyReport verify_replay(const panels::PanelDefinition& definition, std::vecto
 
 /// The first field in which `got` differs from `expected`: failsafe,
 /// failsafe_reason (a number of milliseconds in it, "for 53 ms", may be off
-/// by the time tolerance), deadman, then each axis (within the axis
-/// tolerance), button and switch (position and label); seq, utime, ids and
-/// source health are not compared. nullopt when they match. Fills field,
-/// expected, got and also.
+/// by the time tolerance), deadman, each axis (within the axis tolerance),
+/// button and switch (position and label), then each source's error counters
+/// (crc, counter, length, unknown id, timeouts, exceptions, error frames,
+/// bus-offs, bus state: a corrupt frame that heals within recovery_frames
+/// before the next publish shows only there). seq, utime, ids, frames_ok,
+/// reconnects and ages are not compared. nullopt when they match. Fills
+/// field ("drive_y", "console.crc_errors"), expected, got and also.
 std::optional<VerifyDifference> compare_panel_states(const rise_msgs::PanelState& expected,
                                                      const rise_msgs::PanelState& got,
                                                      const VerifySettings& settings = {});

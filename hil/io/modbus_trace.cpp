@@ -1,5 +1,6 @@
 #include "hil/io/modbus_trace.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
 #include <stdexcept>
@@ -61,16 +62,21 @@ bool has_values(ModbusFunction function, const ModbusResult& result) {
   return write || result.ok();
 }
 
+// The next blank-separated word of `rest` (empty at the end); `rest` moves past it.
+std::string_view next_word(std::string_view& rest) {
+  const auto begin = rest.find_first_not_of(" \t");
+  if (begin == std::string_view::npos) return rest = {}, std::string_view();
+  rest.remove_prefix(begin);
+  const std::size_t end = std::min(rest.find_first_of(" \t"), rest.size());
+  const std::string_view word = rest.substr(0, end);
+  rest.remove_prefix(end);
+  return word;
+}
+
 std::vector<std::string_view> split(std::string_view line) {
-  std::vector<std::string_view> tokens;
-  std::size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-    const std::size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
-    if (i > start) tokens.push_back(line.substr(start, i - start));
-  }
-  return tokens;
+  std::vector<std::string_view> words;
+  for (std::string_view w = next_word(line); !w.empty(); w = next_word(line)) words.push_back(w);
+  return words;
 }
 
 template <typename T>

@@ -6,15 +6,14 @@
 // line ends in " R" (received) or " T" (sent), as candump -x and python-can
 // write it, so a replay can leave out the frames the recorder's owner sent.
 
-#include <chrono>
 #include <cstdint>
-#include <fstream>
 #include <memory>
 #include <mutex>
 #include <string>
 
 #include "hil/io/can_bus.hpp"
 #include "hil/io/candump_log.hpp"
+#include "hil/io/record_file.hpp"
 
 namespace rise::io {
 
@@ -43,22 +42,19 @@ class RecordingBus final : public CanBus {
   const std::string& url() const override { return bus_->url(); }
   std::string last_error() const override { return bus_->last_error(); }
 
-  int64_t frames_recorded() const;
+  int64_t frames_recorded() const { return file_.lines(); }
   /// Writes or flushes that failed (a full disk): the frames are lost, the bus goes on.
-  int64_t write_errors() const;
+  int64_t write_errors() const { return file_.errors(); }
 
  private:
   void record(const CanFrame& frame, CandumpDirection direction);
 
   std::unique_ptr<CanBus> bus_;
   Stamp stamp_;
-  mutable std::mutex mutex_;  // send and receive may come from two threads
-  std::ofstream out_;
+  std::mutex mutex_;  // send and receive may come from two threads: guards file_ and line_
+  RecordFile file_;
   std::string interface_;
   std::string line_;
-  int64_t recorded_ = 0;
-  int64_t write_errors_ = 0;
-  std::chrono::steady_clock::time_point last_flush_;
 };
 
 }  // namespace rise::io

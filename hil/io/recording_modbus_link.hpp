@@ -4,15 +4,14 @@
 // Modbus transaction trace (modbus_trace.hpp), plus the link's reopens and
 // closes, while passing everything through to the link it wraps.
 
-#include <atomic>
 #include <chrono>
 #include <cstdint>
-#include <fstream>
 #include <memory>
 #include <string>
 
 #include "hil/io/modbus_link.hpp"
 #include "hil/io/modbus_trace.hpp"
+#include "hil/io/record_file.hpp"
 
 namespace rise::io {
 
@@ -37,25 +36,21 @@ class RecordingModbusLink final : public ModbusLink {
   ModbusStatus reopen() override;
   void close() override;
 
-  /// Lines written, and writes or flushes that failed. Thread-safe.
-  int64_t lines_recorded() const { return recorded_; }
-  int64_t write_errors() const { return write_errors_; }
+  /// Lines written (the header too), and writes or flushes that failed. Thread-safe.
+  int64_t lines_recorded() const { return file_.lines(); }
+  int64_t write_errors() const { return file_.errors(); }
 
  private:
   using Clock = std::chrono::steady_clock;
   template <typename T>
   ModbusResult transact(ModbusFunction function, uint16_t address, std::span<T> values, ModbusResult result,
                         int64_t time_us, Clock::time_point start);
-  void write_line();
 
   std::unique_ptr<ModbusLink> link_;
-  std::ofstream out_;
+  RecordFile file_;
   std::string source_;
   int unit_;
   std::string line_;
-  std::atomic<int64_t> recorded_{0};  // read by other threads (status lines)
-  std::atomic<int64_t> write_errors_{0};
-  Clock::time_point last_flush_;
 };
 
 }  // namespace rise::io
