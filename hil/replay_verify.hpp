@@ -6,10 +6,13 @@
 // golden LCM log and compares the two field by field.
 //
 // Captures are what `rise-hild --record DIR` writes: a candump log per CAN
-// source (<source>.log; Vector ASC and PEAK TRC read too), a Modbus
-// transaction trace per Modbus source (<source>.modbus.log). Frames the
-// daemon sent (" T") are left out. The records go through the same calls the
-// live bridge makes (hil/source_input.hpp).
+// source (<source>.log), a Modbus transaction trace per Modbus source
+// (<source>.modbus.log). Frames the daemon sent (" T", "Tx") are left out.
+// Vector ASC and PEAK TRC logs replay too, but their times count from the
+// measurement's start, so only a candump log's epoch times line up with a
+// golden's utime. The records go through the same calls the live bridge
+// makes (hil/source_input.hpp). All of this is offline: it allocates, and
+// throws on bad input; nothing here is for the cyclic path.
 //
 // What a capture cannot say is taken as follows. A CAN log has no record of
 // the transport opening or closing: a CAN source is connected from its

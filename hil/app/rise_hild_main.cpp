@@ -56,7 +56,8 @@ int main(int argc, char** argv) {
   app.add_option("--record", record_dir,
                  "record the session into DIR (created): <source>.log (CAN, candump -l), <source>.modbus.log "
                  "(Modbus transaction trace), panel_state.lcmlog (every PanelState, lcm-logger's format); "
-                 "`rise-hild verify --record-dir DIR` replays it");
+                 "`rise-hild verify --record-dir DIR` replays it")
+      ->type_name("DIR");
   // Inspection commands a lab runs before wiring a console in.
   app.require_subcommand(0, 1);
   std::string dbc_file, log_file;
@@ -82,10 +83,12 @@ int main(int argc, char** argv) {
   verify->add_option("--panel", verify_options.panel, "panel definition (YAML)")->capture_default_str();
   verify->add_option("--capture", verify_options.captures,
                      "capture file, named SOURCE.log (CAN: candump, ASC, TRC) or SOURCE.modbus.log (Modbus trace), "
-                     "or SOURCE=FILE; one per source");
+                     "or SOURCE=FILE; one per source")
+      ->type_name("FILE");
   verify->add_option("--record-dir", verify_options.record_dir,
-                     "a `rise-hild --record` directory: its captures, and panel_state.lcmlog as the golden");
-  verify->add_option("--golden", verify_options.golden, "golden LCM log (lcm-logger or --record)");
+                     "a `rise-hild --record` directory: its captures, and panel_state.lcmlog as the golden")
+      ->type_name("DIR");
+  verify->add_option("--golden", verify_options.golden, "golden LCM log (lcm-logger or --record)")->type_name("FILE");
   verify->add_option("--id", verify_options.id, "station id: compare rise/<id>/panel_state (default: the log's one)");
   verify->add_option("--tolerance", verify_options.axis_tolerance, "largest axis difference that matches")
       ->capture_default_str();

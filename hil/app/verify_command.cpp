@@ -35,8 +35,8 @@ int verify_command(const VerifyOptions& o, std::ostream& out, std::ostream& err)
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   char summary[256];
-  std::snprintf(summary, sizeof summary, "%zu of %zu PanelState messages on %s matched (%zu within the time tolerance), "
-                "%lld capture records replayed in %.3f s",
+  std::snprintf(summary, sizeof summary, "%zu of %zu PanelState messages on %s matched (%zu only off their utime, within the time "
+                "tolerance); %lld capture records replayed in %.3f s",
                 report.messages, golden.messages.size(), golden.channel.c_str(), report.off_time,
                 static_cast<long long>(report.records), seconds);
   if (report.passed()) {
