@@ -6,7 +6,8 @@
 //
 //   # rise-hild modbus trace v1
 //   (1700000000.000000) console link open
-//   (1700000000.001234) console unit=1 fc=04 addr=0 count=18 rtt_us=412 ok 0000 3333 ... 0001 0001 0000 0BB8 002A 9C1E
+//   (1700000000.001234) console unit=1 fc=04 addr=0 count=18 rtt_us=66 ok C000 6666 0000 0000 0000 0000 0000 0001
+//                       0000 0000 0000 0000 0001 0001 0000 0258 003D 3419   (one line in the file)
 //   (1700000000.001700) console unit=1 fc=02 addr=0 count=32 rtt_us=288 ok 10000000000000000000000000000000
 //   (1700000000.011234) console unit=1 fc=15 addr=0 count=8 rtt_us=301 ok 10100000
 //   (1700000000.011600) console unit=1 fc=16 addr=0 count=25 rtt_us=350 ok 0000 0002 0000 002A 0000 ...
@@ -27,11 +28,14 @@
 // closed" (the state when recording began), "reopen ok" / "reopen failed",
 // "close". Lines starting with '#' are comments.
 //
-// Worked example: the second line is a poll of the console's 18 input
-// registers (rise-modbus-v1, firmware_protocol/console_modbus.hpp) that took
-// 412 µs: axis.0 = 0x0000, axis.1 = 0x3333 (0.4 of full scale), ...,
-// status 1 (operational), version 1, uptime 0x00000BB8 = 3000 ms, alive
-// counter 0x002A, CRC 0x9C1E; the third line reads button.0 held.
+// Worked example (the values of a poll in tests/data/replay/modbus/console.modbus.log): a
+// poll of the console's 18 input registers (rise-modbus-v1,
+// firmware_protocol/console_modbus.hpp) answered in 66 µs: axis.0 = 0xC000
+// (-16384, drive_x -0.5), axis.1 = 0x6666 (26214, drive_y 0.8), axes 2..5 = 0,
+// switch.0 = 0, switch.1 = 1 (speed medium), switches 2..5 = 0, status 1
+// (operational), version 1, uptime 0x00000258 = 600 ms, alive counter 0x003D,
+// CRC-16/MODBUS of registers 0..16 = 0x3419; the fc=02 line after it reads
+// button.0 (the dead-man) held.
 // `grep ' fc=04 .* timeout'` lists the polls that went unanswered.
 
 #include <cstdint>
