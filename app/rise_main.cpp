@@ -49,6 +49,7 @@ struct DemoOptions {
   std::string panel = "panels/definitions/rise_console.yaml";
   std::string robot = "sim/robots/skid4.yaml";
   std::string log_dir;
+  std::string record_dir;  ///< passed to rise-hild --record
   uint16_t port = 0;
   double timeout_s = 45.0;
 };
@@ -75,10 +76,10 @@ int run_demo(const DemoOptions& o) {
     children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url,
                                                    "--robot", rise::panels::find_data_file(o.robot)},
                           log_dir + "/rise-sim.log");
-    children.emplace_back(
-        std::vector<std::string>{bin + "/rise-hild", "--panel", rise::panels::find_data_file(o.panel),
-                                 "--can", "socketcand://" + bus, "--id", o.id, "--lcm", o.lcm_url},
-        log_dir + "/rise-hild.log");
+    std::vector<std::string> hild{bin + "/rise-hild", "--panel", rise::panels::find_data_file(o.panel),
+                                  "--can", "socketcand://" + bus, "--id", o.id, "--lcm", o.lcm_url};
+    if (!o.record_dir.empty()) hild.insert(hild.end(), {"--record", o.record_dir});
+    children.emplace_back(hild, log_dir + "/rise-hild.log");
     children.emplace_back(
         std::vector<std::string>{bin + "/rise-panel", "emulate", "--panel",
                                  rise::panels::find_data_file(o.panel), "--can",
@@ -184,6 +185,9 @@ int run_demo(const DemoOptions& o) {
   const bool silent = v.loss_reason.find("stale") != std::string::npos;
   report("source loss", v.loss_stop, silent ? source_timeout_s : 0.0, silent ? "source timeout + " : "");
   if (!v.loss_reason.empty()) std::printf("source loss seen as   %s\n", v.loss_reason.c_str());
+  if (!o.record_dir.empty())
+    std::printf("recorded into         %s (rise-hild verify --panel %s --record-dir %s)\n", o.record_dir.c_str(),
+                o.panel.c_str(), o.record_dir.c_str());
   if (!v.deadman_stop.stopped || !v.loss_stop.stopped) rc = 1;
   std::printf("result                %s\n", rc == 0 ? "ok" : "FAILED");
   return rc;
@@ -251,6 +255,9 @@ int main(int argc, char** argv) {
   d->add_option("--port", demo.port, "socketcand TCP port (default: a free one)");
   d->add_option("--log-dir", demo.log_dir, "where the children's logs go (default /tmp/rise-demo-PID)");
   d->add_option("--timeout", demo.timeout_s, "give up after S seconds")->capture_default_str();
+  d->add_option("--record", demo.record_dir,
+                "rise-hild records the session into DIR (rise-hild --record); replay it with "
+                "`rise-hild verify --record-dir DIR`");
   std::string status_id = "t1";
   std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
   double status_every_s = 1.0;

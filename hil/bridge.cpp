@@ -8,6 +8,7 @@
 
 #include "firmware_protocol/console_modbus.hpp"
 #include "firmware_protocol/hid_report.hpp"
+#include "hil/source_input.hpp"
 
 namespace rise::hil {
 namespace {
@@ -175,23 +176,10 @@ void Bridge::source_loop(std::size_t source) {
 
     const io::IoStatus st = bus.receive(frame, 5);
     if (st == io::IoStatus::Ok) {
-      // rise-can-v1 is classic 11-bit only; a DBC device may use FD and 29-bit ids.
-      if (frame.error) {
-        bool changed;
-        {
-          std::lock_guard lock(mutex_);
-          changed = mapper_.on_bus_error(source, io::describe_can_error(frame), monotonic_us());
-          changed_ = changed_ || changed;
-        }
-        if (changed) wake_.notify_all();  // bus-off is published at once
-        continue;
-      }
-      if (frame.remote || (!is_dbc && frame.fd)) continue;
       bool changed;
       {
         std::lock_guard lock(mutex_);
-        changed = mapper_.on_frame(source, frame.id, std::span<const uint8_t>(frame.data.data(), frame.len),
-                                   monotonic_us(), frame.extended);
+        changed = apply_can_frame(mapper_, source, frame, monotonic_us());  // bus-off is published at once too
         changed_ = changed_ || changed;
       }
       if (changed) wake_.notify_all();
@@ -204,24 +192,10 @@ void Bridge::source_loop(std::size_t source) {
 
 // Counts a failed Modbus request; false when the link was closed. Caller holds mutex_.
 bool Bridge::report_modbus(std::size_t source, const io::ModbusResult& result) {
-  using E = PanelMapper::SourceError;
-  const int64_t now = monotonic_us();
-  switch (result.status) {
-    case io::ModbusStatus::Ok: return true;
-    case io::ModbusStatus::Timeout: mapper_.on_source_error(source, E::Timeout, now); break;
-    case io::ModbusStatus::Exception: mapper_.on_source_error(source, E::Exception, now); break;
-    case io::ModbusStatus::CrcError: mapper_.on_source_error(source, E::LinkCrc, now); break;
-    case io::ModbusStatus::Disconnected:
-    case io::ModbusStatus::Error: break;
-  }
-  if (modbus_links_[source]->is_open()) return true;
-  // A timeout only closed the link for a clean restart (see modbus_source_loop).
-  if (result.status != io::ModbusStatus::Timeout) mapper_.on_connection(source, false, now);
-  return false;
+  return apply_modbus_result(mapper_, source, result, modbus_links_[source]->is_open(), monotonic_us());
 }
 
 void Bridge::modbus_source_loop(std::size_t source) {
-  using E = PanelMapper::SourceError;
   io::ModbusLink& link = *modbus_links_[source];
   const panels::SourceDefinition& def = mapper_.definition().sources[source];
   const auto poll_period_us = static_cast<int64_t>(1e6 / def.poll_hz);
@@ -284,19 +258,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
       if (!report_modbus(source, r)) continue;
       mapper_.on_connection(source, true, now);
       if (r.ok()) {
-        uint32_t discrete = 0;
-        for (std::size_t i = 0; i < bits.size(); ++i)
-          if (bits[i] != 0) discrete |= 1u << i;
-        const fp::ModbusInputsResult d = fp::decode_inputs(registers, discrete, last_counter);
-        switch (d.error) {
-          case fp::ModbusDecodeError::None:
-            changed = mapper_.on_inputs(source, d.inputs, now);
-            last_counter = d.inputs.alive_counter;
-            break;
-          case fp::ModbusDecodeError::BadCrc: mapper_.on_source_error(source, E::BadCrc, now); break;
-          case fp::ModbusDecodeError::BadValue: mapper_.on_source_error(source, E::BadValue, now); break;
-          case fp::ModbusDecodeError::StaleCounter: mapper_.on_source_error(source, E::StaleCounter, now); break;
-        }
+        changed = apply_modbus_inputs(mapper_, source, registers, bits, last_counter, now);
         changed_ = changed_ || changed;
       }
     }

@@ -533,4 +533,11 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
   return snap;
 }
 
+PanelSnapshot PanelMapper::preview(int64_t now_us) const {
+  const std::vector<ControlFilter> saved = filters_;
+  PanelSnapshot snap = evaluate(now_us);
+  filters_ = saved;
+  return snap;
+}
+
 }  // namespace rise::hil

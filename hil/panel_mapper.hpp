@@ -124,6 +124,10 @@ class PanelMapper {
   /// bits) run; a control that was forced safe restarts its filters, so a
   /// toggle or a filtered axis never carries state across a source loss.
   PanelSnapshot evaluate(int64_t now_us) const;
+  /// What evaluate(now_us) would return, leaving the transforms' state as
+  /// it was (an offline replay tries several candidate times this way).
+  /// Allocates: not for the cyclic path.
+  PanelSnapshot preview(int64_t now_us) const;
 
   const panels::PanelDefinition& definition() const { return definition_; }
 

@@ -12,8 +12,10 @@
 #include <poll.h>
 
 #include "hil/app/inspect_commands.hpp"
+#include "hil/app/verify_command.hpp"
 #include "hil/bridge.hpp"
 #include "hil/panel_state_message.hpp"
+#include "hil/session_recorder.hpp"
 #include "panels/data_path.hpp"
 
 namespace {
@@ -28,7 +30,8 @@ int64_t wall_us() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"rise-hild: console (CAN or Modbus) → PanelState on LCM, PanelFeedback → console"};
+  CLI::App app{"rise-hild: console (CAN, Modbus or HID) → PanelState on LCM, PanelFeedback → console; "
+               "--record DIR records a session, `verify` replays one against a golden log"};
   std::string panel_file = "panels/definitions/rise_console.yaml";
   std::vector<std::string> source_urls;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
@@ -49,6 +52,12 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--status-every", status_every_s, "log a status line every S seconds (0: on change only)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  std::string record_dir;
+  app.add_option("--record", record_dir,
+                 "record the session into DIR (created): <source>.log (CAN, candump -l), <source>.modbus.log "
+                 "(Modbus transaction trace), panel_state.lcmlog (every PanelState, lcm-logger's format); "
+                 "`rise-hild verify --record-dir DIR` replays it")
+      ->type_name("DIR");
   // Inspection commands a lab runs before wiring a console in.
   app.require_subcommand(0, 1);
   std::string dbc_file, log_file;
@@ -66,8 +75,29 @@ int main(int argc, char** argv) {
                            "descriptor: hex dump, C array, hid-recorder R: line, Android CTS register JSON, "
                            "xpadneo markdown, or a binary report_descriptor")
       ->required();
+  rise::hil::VerifyOptions verify_options;
+  verify_options.panel = panel_file;
+  CLI::App* verify = app.add_subcommand(
+      "verify", "replay captures as fast as possible and compare the PanelState stream with a golden LCM log; "
+                "exit 0 pass, 1 difference (the first is printed with its time and control), 2 bad input");
+  verify->add_option("--panel", verify_options.panel, "panel definition (YAML)")->capture_default_str();
+  verify->add_option("--capture", verify_options.captures,
+                     "capture file, named SOURCE.log (CAN: candump, ASC, TRC) or SOURCE.modbus.log (Modbus trace), "
+                     "or SOURCE=FILE; one per source")
+      ->type_name("FILE");
+  verify->add_option("--record-dir", verify_options.record_dir,
+                     "a `rise-hild --record` directory: its captures, and panel_state.lcmlog as the golden")
+      ->type_name("DIR");
+  verify->add_option("--golden", verify_options.golden, "golden LCM log (lcm-logger or --record)")->type_name("FILE");
+  verify->add_option("--id", verify_options.id, "station id: compare rise/<id>/panel_state (default: the log's one)");
+  verify->add_option("--tolerance", verify_options.axis_tolerance, "largest axis difference that matches")
+      ->capture_default_str();
+  verify->add_option("--time-tolerance-ms", verify_options.time_tolerance_ms,
+                     "a message matches the replayed state this far from its utime (frame/publish races)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
+  if (verify->parsed()) return rise::hil::verify_command(verify_options, std::cout, std::cerr);
   if (dbc_decode->parsed()) return rise::hil::dbc_decode(dbc_file, log_file, std::cout, std::cerr);
   if (hid_describe->parsed()) return rise::hil::hid_describe(hid_file, std::cout, std::cerr);
   if (source_urls.empty()) {
@@ -127,6 +157,23 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  std::unique_ptr<rise::hil::SessionRecorder> recorder;
+  if (!record_dir.empty()) {
+    try {
+      recorder = std::make_unique<rise::hil::SessionRecorder>(record_dir);
+      for (std::size_t i = 0; i < transports.size(); ++i) {
+        const auto& source = definition.sources[i];
+        const int unit = source.is_modbus() ? rise::io::parse_modbus_url(source_urls[i]).unit : 0;
+        const bool url_unit = source_urls[i].find("unit=") != std::string::npos;
+        if (!recorder->record_source(source.name, transports[i], url_unit ? unit : source.unit))
+          spdlog::warn("--record: source '{}' ({}) is not recorded", source.name, source.protocol);
+      }
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 2;
+    }
+    spdlog::info("recording into {}", record_dir);
+  }
 
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
@@ -141,6 +188,7 @@ int main(int argc, char** argv) {
   auto publish = [&](const rise::hil::PanelSnapshot& snap) {
     const auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), source_urls);
     lcm.publish(state_channel, &msg);
+    if (recorder) recorder->record_message(state_channel, msg);
     // Log when the reason changes, not every time an age in it grows.
     std::string reason_kind = snap.failsafe_reason;
     std::erase_if(reason_kind, [](char c) { return c >= '0' && c <= '9'; });
@@ -169,10 +217,16 @@ int main(int argc, char** argv) {
                feedback_channel);
 
   auto next_status = std::chrono::steady_clock::now();
+  int64_t write_errors_reported = 0;
   while (!g_stop) {
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     if (::poll(&pfd, 1, 50) > 0) lcm.handle();
     for (const std::string& note : bridge.take_notes()) spdlog::warn("{}", note);
+    // A full disk costs records, not the session: said once, then at each status line.
+    if (recorder && write_errors_reported == 0 && recorder->counts().write_errors > 0) {
+      write_errors_reported = recorder->counts().write_errors;
+      spdlog::error("recorder: writes into {} fail (disk full?): records are being lost", recorder->dir());
+    }
     if (status_every_s > 0 && std::chrono::steady_clock::now() >= next_status) {
       next_status += std::chrono::microseconds(static_cast<int64_t>(status_every_s * 1e6));
       const auto snap = bridge.snapshot();
@@ -181,9 +235,20 @@ int main(int argc, char** argv) {
                      "error_frames={} bus={}",
                      s.name, s.connected, s.stale, s.frames_ok, s.frames_bad(), s.reconnects, s.timeouts,
                      s.exceptions, s.error_frames, rise::io::to_string(s.bus_state));
+      if (recorder) {
+        const auto c = recorder->counts();
+        spdlog::info("recorder: {} CAN frames, {} Modbus lines, {} PanelState events, {} failed writes",
+                     c.can_frames, c.modbus_lines, c.lcm_events, c.write_errors);
+      }
     }
   }
   bridge.stop();
   spdlog::info("rise-hild stopped after {} messages", seq);
+  if (recorder) {
+    const auto c = recorder->counts();
+    spdlog::info("recorded {} CAN frames, {} Modbus trace lines, {} PanelState events into {}", c.can_frames,
+                 c.modbus_lines, c.lcm_events, recorder->dir());
+    if (c.write_errors > 0) spdlog::error("recorder: {} writes failed (disk full?): the recording is incomplete", c.write_errors);
+  }
   return 0;
 }

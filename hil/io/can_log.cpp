@@ -236,10 +236,9 @@ bool CanLogReader::next(CanLogRecord& record) {
     // line cut by the block's end) takes the general path below.
     std::string_view interface;
     const char* begin = block_.data() + block_begin_;
-    if (const char* after = parse_candump_fast(begin, block_.data() + block_end_, record.frame, interface)) {
+    if (const char* after = parse_candump_fast(begin, block_.data() + block_end_, record.frame, interface, record.tx)) {
       block_begin_ += static_cast<std::size_t>(after - begin);
       record.line = ++line_;
-      record.tx = false;
       if (record.channel != interface) record.channel.assign(interface);
       return true;
     }
@@ -265,7 +264,8 @@ CanLogReader::LineResult CanLogReader::parse_line(std::string_view line, CanLogR
   switch (format_) {
     case CanLogFormat::Candump: {
       std::string_view interface;
-      if (parse_candump_line(line, record.frame, interface) != CandumpError::None) return LineResult::Malformed;
+      if (parse_candump_line(line, record.frame, interface, &record.tx) != CandumpError::None)
+        return LineResult::Malformed;
       record.channel.assign(interface);
       return LineResult::Frame;
     }

@@ -30,7 +30,7 @@ struct CanLogRecord {
   CanFrame frame;
   std::string channel;  ///< "can0" (candump), "1" (ASC, TRC bus); empty if the file has none
   int line = 0;         ///< 1-based line number in the file
-  bool tx = false;      ///< the logger sent it (ASC/TRC "Tx"); false for candump
+  bool tx = false;      ///< the logger sent it (ASC/TRC "Tx", candump " T")
 };
 
 /// Reads a log file record by record (a block of lines in memory at a time).

@@ -77,7 +77,8 @@ int hex_value(char c) { return kHex[static_cast<unsigned char>(c)]; }
 
 }  // namespace
 
-const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std::string_view& interface) {
+const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std::string_view& interface,
+                               bool& tx) {
   // Every read checks `end`; any surprise hands the line to the general parser.
   if (p == end || *p != '(') return nullptr;
   ++p;
@@ -116,6 +117,11 @@ const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std:
     if (len == 8) return nullptr;
     data[len++] = static_cast<uint8_t>(hi << 4 | lo);
   }
+  bool sent = false;
+  if (end - p >= 3 && p[0] == ' ' && (p[1] == 'R' || p[1] == 'T') && (p[2] == '\n' || p[2] == '\r')) {
+    sent = p[1] == 'T';
+    p += 2;
+  }
   if (p != end && *p == '\r') ++p;
   if (p == end || *p != '\n') return nullptr;
   // Field by field, not `f = CanFrame{}`: clearing all 64 data bytes
@@ -129,6 +135,7 @@ const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std:
   f.len = len;
   std::memcpy(f.data.data(), data, 8);
   interface = iface;
+  tx = sent;
   return p + 1;
 }
 
@@ -145,51 +152,71 @@ const char* to_string(CandumpError error) {
   return "?";
 }
 
+std::optional<int64_t> parse_log_time(std::string_view line, std::string_view* rest) {
+  if (line.empty() || line.front() != '(') return std::nullopt;
+  const auto close = line.find(')');
+  const auto dot = line.find('.');
+  if (close == std::string_view::npos || dot == std::string_view::npos || dot > close) return std::nullopt;
+  int64_t sec = 0, usec = 0;
+  // 12 digits of seconds reach year 33658: more is not a time (and would overflow).
+  if (dot - 1 == 0 || dot - 1 > 12) return std::nullopt;
+  for (char c : line.substr(1, dot - 1)) {
+    if (c < '0' || c > '9') return std::nullopt;
+    sec = sec * 10 + (c - '0');
+  }
+  const auto frac = line.substr(dot + 1, close - dot - 1);
+  if (frac.empty() || frac.size() > 9) return std::nullopt;
+  int digits = 0;
+  for (char c : frac) {
+    if (c < '0' || c > '9') return std::nullopt;
+    if (digits++ < 6) usec = usec * 10 + (c - '0');
+  }
+  for (; digits < 6; ++digits) usec *= 10;
+  if (rest) *rest = line.substr(close + 1);
+  return sec * 1'000'000 + usec;
+}
+
+void append_log_time(std::string& out, int64_t time_us) {
+  char text[48];
+  const int n = std::snprintf(text, sizeof text, "(%lld.%06lld)", static_cast<long long>(time_us / 1'000'000),
+                              static_cast<long long>(time_us % 1'000'000));
+  out.append(text, static_cast<std::size_t>(n));
+}
+
 CandumpParse parse_candump_line(std::string_view line) {
   CandumpParse r;
   std::string_view interface;
-  r.error = parse_candump_line(line, r.record.frame, interface);
+  r.error = parse_candump_line(line, r.record.frame, interface, &r.record.tx);
   r.record.interface = std::string(interface);
   return r;
 }
 
-CandumpError parse_candump_line(std::string_view line, CanFrame& frame, std::string_view& interface) {
+CandumpError parse_candump_line(std::string_view line, CanFrame& frame, std::string_view& interface, bool* tx) {
   frame = CanFrame{};
   interface = {};
+  if (tx) *tx = false;
   while (!line.empty() && (line.back() == '\n' || line.back() == '\r' || line.back() == ' ')) line.remove_suffix(1);
   while (!line.empty() && line.front() == ' ') line.remove_prefix(1);
   if (line.empty()) return CandumpError::Empty;
-  if (line.front() != '(') return CandumpError::NoTimestamp;
-  const auto close = line.find(')');
-  const auto dot = line.find('.');
-  if (close == std::string_view::npos || dot == std::string_view::npos || dot > close)
-    return CandumpError::NoTimestamp;
-  int64_t sec = 0, usec = 0;
-  // 12 digits of seconds reach year 33658: more is not a time (and would overflow).
-  if (dot - 1 == 0 || dot - 1 > 12) return CandumpError::NoTimestamp;
-  for (char c : line.substr(1, dot - 1)) {
-    if (c < '0' || c > '9') return CandumpError::NoTimestamp;
-    sec = sec * 10 + (c - '0');
-  }
-  const auto frac = line.substr(dot + 1, close - dot - 1);
-  if (frac.empty() || frac.size() > 9) return CandumpError::NoTimestamp;
-  int digits = 0;
-  for (char c : frac) {
-    if (c < '0' || c > '9') return CandumpError::NoTimestamp;
-    if (digits++ < 6) usec = usec * 10 + (c - '0');
-  }
-  for (; digits < 6; ++digits) usec *= 10;
-  frame.timestamp_us = sec * 1'000'000 + usec;
+  std::string_view rest;
+  const std::optional<int64_t> time_us = parse_log_time(line, &rest);
+  if (!time_us) return CandumpError::NoTimestamp;
+  frame.timestamp_us = *time_us;
 
-  std::string_view rest = line.substr(close + 1);
   while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
   const auto space = rest.find(' ');
   if (space == std::string_view::npos || space == 0) return CandumpError::NoInterface;
   interface = rest.substr(0, space);
   rest = rest.substr(space + 1);
   while (!rest.empty() && rest.front() == ' ') rest.remove_prefix(1);
-  // Anything after the frame (candump -x adds " R" / " T") is ignored.
-  if (const auto end = rest.find(' '); end != std::string_view::npos) rest = rest.substr(0, end);
+  // After the frame candump -x and python-can write the direction (" R" /
+  // " T"); anything else there is ignored.
+  if (const auto end = rest.find(' '); end != std::string_view::npos) {
+    std::string_view after = rest.substr(end);
+    while (!after.empty() && after.front() == ' ') after.remove_prefix(1);
+    if (tx) *tx = after == "T" || after == "t";
+    rest = rest.substr(0, end);
+  }
 
   const auto hash = rest.find('#');
   if (hash == std::string_view::npos) return CandumpError::BadId;
@@ -237,32 +264,38 @@ CandumpError parse_candump_line(std::string_view line, CanFrame& frame, std::str
   return CandumpError::None;
 }
 
-std::string format_candump_line(const CanFrame& f, std::string_view interface) {
-  char head[64];
-  std::snprintf(head, sizeof head, "(%lld.%06lld) ", static_cast<long long>(f.timestamp_us / 1'000'000),
-                static_cast<long long>(f.timestamp_us % 1'000'000));
-  std::string out = head;
+std::string format_candump_line(const CanFrame& f, std::string_view interface, CandumpDirection direction) {
+  std::string out;
+  append_candump_line(out, f, interface, direction);
+  return out;
+}
+
+void append_candump_line(std::string& out, const CanFrame& f, std::string_view interface,
+                         CandumpDirection direction) {
+  append_log_time(out, f.timestamp_us);
+  out += ' ';
   out += interface;
   char id[16];
-  if (f.error) std::snprintf(id, sizeof id, " %08X#", f.id | kErrFlag);
-  else if (f.extended) std::snprintf(id, sizeof id, " %08X#", f.id);
-  else std::snprintf(id, sizeof id, " %03X#", f.id);
-  out += id;
+  const int id_len = f.error      ? std::snprintf(id, sizeof id, " %08X#", f.id | kErrFlag)
+                     : f.extended ? std::snprintf(id, sizeof id, " %08X#", f.id)
+                                  : std::snprintf(id, sizeof id, " %03X#", f.id);
+  out.append(id, static_cast<std::size_t>(id_len));
   static const char* digits = "0123456789ABCDEF";
   if (f.remote) {
     out += 'R';
     if (f.len) out += digits[f.len & 0xF];
-    return out;
+  } else {
+    if (f.fd) {
+      out += '#';
+      out += digits[(f.brs ? 1 : 0) | (f.esi ? 2 : 0)];
+    }
+    for (std::size_t i = 0; i < f.len; ++i) {
+      out += digits[f.data[i] >> 4];
+      out += digits[f.data[i] & 0xF];
+    }
   }
-  if (f.fd) {
-    out += '#';
-    out += digits[(f.brs ? 1 : 0) | (f.esi ? 2 : 0)];
-  }
-  for (std::size_t i = 0; i < f.len; ++i) {
-    out += digits[f.data[i] >> 4];
-    out += digits[f.data[i] & 0xF];
-  }
-  return out;
+  if (direction == CandumpDirection::Received) out += " R";
+  if (direction == CandumpDirection::Sent) out += " T";
 }
 
 }  // namespace rise::io

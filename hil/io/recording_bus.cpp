@@ -1,48 +1,36 @@
 #include "hil/io/recording_bus.hpp"
 
-#include <stdexcept>
-
-#include "hil/io/candump_log.hpp"
+#include "hil/io/posix_io.hpp"
 
 namespace rise::io {
-namespace {
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-}  // namespace
 
-RecordingBus::RecordingBus(std::unique_ptr<CanBus> bus, const std::string& path, std::string interface)
-    : bus_(std::move(bus)), out_(path, std::ios::trunc), interface_(std::move(interface)),
-      last_flush_(std::chrono::steady_clock::now()) {
-  if (!out_) throw std::runtime_error(path + ": cannot create the CAN log");
+RecordingBus::RecordingBus(std::unique_ptr<CanBus> bus, const std::string& path, std::string interface,
+                           Stamp stamp)
+    : bus_(std::move(bus)), stamp_(stamp), file_(path, "CAN log"), interface_(std::move(interface)) {
+  line_.reserve(256 + interface_.size());
 }
 
-RecordingBus::~RecordingBus() { out_.flush(); }
+RecordingBus::~RecordingBus() = default;
 
-void RecordingBus::record(const CanFrame& frame) {
+void RecordingBus::record(const CanFrame& frame, CandumpDirection direction) {
   CanFrame stamped = frame;
-  if (stamped.timestamp_us == 0) stamped.timestamp_us = wall_us();
-  out_ << format_candump_line(stamped, interface_) << '\n';
-  ++recorded_;
-  // Flushed at least every 100 ms: a killed daemon loses at most that much.
-  const auto now = std::chrono::steady_clock::now();
-  if (now - last_flush_ >= std::chrono::milliseconds(100)) {
-    out_.flush();
-    last_flush_ = now;
-  }
+  if (stamped.timestamp_us == 0 || (stamp_ == Stamp::Receive && direction == CandumpDirection::Received))
+    stamped.timestamp_us = detail::now_epoch_us();
+  std::lock_guard lock(mutex_);
+  line_.clear();
+  append_candump_line(line_, stamped, interface_, direction);
+  file_.write_line(line_);
 }
 
 IoStatus RecordingBus::send(const CanFrame& frame) {
   const IoStatus st = bus_->send(frame);
-  if (st == IoStatus::Ok) record(frame);
+  if (st == IoStatus::Ok) record(frame, CandumpDirection::Sent);
   return st;
 }
 
 IoStatus RecordingBus::receive(CanFrame& frame, int timeout_ms) {
   const IoStatus st = bus_->receive(frame, timeout_ms);
-  if (st == IoStatus::Ok) record(frame);
+  if (st == IoStatus::Ok) record(frame, CandumpDirection::Received);
   return st;
 }
 

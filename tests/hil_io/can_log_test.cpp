@@ -418,6 +418,9 @@ TEST_CASE("the reader's in-place candump path gives what the line parser gives, 
       "(1436509052.249717) can0 123##1112233\n"
       "(1436509052.249718) can0 123#R4\n"
       "(1436509052.249719) can0 321#AABB R\n"
+      "(1436509052.249719) can0 321#AABB T\n"
+      "(1436509052.249719) can0 321#AABB T\r\n"
+      "(1436509052.249719) can0 321#AABB X\n"
       "(1436509052.249720) can0 321#AA.BB.CC\n"
       "(1436509052.250) can0 100#01\n"
       "(1436509052.249721) can0 800#01\n"
@@ -447,6 +450,7 @@ TEST_CASE("the reader's in-place candump path gives what the line parser gives, 
       CHECK(r.channel == expected.record.interface);
       CHECK(same_content(r.frame, expected.record.frame));
       CHECK(r.frame.timestamp_us == expected.record.frame.timestamp_us);
+      CHECK(r.tx == expected.record.tx);
     }
     CHECK_FALSE(reader.next(r));
     CHECK(frames > 0);

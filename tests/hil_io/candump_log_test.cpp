@@ -71,3 +71,23 @@ TEST_CASE("every line of the real ICSim capture reads and writes back unchanged"
   }
   CHECK(lines == 6158);  // MANIFEST.md: 6158 classic frames
 }
+
+TEST_CASE("a candump line's direction reads back as written: R received, T sent, none received", "[hil_io]") {
+  const auto f = rise::io::parse_candump_line("(1.000001) can0 123#DEADBEEF").record.frame;
+  const auto [direction, text, tx] = GENERATE(table<CandumpDirection, std::string, bool>({
+      {CandumpDirection::None, "(1.000001) can0 123#DEADBEEF", false},
+      {CandumpDirection::Received, "(1.000001) can0 123#DEADBEEF R", false},
+      {CandumpDirection::Sent, "(1.000001) can0 123#DEADBEEF T", true},
+  }));
+  CHECK(format_candump_line(f, "can0", direction) == text);
+  const auto r = parse_candump_line(text);
+  REQUIRE(r.ok());
+  CHECK(r.record.tx == tx);
+  CHECK(same_content(r.record.frame, f));
+  std::string reused;
+  reused.reserve(256);
+  const auto* data = reused.data();
+  append_candump_line(reused, f, "can0", direction);
+  CHECK(reused == text);
+  CHECK(reused.data() == data);  // no allocation into a buffer with the room
+}

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 
 #include "hil/io/can_log.hpp"
@@ -57,4 +58,48 @@ TEST_CASE("a recorded bus writes every frame it sends and receives as a candump 
   while (replay->receive(f, 100) == IoStatus::Ok) CHECK(same_content(f, sent[n++]));
   CHECK(n == sent.size());
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a recorded bus marks sent frames T and received ones R, and can stamp them when they are read",
+          "[hil_io]") {
+  const std::string dir = std::filesystem::temp_directory_path() / ("rise-rec-dir-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/console.log";
+  CanFrame old;
+  old.id = 0x130;
+  old.len = 2;
+  old.timestamp_us = 1'000'000;  // a transport's stamp long ago
+  int64_t before = 0, after = 0;
+  {
+    RecordingBus recorded(open_can_bus("mem://recording_stamp"), path, "console", RecordingBus::Stamp::Receive);
+    auto peer = open_can_bus("mem://recording_stamp");
+    REQUIRE(peer->send(old) == IoStatus::Ok);
+    before = std::chrono::duration_cast<std::chrono::microseconds>(
+                 std::chrono::system_clock::now().time_since_epoch()).count();
+    CanFrame got;
+    REQUIRE(recorded.receive(got, 1000) == IoStatus::Ok);
+    after = std::chrono::duration_cast<std::chrono::microseconds>(
+                std::chrono::system_clock::now().time_since_epoch()).count();
+    REQUIRE(recorded.send(old) == IoStatus::Ok);
+  }
+  const auto records = read_can_log(path);
+  REQUIRE(records.size() == 2);
+  CHECK_FALSE(records[0].tx);
+  CHECK(records[0].frame.timestamp_us >= before);
+  CHECK(records[0].frame.timestamp_us <= after);
+  CHECK(records[1].tx);
+  CHECK(records[1].frame.timestamp_us == old.timestamp_us);  // a sent frame keeps its own time
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a recorded bus whose disk is full counts the lost frames and passes the traffic on", "[hil_io]") {
+  RecordingBus recorded(open_can_bus("mem://recording_full"), "/dev/full", "console");
+  CanFrame f;
+  f.id = 0x110;
+  f.len = 8;
+  // Frames are flushed every 100 ms; the first flush onto /dev/full fails.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  while (recorded.write_errors() == 0 && std::chrono::steady_clock::now() < deadline)
+    REQUIRE(recorded.send(f) == IoStatus::Ok);
+  CHECK(recorded.write_errors() > 0);
 }

@@ -1,0 +1,62 @@
+#!/bin/bash
+# Makes the recorded sessions and golden PanelState logs in this folder: the
+# console emulator (rise-panel) plays session.txt on a real transport on
+# loopback, rise-hild reads it and records the session with --record:
+#   can/       rise_console.yaml over socketcand (TCP):  console.log + panel_state.lcmlog
+#   modbus/    rise_console_modbus.yaml over Modbus TCP: console.modbus.log + panel_state.lcmlog
+#   split/     rise_console_split.yaml, sticks on socketcand + buttons on Modbus TCP
+# Each is checked with `rise-hild verify --record-dir` before it is kept.
+# Run from anywhere after a build: bash tests/data/replay/make_goldens.sh [BUILD_DIR]
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../../.." && pwd)
+bin=$(cd "${1:-$root/build}" && pwd)/bin
+work=$(mktemp -d)
+trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
+cd "$root"
+
+# wait_for FILE TEXT: until TEXT appears in FILE (10 s at most).
+wait_for() {
+  for _ in $(seq 1000); do grep -q -- "$2" "$1" 2>/dev/null && return 0; sleep 0.01; done
+  echo "timed out waiting for '$2' in $1" >&2; cat "$1" >&2; return 1
+}
+
+port=$((30000 + $$ % 20000))
+record() {  # record NAME PANEL HILD_SOURCES... -- EMULATOR_ARGS... [-- EMULATOR_ARGS...]
+  local name=$1 panel=$2; shift 2
+  local sources=()
+  while [ "$1" != "--" ]; do sources+=(--source "$1"); shift; done
+  shift
+  local pids=() n=0 args=()
+  for a in "$@" --; do
+    if [ "$a" = "--" ]; then
+      "$bin/rise-panel" emulate --panel "$panel" --script "$here/session.txt" --start-on-feedback "${args[@]}" \
+        > "$work/$name-panel$n.log" 2>&1 &
+      pids+=($!)
+      wait_for "$work/$name-panel$n.log" "rise-panel ready"
+      n=$((n + 1)); args=()
+    else
+      args+=("$a")
+    fi
+  done
+  rm -rf "${work:?}/$name"
+  "$bin/rise-hild" --panel "$panel" "${sources[@]}" --id golden --lcm 'memq://' --record "$work/$name" \
+    > "$work/$name-hild.log" 2>&1 &
+  local hild=$!
+  wait "${pids[@]}"
+  wait_for "$work/$name-hild.log" "failsafe: .*disconnected"
+  kill -TERM $hild; wait $hild
+  "$bin/rise-hild" verify --panel "$panel" --record-dir "$work/$name"
+  rm -rf "${here:?}/$name"; mkdir -p "$here/$name"
+  cp "$work/$name"/* "$here/$name/"
+  ls -l "$here/$name"
+}
+
+record can panels/definitions/rise_console.yaml "socketcand://127.0.0.1:$port/can0" \
+  -- --can "socketcand+listen://127.0.0.1:$port/can0"
+record modbus panels/definitions/rise_console_modbus.yaml "modbus+tcp://127.0.0.1:$((port + 1))" \
+  -- --modbus "modbus+tcp-listen://127.0.0.1:$((port + 1))?unit=1"
+record split panels/definitions/rise_console_split.yaml "socketcand://127.0.0.1:$((port + 2))/can0" \
+  "modbus+tcp://127.0.0.1:$((port + 3))" \
+  -- --source sticks --can "socketcand+listen://127.0.0.1:$((port + 2))/can0" \
+  -- --source buttons --modbus "modbus+tcp-listen://127.0.0.1:$((port + 3))?unit=1"
