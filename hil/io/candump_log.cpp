@@ -89,7 +89,7 @@ const char* parse_candump_fast(const char* p, const char* end, CanFrame& f, std:
   const auto n = p - digits;
   if (n == 0 || n > 12 || p == end || *p != '.') return nullptr;
   int64_t sec = 0;
-  const char* tail = n >= 8 ? p - 8 : digits;
+  const char* tail = n >= 8 ? p - 8 : p;  // the last eight digits, if there are eight
   for (const char* d = digits; d != tail; ++d) sec = sec * 10 + (*d - '0');
   if (n >= 8) sec = sec * 100'000'000 + eight_digits(tail);
   ++p;
