@@ -14,6 +14,7 @@
 
 #include "app/chain_monitor.hpp"
 #include "app/child_process.hpp"
+#include "tests/integration/integration_support.hpp"
 #include "panels/panel_definition.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -21,10 +22,10 @@
 
 using rise::app::ChainView;
 using rise::app::ChildProcess;
+using rise::test::kBin;
+using rise::test::kSource;
 
 namespace {
-const std::string kSource = RISE_SOURCE_DIR;
-const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
 const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
 
 uint16_t free_port() {

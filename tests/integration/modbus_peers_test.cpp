@@ -20,15 +20,16 @@
 #include <thread>
 
 #include "app/child_process.hpp"
+#include "tests/integration/integration_support.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "rise_msgs/PanelState.hpp"
 
 using rise::app::ChildProcess;
+using rise::test::kBin;
+using rise::test::kSource;
 namespace fp = rise::firmware_protocol;
 
 namespace {
-const std::string kSource = RISE_SOURCE_DIR;
-const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
 const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
 
 uint16_t free_port() {

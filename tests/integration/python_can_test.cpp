@@ -12,21 +12,14 @@
 #include <sstream>
 
 #include "app/child_process.hpp"
+#include "tests/integration/integration_support.hpp"
 #include "firmware_protocol/dbc.hpp"
 
 using rise::app::ChildProcess;
+using rise::test::kBin;
+using rise::test::kSource;
+using rise::test::python_can_available;
 namespace fp = rise::firmware_protocol;
-
-namespace {
-const std::string kSource = RISE_SOURCE_DIR;
-const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
-
-bool python_can_available() {
-  if (!std::filesystem::exists("/usr/bin/python3")) return false;
-  ChildProcess probe({"/usr/bin/python3", "-c", "import can"}, "/dev/null");
-  return probe.wait_for(20000) == 0;
-}
-}  // namespace
 
 TEST_CASE("python-can receives the emulator's frames over socketcand and our DBC decodes the scripted values",
           "[integration]") {

@@ -14,15 +14,17 @@
 #include <sstream>
 
 #include "app/child_process.hpp"
+#include "tests/integration/integration_support.hpp"
 #include "hil/io/can_log.hpp"
 #include "hil/io/recording_bus.hpp"
 #include "rise_msgs/PanelState.hpp"
 
 using rise::app::ChildProcess;
+using rise::test::kBin;
+using rise::test::kSource;
+using rise::test::python_can_available;
 
 namespace {
-const std::string kSource = RISE_SOURCE_DIR;
-const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
 const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
 
 std::string port_text(int offset) { return std::to_string(32000 + (::getpid() * 7 + offset) % 20000); }
@@ -34,11 +36,6 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
-bool python_can_available() {
-  if (!std::filesystem::exists("/usr/bin/python3")) return false;
-  ChildProcess probe({"/usr/bin/python3", "-c", "import can"}, "/dev/null");
-  return probe.wait_for(20000) == 0;
-}
 
 struct TempDir {
   std::string path;

@@ -11,20 +11,13 @@
 #include <vector>
 
 #include "app/child_process.hpp"
+#include "tests/integration/integration_support.hpp"
 #include "hil/io/candump_log.hpp"
 
 using rise::app::ChildProcess;
-
-namespace {
-const std::string kSource = RISE_SOURCE_DIR;
-const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
-
-bool python_can_available() {
-  if (!std::filesystem::exists("/usr/bin/python3")) return false;
-  ChildProcess probe({"/usr/bin/python3", "-c", "import can"}, "/dev/null");
-  return probe.wait_for(20000) == 0;
-}
-}  // namespace
+using rise::test::kBin;
+using rise::test::kSource;
+using rise::test::python_can_available;
 
 TEST_CASE("rise-panel replay plays a capture onto socketcand and python-can receives it frame for frame",
           "[integration]") {
