@@ -154,7 +154,7 @@ class Simulation {
   /// objects; never the robot's own parts — or +infinity when there is none
   /// within max_range_m. ODE ray casting (dCreateRay + dCollide), the
   /// laser scanner's primitive. Safe in the cyclic path: no allocation,
-  /// never throws.
+  /// never throws. It reuses one ray geom: not from two threads at once.
   double cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
                     double max_range_m) const;
 

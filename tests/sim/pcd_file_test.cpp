@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -118,5 +119,28 @@ TEST_CASE("the PCD reader takes other fields and refuses what it cannot read wit
           (dir / "w.pcd").string() + ":6: FIELDS: needs x, y and z");
     CHECK(read_error((dir / "missing.pcd").string()) == (dir / "missing.pcd").string() + ":0: cannot open");
   }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("rise-sim --scan-dir writes a scan at start and every --scan-every seconds of sim time", "[sim]") {
+  const fs::path dir = temp_dir("rise_sim_scans");
+  // memq:// keeps the run off the network; --fast --duration ends it by itself.
+  const std::string command = "timeout 120 " + std::string(RISE_BINARY_DIR) + "/bin/rise-sim --robot " +
+                              std::string(RISE_SOURCE_DIR) + "/sim/robots/tracked_eod.yaml --world " + kBuilding +
+                              " --lcm memq:// --fast --duration 2.5 --log-level warn --scan-format ascii --scan-every 1"
+                              " --scan-dir " + dir.string();
+  REQUIRE(std::system(command.c_str()) == 0);
+  for (int k = 0; k < 3; ++k) {
+    const std::string stem = (dir / ("scan_000" + std::to_string(k))).string();
+    INFO(stem);
+    const PoseFile pose = read_pose(stem + ".pose");
+    CHECK(pose.time_s == Approx(k).margin(1e-9));
+    const PointCloud cloud = read_pcd(stem + ".pcd");
+    CHECK(cloud.points.size() > 40000);
+    CHECK((cloud.viewpoint.matrix() - pose.T_world_sensor.matrix()).norm() < 1e-12);
+    // The robot stands at the start: the sensor 25 cm ahead of the chassis centre.
+    CHECK(pose.T_world_sensor.translation().x() == Approx(0.25).margin(0.005));
+  }
+  CHECK_FALSE(fs::exists(dir / "scan_0003.pcd"));
   fs::remove_all(dir);
 }
