@@ -9,6 +9,8 @@
 namespace rise::sim {
 namespace {
 
+constexpr double kDeg = M_PI / 180.0;
+
 AxisMapping parse_axis(const YamlReader& r, const YAML::Node& n, const std::string& where) {
   r.only_keys(n, where, {"axis", "max_mps", "max_radps", "invert"});
   AxisMapping m;
@@ -38,13 +40,91 @@ ArmJointMapping parse_arm_joint(const YamlReader& r, const YAML::Node& n, const 
   if (!n["max_radps"]) r.fail(n, where + ".max_radps", "missing");
   j.axis.max = r.positive(n, "max_radps", where, 0.0);
   if (n["invert"]) j.axis.invert = r.as<bool>(n["invert"], where + ".invert");
-  constexpr double kDeg = M_PI / 180.0;
   if (n["min_deg"]) j.min_rad = r.as<double>(n["min_deg"], where + ".min_deg") * kDeg;
   if (n["max_deg"]) j.max_rad = r.as<double>(n["max_deg"], where + ".max_deg") * kDeg;
   if (!(j.min_rad < 0.0 && j.max_rad > 0.0)) r.fail(n, where + ".min_deg", "limits must include 0 (min < 0 < max)");
   j.max_torque_nm = r.positive(n, "max_torque_nm", where, j.max_torque_nm);
   j.break_torque_nm = r.positive(n, "break_torque_nm", where, j.break_torque_nm);
   return j;
+}
+
+Mount parse_mount(const YamlReader& r, const YAML::Node& n, const std::string& where) {
+  Mount m;
+  m.position_m = r.vector<3>(n, "mount_m", where);
+  if (n["rpy_deg"]) {
+    m.rpy_rad = r.vector<3>(n, "rpy_deg", where);
+    for (double& a : m.rpy_rad) a *= kDeg;
+  }
+  return m;
+}
+
+LaserDescription parse_laser(const YamlReader& r, const YAML::Node& n, const std::string& where) {
+  r.only_keys(n, where, {"mount_m", "rpy_deg", "fov_deg", "resolution_deg", "range_m", "noise_m", "rotating"});
+  LaserDescription l;
+  l.mount = parse_mount(r, n, where);
+  l.fov_rad = r.positive(n, "fov_deg", where, l.fov_rad / kDeg) * kDeg;
+  if (l.fov_rad > 2 * M_PI + 1e-9) r.fail(n["fov_deg"], where + ".fov_deg", "must be <= 360");
+  l.resolution_rad = r.positive(n, "resolution_deg", where, l.resolution_rad / kDeg) * kDeg;
+  if (l.resolution_rad > l.fov_rad) r.fail(n["resolution_deg"], where + ".resolution_deg", "must be <= fov_deg");
+  if (n["range_m"]) {
+    const auto range = r.vector<2>(n, "range_m", where);
+    if (!(range[0] >= 0.0 && range[1] > range[0]))
+      r.fail(n["range_m"], where + ".range_m", "expected [min, max] with 0 <= min < max");
+    l.min_range_m = range[0];
+    l.max_range_m = range[1];
+  }
+  l.noise_m = r.positive(n, "noise_m", where, l.noise_m, true);
+  if (const YAML::Node rot = n["rotating"]) {
+    const std::string w = where + ".rotating";
+    r.only_keys(rot, w, {"axis", "steps", "sweep_deg"});
+    LaserRotation t;
+    if (rot["axis"]) {
+      const auto axis = r.as<std::string>(rot["axis"], w + ".axis");
+      if (axis != "x" && axis != "y" && axis != "z") r.fail(rot["axis"], w + ".axis", "expected x, y or z");
+      t.axis = axis[0] - 'x';
+    }
+    if (!rot["steps"]) r.fail(rot, w + ".steps", "missing");
+    t.steps = r.as<int>(rot["steps"], w + ".steps");
+    if (t.steps < 1 || t.steps > 10000) r.fail(rot["steps"], w + ".steps", "must be in 1..10000");
+    t.sweep_rad = r.positive(rot, "sweep_deg", w, t.sweep_rad / kDeg) * kDeg;
+    if (t.sweep_rad > 2 * M_PI + 1e-9) r.fail(rot["sweep_deg"], w + ".sweep_deg", "must be <= 360");
+    l.rotating = t;
+  }
+  if (static_cast<double>(l.beams()) * l.lines() > 1e7) r.fail(n, where, "more than 10 million rays per scan");
+  return l;
+}
+
+SensorsDescription parse_sensors(const YamlReader& r, const YAML::Node& n) {
+  r.only_keys(n, "sensors", {"seed", "laser", "odometry", "imu", "cameras"});
+  SensorsDescription s;
+  if (n["seed"]) s.seed = r.as<uint64_t>(n["seed"], "sensors.seed");
+  if (const YAML::Node l = n["laser"]) s.laser = parse_laser(r, l, "sensors.laser");
+  if (const YAML::Node o = n["odometry"]) {
+    r.only_keys(o, "sensors.odometry", {"scale_sigma", "noise_per_sqrt_m"});
+    s.odometry.scale_sigma = r.positive(o, "scale_sigma", "sensors.odometry", 0.0, true);
+    s.odometry.noise_per_sqrt_m = r.positive(o, "noise_per_sqrt_m", "sensors.odometry", 0.0, true);
+  }
+  if (const YAML::Node i = n["imu"]) {
+    const std::string w = "sensors.imu";
+    r.only_keys(i, w, {"gyro_noise_radps", "gyro_bias_radps", "accel_noise_mps2", "accel_bias_mps2"});
+    s.imu.gyro_noise_radps = r.positive(i, "gyro_noise_radps", w, 0.0, true);
+    s.imu.gyro_bias_radps = r.positive(i, "gyro_bias_radps", w, 0.0, true);
+    s.imu.accel_noise_mps2 = r.positive(i, "accel_noise_mps2", w, 0.0, true);
+    s.imu.accel_bias_mps2 = r.positive(i, "accel_bias_mps2", w, 0.0, true);
+  }
+  if (const YAML::Node cams = n["cameras"]) {
+    if (!cams.IsSequence()) r.fail(cams, "sensors.cameras", "expected a list");
+    for (std::size_t k = 0; k < cams.size(); ++k) {
+      const std::string w = "sensors.cameras[" + std::to_string(k) + "]";
+      r.only_keys(cams[k], w, {"name", "mount_m", "rpy_deg"});
+      if (!cams[k]["name"]) r.fail(cams[k], w + ".name", "missing");
+      CameraMount c{r.as<std::string>(cams[k]["name"], w + ".name"), parse_mount(r, cams[k], w)};
+      for (const auto& other : s.cameras)
+        if (other.name == c.name) r.fail(cams[k]["name"], w + ".name", "duplicate camera '" + c.name + "'");
+      s.cameras.push_back(c);
+    }
+  }
+  return s;
 }
 
 }  // namespace
@@ -61,7 +141,7 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with robot, chassis, wheels, control");
-  r.only_keys(root, "", {"robot", "kind", "chassis", "wheels", "tracks", "arm", "control"});
+  r.only_keys(root, "", {"robot", "kind", "chassis", "wheels", "tracks", "arm", "control", "sensors"});
   RobotDescription d;
   d.file = file;
   if (!root["robot"]) r.fail(root, "robot", "missing");
@@ -189,6 +269,7 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
     a.gripper_max_force_n = r.positive(g, "max_force_n", "control.arm.gripper", a.gripper_max_force_n);
     d.control.arm = a;
   }
+  if (const YAML::Node sensors = root["sensors"]) d.sensors = parse_sensors(r, sensors);
   return d;
 }
 

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "sim/sensor_description.hpp"
+
 namespace rise::sim {
 
 enum class RobotKind { SkidSteer, Tracked };
@@ -106,6 +108,7 @@ struct RobotDescription {
   TracksDescription tracks;  ///< tracked only
   std::optional<ArmDescription> arm;
   ControlMapping control;
+  SensorsDescription sensors;  ///< optional `sensors` section
 };
 
 /// Loads a robot file. Throws std::runtime_error "file:line: key: message"

@@ -249,6 +249,9 @@ struct Simulation::Impl {
   DriveCommand command;
   ArmCommand arm_command;
   int64_t steps = 0;
+  dGeomID ray = nullptr;  // in no space: the scanner's probe
+  std::optional<Odometry> odometry;
+  std::optional<Imu> imu;
 
   dGeomID add_geom(dGeomID g, GeomKind kind, const std::string& name, int side = 0) {
     infos.push_back(std::make_unique<GeomInfo>(GeomInfo{kind, name, side, false}));
@@ -292,6 +295,66 @@ struct Simulation::Impl {
     else build_skid_steer();
     if (robot.arm && robot.control.arm) build_arm();
     place_robot();
+    ray = dCreateRay(nullptr, 1.0);
+    dGeomRaySetClosestHit(ray, 1);
+    // Separate noise streams, so that one sensor's draws never shift another's.
+    const uint64_t seed = robot.sensors.seed;
+    const double gauge = robot.kind == RobotKind::Tracked ? robot.tracks.gauge_m : robot.wheels.track_m;
+    odometry.emplace(robot.sensors.odometry, gauge, world_desc.robot_start_m, world_desc.robot_start_yaw_rad,
+                     seed * 2 + 1);
+    imu.emplace(robot.sensors.imu, Eigen::Vector3d(0, 0, -9.81), seed * 2 + 2);
+  }
+
+  struct RayHit {
+    dGeomID ray;
+    double range_m;
+  };
+  static void ray_callback(void* data, dGeomID a, dGeomID b) {
+    auto* hit = static_cast<RayHit*>(data);
+    const dGeomID other = a == hit->ray ? b : a;
+    const auto* info = static_cast<const GeomInfo*>(dGeomGetData(other));
+    if (!info || is_robot(info->kind)) return;
+    dContactGeom c;
+    if (dCollide(hit->ray, other, 1, &c, sizeof(dContactGeom)) > 0) hit->range_m = std::min(hit->range_m, c.depth);
+  }
+
+  double cast_ray_m(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range_m) {
+    const double inf = std::numeric_limits<double>::infinity();
+    if (!(max_range_m > 0.0)) return inf;
+    dGeomRaySetLength(ray, max_range_m);
+    dGeomRaySet(ray, o[0], o[1], o[2], d[0], d[1], d[2]);
+    RayHit hit{ray, inf};
+    dSpaceCollide2(ray, reinterpret_cast<dGeomID>(static_space), &hit, &ray_callback);
+    dSpaceCollide2(ray, reinterpret_cast<dGeomID>(space), &hit, &ray_callback);
+    return hit.range_m <= max_range_m ? hit.range_m : inf;
+  }
+
+  Eigen::Isometry3d T_world_base() const {
+    const dReal* p = dBodyGetPosition(chassis);
+    const dReal* q = dBodyGetQuaternion(chassis);
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translate(Eigen::Vector3d(p[0], p[1], p[2]));
+    T.rotate(Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized());
+    return T;
+  }
+
+  void update_sensors() {
+    double left = 0.0, right = 0.0;
+    if (robot.kind == RobotKind::Tracked) {
+      left = track_speed_mps[0];
+      right = track_speed_mps[1];
+    } else {
+      // Wheel rim speeds, each side the mean of its two wheels (fl, fr, rl, rr).
+      const double r = robot.wheels.radius_m;
+      left = r * (dJointGetHingeAngleRate(hinges[0]) + dJointGetHingeAngleRate(hinges[2])) / 2;
+      right = r * (dJointGetHingeAngleRate(hinges[1]) + dJointGetHingeAngleRate(hinges[3])) / 2;
+    }
+    odometry->update(left, right, kStepS);
+    const Eigen::Isometry3d T = T_world_base();
+    const dReal* v = dBodyGetLinearVel(chassis);
+    const dReal* w = dBodyGetAngularVel(chassis);
+    imu->update(T.linear(), Eigen::Vector3d(v[0], v[1], v[2]), T.linear().transpose() * Eigen::Vector3d(w[0], w[1], w[2]),
+                kStepS);
   }
 
   void build_world() {
@@ -823,11 +886,13 @@ struct Simulation::Impl {
       else dJointGetHingeAxis(arm_joints[i].joint, axis);
       arm_efforts[i] = t[0] * axis[0] + t[1] * axis[1] + t[2] * axis[2];
     }
+    update_sensors();
     check_breakables();
     update_events();
   }
 
   ~Impl() {
+    if (ray) dGeomDestroy(ray);
     if (contacts) dJointGroupDestroy(contacts);
     if (space) dSpaceDestroy(space);
     if (static_space) dSpaceDestroy(static_space);
@@ -881,6 +946,19 @@ std::array<double, 3> Simulation::object_position_m(const std::string& object) c
   }
   const double nan = std::numeric_limits<double>::quiet_NaN();
   return {nan, nan, nan};
+}
+
+Eigen::Isometry3d Simulation::T_world_base() const { return impl_->T_world_base(); }
+
+std::optional<Eigen::Isometry3d> Simulation::T_world_camera(const std::string& camera) const {
+  for (const auto& c : impl_->robot.sensors.cameras)
+    if (c.name == camera) return impl_->T_world_base() * c.mount.T_base_mount();
+  return std::nullopt;
+}
+
+double Simulation::cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
+                              double max_range_m) const {
+  return impl_->cast_ray_m(origin_world, direction_world, max_range_m);
 }
 
 RobotSnapshot Simulation::snapshot() const {
@@ -939,6 +1017,8 @@ RobotSnapshot Simulation::snapshot() const {
   r.stop_reason = s.command.stop_reason;
   r.commanded_linear_mps = s.command.linear_mps;
   r.commanded_angular_radps = s.command.angular_radps;
+  r.odometry = s.odometry->reading();
+  r.imu = s.imu->reading();
   return r;
 }
 

@@ -6,13 +6,18 @@
 // semantic events a scenario engine scores (collisions, doors, regions,
 // stairs, broken joints, tip-over).
 
+#include <Eigen/Geometry>
+
 #include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "sim/imu.hpp"
+#include "sim/odometry.hpp"
 #include "sim/robot_description.hpp"
 #include "sim/world_description.hpp"
 
@@ -86,6 +91,8 @@ struct RobotSnapshot {
   std::string stop_reason;
   double commanded_linear_mps = 0.0;
   double commanded_angular_radps = 0.0;
+  OdometryReading odometry;  ///< from the tracks' belt speeds or the wheels' rates, with the robot file's noise
+  ImuReading imu;            ///< the last step's sample
 
   double yaw_rad() const;
   double speed_mps() const;
@@ -135,6 +142,21 @@ class Simulation {
   double door_angle_rad(const std::string& door) const;
   /// Centre of a movable object or a door panel (m), NaNs for an unknown name.
   std::array<double, 3> object_position_m(const std::string& object) const;
+
+  /// The true pose of the base frame (the chassis centre; x forward, y left,
+  /// z up) in the world. Safe in the cyclic path.
+  Eigen::Isometry3d T_world_base() const;
+  /// The true world pose of the robot file's camera `camera`
+  /// (sensors.cameras), nullopt for an unknown name. Safe in the cyclic path.
+  std::optional<Eigen::Isometry3d> T_world_camera(const std::string& camera) const;
+  /// Distance (m) from `origin_world` along the unit `direction_world` to the
+  /// first surface of the world — ground, static boxes, walls, stairs, doors,
+  /// objects; never the robot's own parts — or +infinity when there is none
+  /// within max_range_m. ODE ray casting (dCreateRay + dCollide), the
+  /// laser scanner's primitive. Safe in the cyclic path: no allocation,
+  /// never throws. It reuses one ray geom: not from two threads at once.
+  double cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
+                    double max_range_m) const;
 
  private:
   struct Impl;

@@ -10,18 +10,6 @@ namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
 
-template <std::size_t N>
-std::array<double, N> read_vector(const YamlReader& r, const YAML::Node& map, const char* key,
-                                  const std::string& where) {
-  static const char* const kShapes[] = {"", "[x]", "[x, y]", "[x, y, z]"};
-  const YAML::Node v = map[key];
-  if (!v || !v.IsSequence() || v.size() != N)
-    r.fail(v ? v : map, where + "." + key, std::string("expected ") + kShapes[N]);
-  std::array<double, N> out{};
-  for (std::size_t k = 0; k < N; ++k) out[k] = r.as<double>(v[k], where + "." + key);
-  return out;
-}
-
 // Every entity has a unique name: events and contacts name them.
 class Names {
  public:
@@ -79,7 +67,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
   }
   if (const YAML::Node s = root["robot_start"]) {
     r.only_keys(s, "robot_start", {"xy_m", "yaw_deg"});
-    if (s["xy_m"]) w.robot_start_m = read_vector<2>(r, s, "xy_m", "robot_start");
+    if (s["xy_m"]) w.robot_start_m = r.vector<2>(s, "xy_m", "robot_start");
     w.robot_start_yaw_rad = degrees(r, s, "yaw_deg", "robot_start", 0.0);
   }
   if (const YAML::Node boxes = list(r, root, "boxes")) {
@@ -89,8 +77,8 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       r.only_keys(b, where, {"name", "center_m", "size_m", "yaw_deg"});
       BoxObstacle box;
       box.name = names.take(r, b, where);
-      box.center_m = read_vector<3>(r, b, "center_m", where);
-      box.size_m = read_vector<3>(r, b, "size_m", where);
+      box.center_m = r.vector<3>(b, "center_m", where);
+      box.size_m = r.vector<3>(b, "size_m", where);
       for (double s : box.size_m)
         if (!(s > 0)) r.fail(b["size_m"], where + ".size_m", "must be > 0");
       box.yaw_rad = degrees(r, b, "yaw_deg", where, 0.0);
@@ -104,8 +92,8 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       r.only_keys(n, where, {"name", "from", "to", "height", "thickness"});
       Wall wall;
       wall.name = names.take(r, n, where);
-      wall.from_m = read_vector<2>(r, n, "from", where);
-      wall.to_m = read_vector<2>(r, n, "to", where);
+      wall.from_m = r.vector<2>(n, "from", where);
+      wall.to_m = r.vector<2>(n, "to", where);
       wall.height_m = r.positive(n, "height", where, wall.height_m);
       wall.thickness_m = r.positive(n, "thickness", where, wall.thickness_m);
       if (std::hypot(wall.to_m[0] - wall.from_m[0], wall.to_m[1] - wall.from_m[1]) < 1e-3)
@@ -121,7 +109,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
                              "break_torque_nm", "break_time_ms", "mass_kg", "friction_torque_nm", "return_nm_per_rad"});
       Door d;
       d.name = names.take(r, n, where);
-      d.hinge_m = read_vector<2>(r, n, "hinge", where);
+      d.hinge_m = r.vector<2>(n, "hinge", where);
       d.width_m = r.positive(n, "width", where, d.width_m);
       d.height_m = r.positive(n, "height", where, d.height_m);
       d.thickness_m = r.positive(n, "thickness", where, d.thickness_m);
@@ -143,7 +131,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       r.only_keys(n, where, {"name", "start", "yaw_deg", "steps", "riser_m", "tread_m", "width_m", "landing_m"});
       Stairs s;
       s.name = names.take(r, n, where);
-      s.start_m = read_vector<2>(r, n, "start", where);
+      s.start_m = r.vector<2>(n, "start", where);
       s.yaw_rad = degrees(r, n, "yaw_deg", where, 0.0);
       if (n["steps"]) {
         s.steps = r.as<int>(n["steps"], where + ".steps");
@@ -163,12 +151,12 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       r.only_keys(n, where, {"name", "size_m", "mass_kg", "center_m"});
       MovableObject o;
       o.name = names.take(r, n, where);
-      o.size_m = read_vector<3>(r, n, "size_m", where);
+      o.size_m = r.vector<3>(n, "size_m", where);
       for (double s : o.size_m)
         if (!(s > 0)) r.fail(n["size_m"], where + ".size_m", "must be > 0");
       if (!n["mass_kg"]) r.fail(n, where + ".mass_kg", "missing");
       o.mass_kg = r.positive(n, "mass_kg", where, o.mass_kg);
-      o.center_m = read_vector<3>(r, n, "center_m", where);
+      o.center_m = r.vector<3>(n, "center_m", where);
       w.objects.push_back(o);
     }
   }
@@ -179,8 +167,8 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       r.only_keys(n, where, {"name", "min", "max"});
       Region g;
       g.name = names.take(r, n, where);
-      g.min_m = read_vector<3>(r, n, "min", where);
-      g.max_m = read_vector<3>(r, n, "max", where);
+      g.min_m = r.vector<3>(n, "min", where);
+      g.max_m = r.vector<3>(n, "max", where);
       for (std::size_t k = 0; k < 3; ++k)
         if (!(g.max_m[k] > g.min_m[k])) r.fail(n["max"], where + ".max", "must exceed min on every axis");
       w.regions.push_back(g);

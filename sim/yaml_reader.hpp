@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
@@ -49,6 +50,18 @@ class YamlReader {
     const double v = as<double>(n, k);
     if (!(allow_zero ? v >= 0.0 : v > 0.0)) fail(n, k, allow_zero ? "must be >= 0" : "must be > 0");
     return v;
+  }
+
+  /// The list of N numbers at map[key] (required).
+  template <std::size_t N>
+  std::array<double, N> vector(const YAML::Node& map, const char* key, const std::string& where) const {
+    static const char* const kShapes[] = {"", "[x]", "[x, y]", "[x, y, z]"};
+    const YAML::Node v = map[key];
+    const std::string k = where.empty() ? key : where + "." + key;
+    if (!v || !v.IsSequence() || v.size() != N) fail(v ? v : map, k, std::string("expected ") + kShapes[N]);
+    std::array<double, N> out{};
+    for (std::size_t i = 0; i < N; ++i) out[i] = as<double>(v[i], k);
+    return out;
   }
 
   YAML::Node load_text(const std::string& text) const {

@@ -1,7 +1,8 @@
 // rise-sim: the ODE simulator as an LCM node. Subscribes the trainee's
 // PanelState, steps the world at a fixed 1 ms, publishes RobotState, the
 // console feedback (the speed display) and every simulation event
-// (SimEvent on rise/<id>/sim_event).
+// (SimEvent on rise/<id>/sim_event). With --scan-dir it also writes the
+// robot's 3D laser scans as PCD files with their true pose beside them.
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -11,13 +12,17 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <filesystem>
+#include <limits>
+#include <optional>
 #include <thread>
 
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
+#include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
 
 namespace {
@@ -128,6 +133,9 @@ int main(int argc, char** argv) {
   double state_hz = 50.0;
   int panel_timeout_ms = 100;
   std::string log_level = "info";
+  std::string scan_dir;
+  double scan_every_s = 0.0;
+  std::string scan_format = "binary";
   app.add_option("--robot", robot_file, "robot file (YAML)")->capture_default_str();
   app.add_option("--world", world_file, "world file (YAML); default: the built-in yard");
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
@@ -139,6 +147,12 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  app.add_option("--scan-dir", scan_dir, "write a laser scan (scan_NNNN.pcd + .pose) here at start");
+  app.add_option("--scan-every", scan_every_s, "and every S seconds of sim time (0: only at start)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--scan-format", scan_format, "PCD DATA: ascii or binary")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"ascii", "binary"}));
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
 
@@ -166,6 +180,24 @@ int main(int argc, char** argv) {
   // a stalled sim from acting on old sticks.
   lcm.subscribe(panel_channel, &PanelListener::on, &panel)->setQueueCapacity(8);
 
+  std::optional<rise::sim::LaserScanner> scanner;
+  if (!scan_dir.empty()) {
+    if (!robot.sensors.laser) {
+      spdlog::error("--scan-dir: {} has no sensors.laser", robot.file);
+      return 2;
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(scan_dir, ec);
+    if (ec) {
+      spdlog::error("--scan-dir {}: {}", scan_dir, ec.message());
+      return 2;
+    }
+    scanner.emplace(*robot.sensors.laser, robot.sensors.seed);
+  }
+  int scans = 0;
+  double next_scan_s = 0.0;
+  const auto format = scan_format == "ascii" ? rise::sim::PcdFormat::Ascii : rise::sim::PcdFormat::Binary;
+
   rise::sim::Simulation sim(robot, world);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
@@ -183,6 +215,21 @@ int main(int argc, char** argv) {
     // Take every waiting LCM message without blocking the physics.
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     while (::poll(&pfd, 1, 0) > 0) lcm.handle();
+
+    // Stop-and-go scanning: the whole scan at one instant of sim time.
+    if (scanner && sim.time_s() >= next_scan_s - 1e-9) {
+      char name[32];
+      std::snprintf(name, sizeof name, "scan_%04d", scans++);
+      const auto stem = (std::filesystem::path(scan_dir) / name).string();
+      const auto scan = scanner->scan(sim);
+      try {
+        rise::sim::write_scan(stem, scan, format);
+        spdlog::info("scan {:.3f} s: {}.pcd, {} points", scan.time_s, stem, scan.points_sensor.size());
+      } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+      }
+      next_scan_s = scan_every_s > 0 ? next_scan_s + scan_every_s : std::numeric_limits<double>::infinity();
+    }
 
     rise::sim::ControlInput input = panel.input;
     input.fresh = panel.any && std::chrono::steady_clock::now() - panel.received <= timeout;

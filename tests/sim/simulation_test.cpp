@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "sim/simulation.hpp"
+#include "tests/sim/sim_panel.hpp"
 
 using namespace rise::sim;
 
@@ -15,22 +16,8 @@ const std::string kRobot = std::string(RISE_SOURCE_DIR) + "/sim/robots/skid4.yam
 RobotDescription robot() { return load_robot_description(kRobot); }
 
 // A panel with the dead-man held, mode=drive, speed=fast and the given sticks.
-ControlInput drive(float forward, float turn_right) {
-  ControlInput in;
-  in.fresh = true;
-  in.failsafe = false;
-  in.deadman = true;
-  in.axes = {{"drive_y", forward}, {"drive_x", turn_right}};
-  in.buttons = {{"estop", false}};
-  in.switches = {{"mode", 0}, {"speed", 2}};
-  in.switch_labels = {{"mode", "drive"}, {"speed", "fast"}};
-  return in;
-}
-
-void run(Simulation& sim, double seconds) {
-  const auto steps = static_cast<int>(std::lround(seconds / Simulation::kStepS));
-  for (int i = 0; i < steps; ++i) sim.step();
-}
+constexpr auto drive = &rise::sim::testing::drive_panel;
+constexpr auto run = &rise::sim::testing::run_for;
 
 double yaw_deg(const RobotSnapshot& s) { return s.yaw_rad() * 180.0 / M_PI; }
 
