@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_data.hpp"
 #include "hil/io/can_url.hpp"
 #include "hil/io/replay_bus.hpp"
 
@@ -54,14 +55,10 @@ void print(const char* who, const Figures& f) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  const std::string data = root ? root : std::string(RISE_SOURCE_DIR) + "/../shared/data";
-  const std::string log = argc > 1 && argv[1][0] ? argv[1] : data + "/can/ICSim/sample-can.log";
+  const auto found = rise::bench::data_file(argc > 1 ? argv[1] : nullptr, "can/ICSim/sample-can.log");
+  if (!found) return 2;
+  const std::string& log = *found;
   const double seconds = argc > 2 ? std::atof(argv[2]) : 60.0;
-  if (!std::filesystem::exists(log)) {
-    std::fprintf(stderr, "%s is absent (set RISE_TEST_DATA)\n", log.c_str());
-    return 2;
-  }
   std::printf("real-time replay lateness, %.0f s of %s (looped), speed 1\n", seconds, log.c_str());
 
   // python-can: MessageSync over the file looped with shifted timestamps,

@@ -16,17 +16,14 @@
 #include <filesystem>
 #include <string>
 
+#include "bench/bench_data.hpp"
 #include "hil/io/can_bus.hpp"
 
 int main(int argc, char** argv) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  const std::string data = root ? root : std::string(RISE_SOURCE_DIR) + "/../shared/data";
-  const std::string log = argc > 1 && argv[1][0] ? argv[1] : data + "/can/ICSim/sample-can.log";
+  const auto found = rise::bench::data_file(argc > 1 ? argv[1] : nullptr, "can/ICSim/sample-can.log");
+  if (!found) return 2;
+  const std::string& log = *found;
   const int passes = argc > 2 ? std::atoi(argv[2]) : 200;
-  if (!std::filesystem::exists(log)) {
-    std::fprintf(stderr, "%s is absent (set RISE_TEST_DATA)\n", log.c_str());
-    return 2;
-  }
   std::printf("replay throughput, %d passes over %s\n", passes, log.c_str());
 
   auto bus = rise::io::open_can_bus("replay://" + log + "?fast=1&loop=" + std::to_string(passes - 1));
