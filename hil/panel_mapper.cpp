@@ -70,9 +70,11 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
           if (other.is_multiplexer) b.multiplexer = &other;
       binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
       sources_[c.source].dbc.push_back(b);
-    } else if (!c.hid_signal.empty()) {
+    } else if (!c.hid_signal.empty() || c.modbus_point) {
       DbcBinding b;
       b.hid_raw = c.kind == ControlKind::Switch;
+      b.modbus = c.modbus_point;
+      b.modbus_type = c.modbus_type;
       binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
       sources_[c.source].dbc.push_back(b);
     } else {
@@ -204,6 +206,25 @@ bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> rep
   return changed;
 }
 
+bool PanelMapper::on_modbus_poll(std::size_t source, const ModbusPoll& poll, int64_t now_us) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  bool changed = false;
+  for (DbcBinding& b : s.dbc) {
+    const std::optional<uint16_t> raw = b.modbus ? poll.value(*b.modbus) : std::nullopt;
+    if (!raw) continue;
+    const double value = b.modbus->is_bit() ? *raw : panels::modbus_number(*raw, b.modbus_type);
+    changed = changed || b.last_us == 0 || value != b.value;
+    b.value = value;
+    b.last_us = now_us;
+  }
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.status.frames_ok++;
+  s.last_any_valid_us = now_us;
+  s.poll_last_us = now_us;
+  return changed;
+}
+
 bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
                            int64_t now_us, bool extended) {
   if (source >= sources_.size()) return false;
@@ -313,6 +334,7 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   if (!connected) {
     for (auto& b : s.dbc) b.last_us = 0;
     s.hid_last_us = 0;
+    s.poll_last_us = 0;
     s.decoder.reset();
     s.last_valid_us.fill(0);
     s.status.heartbeat_seen = false;
@@ -348,6 +370,20 @@ bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::stri
     const int64_t age_us = now_us - s.hid_last_us;
     if (timeout_us > 0 && age_us > timeout_us) {
       *reason = name + ": stale (no report for " + std::to_string(age_us / 1000) + " ms)";
+      return false;
+    }
+    return true;
+  }
+  if (def.is_generic_modbus()) {
+    // A third-party device has no alive counter or CRC of ours: it is
+    // trusted while its polls are answered.
+    if (s.poll_last_us == 0) {
+      *reason = name + ": no poll answered yet";
+      return false;
+    }
+    const int64_t age_us = now_us - s.poll_last_us;
+    if (age_us > timeout_us) {
+      *reason = name + ": stale (no poll answered for " + std::to_string(age_us / 1000) + " ms)";
       return false;
     }
     return true;
@@ -497,6 +533,12 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
             // A DBC signal's value is the position index (its VAL_ table names them).
             const double value = s.dbc[static_cast<std::size_t>(b)].value;
             position = value >= 0.0 && value < 255.0 ? static_cast<uint8_t>(std::lround(value)) : fp::kSwitchInvalid;
+            if (c.modbus_point && position >= c.positions.size()) {
+              // A register's number: no "not available" value.
+              set_safe(c, v);
+              append_reason(reasons, c.name + ": position " + std::to_string(std::lround(value)) + " unknown");
+              break;
+            }
           }
           if (position >= c.positions.size()) {
             set_safe(c, v);
