@@ -91,6 +91,7 @@ bool ReplayModbusLink::link_up(int64_t trace_us) const {
 }
 
 int64_t ReplayModbusLink::in_pass(int64_t elapsed) const {
+  if (past_end(elapsed)) return window_end_us_;
   const int64_t offset = elapsed % period_us_;
   return window_begin_us_ + std::min(offset, window_end_us_ - window_begin_us_);
 }
