@@ -103,10 +103,7 @@ bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, s
     }
     if (b.multiplexer && static_cast<uint64_t>(fp::extract_raw(*b.multiplexer, data)) != b.signal->multiplexer_value)
       continue;  // this frame carries another multiplexed page
-    const double value = fp::physical_value(*b.signal, fp::extract_raw(*b.signal, data));
-    changed = changed || b.last_us == 0 || value != b.value;
-    b.value = value;
-    b.last_us = now_us;
+    changed = take(b, fp::physical_value(*b.signal, fp::extract_raw(*b.signal, data)), now_us) || changed;
   }
   if (!matched) {
     s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
@@ -206,22 +203,23 @@ bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> rep
   return changed;
 }
 
+bool PanelMapper::take(DbcBinding& b, double value, int64_t now_us) {
+  const bool changed = b.last_us == 0 || value != b.value;
+  b.value = value;
+  b.last_us = now_us;
+  return changed;
+}
+
 bool PanelMapper::on_modbus_poll(std::size_t source, const ModbusPoll& poll, int64_t now_us) {
   if (source >= sources_.size()) return false;
   SourceState& s = sources_[source];
-  bool changed = false;
-  for (DbcBinding& b : s.dbc) {
-    const std::optional<uint16_t> raw = b.modbus ? poll.value(*b.modbus) : std::nullopt;
-    if (!raw) continue;
-    const double value = b.modbus->is_bit() ? *raw : panels::modbus_number(*raw, b.modbus_type);
-    changed = changed || b.last_us == 0 || value != b.value;
-    b.value = value;
-    b.last_us = now_us;
-  }
-  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.poll_last_us = s.last_any_valid_us = now_us;
   s.status.frames_ok++;
-  s.last_any_valid_us = now_us;
-  s.poll_last_us = now_us;
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  bool changed = false;
+  for (DbcBinding& b : s.dbc)
+    if (const std::optional<uint16_t> raw = b.modbus ? poll.value(*b.modbus) : std::nullopt)
+      changed = take(b, b.modbus->is_bit() ? *raw : panels::modbus_number(*raw, b.modbus_type), now_us) || changed;
   return changed;
 }
 

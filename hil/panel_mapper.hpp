@@ -174,6 +174,8 @@ class PanelMapper {
   };
 
   void count_valid(SourceState& s);
+  // A bound signal's value at now_us; true when it changed (or came first since a loss).
+  static bool take(DbcBinding& b, double value, int64_t now_us);
   bool source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const;
 
   panels::PanelDefinition definition_;

@@ -86,33 +86,22 @@ void ModbusServer::holding_registers(std::span<uint16_t> out) const {
   std::copy_n(mapping_->tab_registers, n, out.begin());
 }
 
-namespace {
-// Copies `from` into table[address..] of a table of `size`, what fits.
 template <typename T>
-void put(T* table, int size, uint16_t address, std::span<const T> from) {
+void ModbusServer::put(T* table, int size, uint16_t address, std::span<const T> from) {
+  std::lock_guard lock(mutex_);  // the table pointers themselves never change
   for (std::size_t i = 0; i < from.size() && address + i < static_cast<std::size_t>(size); ++i)
     table[address + i] = from[i];
 }
-}  // namespace
 
-void ModbusServer::set_coils(uint16_t address, std::span<const uint8_t> bits) {
-  std::lock_guard lock(mutex_);
-  put(mapping_->tab_bits, mapping_->nb_bits, address, bits);
+void ModbusServer::set_coils(uint16_t a, std::span<const uint8_t> b) { put(mapping_->tab_bits, mapping_->nb_bits, a, b); }
+void ModbusServer::set_discrete_inputs(uint16_t a, std::span<const uint8_t> b) {
+  put(mapping_->tab_input_bits, mapping_->nb_input_bits, a, b);
 }
-
-void ModbusServer::set_discrete_inputs(uint16_t address, std::span<const uint8_t> bits) {
-  std::lock_guard lock(mutex_);
-  put(mapping_->tab_input_bits, mapping_->nb_input_bits, address, bits);
+void ModbusServer::set_holding_registers(uint16_t a, std::span<const uint16_t> r) {
+  put(mapping_->tab_registers, mapping_->nb_registers, a, r);
 }
-
-void ModbusServer::set_holding_registers(uint16_t address, std::span<const uint16_t> registers) {
-  std::lock_guard lock(mutex_);
-  put(mapping_->tab_registers, mapping_->nb_registers, address, registers);
-}
-
-void ModbusServer::set_input_registers(uint16_t address, std::span<const uint16_t> registers) {
-  std::lock_guard lock(mutex_);
-  put(mapping_->tab_input_registers, mapping_->nb_input_registers, address, registers);
+void ModbusServer::set_input_registers(uint16_t a, std::span<const uint16_t> r) {
+  put(mapping_->tab_input_registers, mapping_->nb_input_registers, a, r);
 }
 
 void ModbusServer::coils(uint16_t address, std::span<uint8_t> out) const {

@@ -61,6 +61,9 @@ class ModbusServer {
   void serve_tcp();
   void serve_rtu();
   void reply(const uint8_t* query, int length);
+  // Copies `from` into table[address..] of a table of `size`: what fits.
+  template <typename T>
+  void put(T* table, int size, uint16_t address, std::span<const T> from);
 
   ModbusAddress address_;
   _modbus* ctx_ = nullptr;

@@ -73,12 +73,14 @@ class ReplayModbusLink final : public ModbusLink {
   /// or an empty window.
   ReplayModbusLink(std::string url, ReplayAddress address);
 
-  /// Each answers as the header says; no throw, no allocation; a recorded
-  /// timeout sleeps (real time only).
+  /// The recorded answer of the same request at the replay time, as the
+  /// header says; no throw, no allocation; a recorded timeout sleeps its
+  /// rtt_us / speed (real time only).
   ModbusResult read_coils(uint16_t address, std::span<uint8_t> bits) override;
   ModbusResult read_discrete_inputs(uint16_t address, std::span<uint8_t> bits) override;
   ModbusResult read_holding_registers(uint16_t address, std::span<uint16_t> registers) override;
   ModbusResult read_input_registers(uint16_t address, std::span<uint16_t> registers) override;
+  /// Dropped and counted: Ok while the recorded link was up. No throw.
   ModbusResult write_coils(uint16_t address, std::span<const uint8_t> bits) override;
   ModbusResult write_registers(uint16_t address, std::span<const uint16_t> registers) override;
 

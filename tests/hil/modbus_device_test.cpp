@@ -358,7 +358,7 @@ TEST_CASE("a modbus source's LEDs and displays are written point by point, each 
 }
 
 TEST_CASE("the bridge polls a third-party Modbus device over TCP, writes its feedback, fails safe when it goes "
-          "away and recovers when it returns; the recorded session verifies",
+          "away and recovers when it returns, and the recorded session verifies",
           "[hil]") {
   const auto def = plc_panel();
   const rise::io::ModbusTableSizes sizes{16, 16, 16, 16};

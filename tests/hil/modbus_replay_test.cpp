@@ -101,8 +101,8 @@ TEST_CASE("a recorded Modbus session replayed through the live bridge by replay:
 
   // Where the golden is steady for ±30 ms (not at an edge that the replay's
   // own poll phase may move by one poll, nor at the golden's own ends), the
-  // replayed message nearest in trace time (within a publish period) must
-  // be the golden's.
+  // replayed message nearest in trace time (within two publish periods: a
+  // late tick is skipped) must be the golden's.
   VerifySettings loose;
   loose.time_tolerance_us = 30'000;  // ages in a failsafe reason ("for 103 ms")
   std::size_t compared = 0;
@@ -116,7 +116,7 @@ TEST_CASE("a recorded Modbus session replayed through the live bridge by replay:
       return std::llabs(a.utime - g.utime) < std::llabs(b.utime - g.utime);
     });
     INFO("golden message seq " << g.seq << " at " << (g.utime - window.begin_us) / 1000 << " ms of the trace");
-    REQUIRE(std::llabs(nearest->utime - g.utime) <= 10'000);
+    REQUIRE(std::llabs(nearest->utime - g.utime) <= 20'000);
     const auto difference = compare_panel_states(without_counters(g), without_counters(*nearest), loose);
     INFO((difference ? describe(*difference) : std::string()));
     CHECK_FALSE(difference.has_value());
@@ -147,8 +147,8 @@ TEST_CASE("a recorded Modbus session replayed through the live bridge by replay:
   CHECK(silent.axes[1].value == 0.0f);
 }
 
-TEST_CASE("the end of a Modbus replay fails the panel safe within a poll and a publish period and keeps it so; "
-          "speed=2 plays it in half the time",
+TEST_CASE("the end of a Modbus replay fails the panel safe within a poll and a publish period and keeps it so, "
+          "and speed=2 plays it in half the time",
           "[hil]") {
   const double speed = GENERATE(1.0, 2.0);
   INFO("speed " << speed);
