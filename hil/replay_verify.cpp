@@ -137,16 +137,20 @@ class ModbusFeed final : public CaptureReplay::Feed {
     }
   }
 
+  // "fc=04 addr=0 count=18", as the trace writes a request.
+  static std::string request_text(Fn function, uint16_t address, uint16_t count) {
+    const auto fc = static_cast<int>(function);
+    return std::string("fc=") + (fc < 10 ? "0" : "") + std::to_string(fc) + " addr=" + std::to_string(address) +
+           " count=" + std::to_string(count);
+  }
   std::runtime_error bad_line(const std::string& what) const {
-    return std::runtime_error(reader_.path() + ":" + std::to_string(record_.line) + ": fc=" +
-                              std::to_string(static_cast<int>(record_.function)) + " addr=" +
-                              std::to_string(record_.address) + " count=" + std::to_string(record_.count) + " " + what);
+    return std::runtime_error(reader_.path() + ":" + std::to_string(record_.line) + ": " +
+                              request_text(record_.function, record_.address, record_.count) + " " + what);
   }
   std::string describe_reads() const {
     std::string text;
     for (const ModbusRead& r : poll_.reads())
-      text += (text.empty() ? "" : ", ") + std::string("fc=") + std::to_string(static_cast<int>(r.function)) +
-              " addr=" + std::to_string(r.address) + " count=" + std::to_string(r.count);
+      text += (text.empty() ? "" : ", ") + request_text(r.function, r.address, r.count);
     return text;
   }
 

@@ -44,9 +44,10 @@ struct ModbusPoint {
 enum class ModbusValueType : uint8_t { UInt16, Int16 };
 
 /// "holding_register.3.bit.2" → ModbusPoint; nullopt when malformed or out
-/// of range (address above 65535, bit above 15, a bit of a coil).
+/// of range (address above 65535, bit above 15, a bit of a coil). No throw,
+/// no allocation.
 std::optional<ModbusPoint> parse_modbus_point(std::string_view text);
-/// The text parse_modbus_point() reads.
+/// The text parse_modbus_point() reads. Allocates: for messages.
 std::string to_string(const ModbusPoint& point);
 
 /// A register's raw 16 bits as `type` reads them (two's complement for

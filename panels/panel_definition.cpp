@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -522,8 +523,17 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
 // feedback writes (the control would read our own LED back), and each
 // table's span from the lowest to the highest address within one request,
 // as the bridge reads each table in one request per poll (Modbus
-// Application Protocol V1.1b3 §6.1-6.4: 2000 bits, 125 registers).
-void check_modbus_points(const Context& ctx, const PanelDefinition& def, const YAML::Node& controls) {
+// Application Protocol V1.1b3 §6.1-6.4: 2000 bits, 125 registers). A
+// modbus source is healthy while its polls are answered: it needs a point
+// to poll.
+void check_modbus_points(const Context& ctx, const PanelDefinition& def, const YAML::Node& root) {
+  const YAML::Node controls = root["controls"];
+  for (std::size_t s = 0; s < def.sources.size(); ++s)
+    if (def.sources[s].is_generic_modbus() &&
+        std::none_of(def.controls.begin(), def.controls.end(), [&](const auto& c) { return c.source == s; }))
+      ctx.fail(root["sources"][s], "sources[" + std::to_string(s) + "]",
+               "no control reads source '" + def.sources[s].name +
+                   "': a modbus source is trusted while its polls are answered, and it needs a point to poll");
   std::map<std::pair<std::size_t, ModbusTable>, std::pair<uint16_t, uint16_t>> spans;
   for (std::size_t i = 0; i < def.controls.size(); ++i) {
     const ControlDefinition& c = def.controls[i];
@@ -666,7 +676,7 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
     ctx.fail(controls, "controls", "motion controls need a control with role: deadman");
 
   if (const YAML::Node feedback = root["feedback"]) parse_feedback(ctx, def, feedback);
-  check_modbus_points(ctx, def, controls);
+  check_modbus_points(ctx, def, root);
   return def;
 }
 

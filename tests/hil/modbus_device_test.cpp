@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <sstream>
 
@@ -219,6 +220,20 @@ TEST_CASE("a modbus source's definition binds points of the device's tables and 
     } catch (const std::runtime_error& e) {
       CHECK_THAT(e.what(), Catch::StartsWith(message));
     }
+  }
+  SECTION("a modbus source that no control reads has nothing to poll: refused") {
+    const std::string yaml =
+        "panel: p\n"
+        "sources:\n"
+        "  - {name: console, protocol: rise-modbus-v1}\n"
+        "  - {name: plc, protocol: modbus}\n"
+        "controls:\n"
+        "  - {name: deadman, kind: button, source: console, signal: button.0, safe: false}\n"
+        "feedback:\n"
+        "  leds: [{name: fault, source: plc, signal: coil.3}]\n";
+    CHECK_THROWS_WITH(rise::panels::parse_panel_definition(yaml, "p.yaml"),
+                      "p.yaml:4: sources[1]: no control reads source 'plc': a modbus source is trusted while its "
+                      "polls are answered, and it needs a point to poll");
   }
   SECTION("a point's signal and type are refused on a source of another protocol") {
     const std::string head =
@@ -457,5 +472,17 @@ TEST_CASE("the bridge polls a third-party Modbus device over TCP, writes its fee
   if (report.difference) INFO(describe(*report.difference));
   CHECK(report.passed());
   CHECK(report.messages == golden.messages.size());
+
+  // A definition that polls other points than the recorded ones is refused at the first read it lacks.
+  std::ifstream in(std::string(RISE_SOURCE_DIR) + "/panels/definitions/modbus_plc_panel.yaml");
+  std::stringstream yaml;
+  yaml << in.rdbuf();
+  std::string other = yaml.str();
+  other.replace(other.find("input_register.5.bit.3"), 22, "input_register.7.bit.3");
+  const auto other_def = rise::panels::parse_panel_definition(other, "other.yaml");
+  CHECK_THROWS_WITH(verify_replay(other_def, captures_in(other_def, dir), golden.messages),
+                    Catch::Contains("/plc.modbus.log:") &&
+                        Catch::Contains(": fc=04 addr=0 count=6 is not a read of this source's poll (fc=02 addr=0 "
+                                        "count=2, fc=03 addr=3 count=1, fc=04 addr=0 count=8)"));
   std::filesystem::remove_all(dir);
 }
