@@ -199,6 +199,8 @@ void Bridge::modbus_source_loop(std::size_t source) {
   io::ModbusLink& link = *modbus_links_[source];
   const panels::SourceDefinition& def = mapper_.definition().sources[source];
   const auto poll_period_us = static_cast<int64_t>(1e6 / def.poll_hz);
+  ModbusPoll poll(modbus_poll_reads(mapper_.definition(), source));
+  ModbusFeedbackWriter device_feedback;  // a modbus device's LEDs and displays
   int64_t retry_ms = settings_.reopen_min_ms;
   int64_t next_retry_us = 0;
   int64_t next_poll_us = 0;
@@ -206,8 +208,6 @@ void Bridge::modbus_source_loop(std::size_t source) {
   std::optional<uint16_t> last_counter;
   fp::ModbusFeedbackBlock last_sent;
   bool have_sent = false;
-  std::array<uint16_t, fp::modbus_ir::kCount> registers{};
-  std::array<uint8_t, fp::kModbusDiscreteInputs> bits{};
   std::array<uint8_t, fp::kModbusCoils> coils{};
 
   while (running_) {
@@ -219,6 +219,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
       // the source's age (timeout_ms), not by this reconnect.
       last_counter.reset();
       have_sent = false;
+      device_feedback.forget();
       bool reopened = false;
       if (now >= next_retry_us) {
         if (link.reopen() == io::ModbusStatus::Ok) {
@@ -248,9 +249,9 @@ void Bridge::modbus_source_loop(std::size_t source) {
     next_poll_us += poll_period_us;
     if (next_poll_us <= now) next_poll_us = now + poll_period_us;
 
-    // Inputs: the register block (under the map's CRC), then the buttons.
-    io::ModbusResult r = link.read_input_registers(0, registers);
-    if (r.ok()) r = link.read_discrete_inputs(0, bits);
+    // Inputs: rise-modbus-v1's register block (under the map's CRC), then
+    // the buttons; a modbus device's tables (modbus_poll.hpp).
+    const io::ModbusResult r = poll.read(link);
     bool changed = false;
     {
       std::lock_guard lock(mutex_);
@@ -258,7 +259,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
       if (!report_modbus(source, r)) continue;
       mapper_.on_connection(source, true, now);
       if (r.ok()) {
-        changed = apply_modbus_inputs(mapper_, source, registers, bits, last_counter, now);
+        changed = apply_modbus_poll(mapper_, source, poll, last_counter, now);
         changed_ = changed_ || changed;
       }
     }
@@ -271,6 +272,14 @@ void Bridge::modbus_source_loop(std::size_t source) {
       std::lock_guard lock(mutex_);
       snap = mapper_.evaluate(now);
       request = feedback_;
+    }
+    if (def.is_generic_modbus()) {
+      // A device's own coils and registers: written when they change.
+      const io::ModbusResult w =
+          device_feedback.write(link, build_modbus_feedback(mapper_.definition(), source, request, snap));
+      std::lock_guard lock(mutex_);
+      report_modbus(source, w);
+      continue;
     }
     const FeedbackFrames frames = build_feedback(mapper_.definition(), source, request, snap);
     const fp::ModbusFeedbackBlock block = fp::encode_feedback(frames.indicators, frames.displays);

@@ -1,5 +1,6 @@
 #include "hil/feedback.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -56,6 +57,25 @@ FeedbackFrames build_feedback(const panels::PanelDefinition& definition, std::si
     for (const auto& [name, value] : request.displays)
       if (name == display.name) frame.raw = display_raw(value, display.decimals);
     out.displays.push_back(frame);
+  }
+  return out;
+}
+
+std::vector<ModbusWrite> build_modbus_feedback(const panels::PanelDefinition& definition, std::size_t source,
+                                               const FeedbackRequest& request, const PanelSnapshot& snapshot) {
+  std::vector<ModbusWrite> out;
+  const bool estop = estop_pressed(definition, snapshot);
+  for (const auto& led : definition.leds)
+    if (led.source == source && led.modbus_point)
+      out.push_back({*led.modbus_point, static_cast<uint16_t>(lit(led, request, snapshot, estop) ? 1 : 0)});
+  for (const auto& display : definition.displays) {
+    if (display.source != source || !display.modbus_point) continue;
+    int32_t raw = 0;
+    for (const auto& [name, value] : request.displays)
+      if (name == display.name) raw = display_raw(value, display.decimals);
+    const bool int16 = display.modbus_type == panels::ModbusValueType::Int16;
+    raw = std::clamp<int32_t>(raw, int16 ? -32768 : 0, int16 ? 32767 : 65535);
+    out.push_back({*display.modbus_point, static_cast<uint16_t>(raw)});
   }
   return out;
 }

@@ -52,6 +52,14 @@ std::vector<std::vector<uint8_t>> build_hid_feedback(const panels::PanelDefiniti
 std::vector<std::string> hid_feedback_problems(const panels::PanelDefinition& definition, std::size_t source,
                                                const firmware_protocol::HidOutputEncoder& encoder);
 
+/// What shows a "modbus" source's feedback: each LED of `source` (lit as
+/// build_feedback decides) as 1 / 0 on its coil or holding register, then
+/// each display as its raw value (value · 10^decimals) saturated to its
+/// type (uint16: 0..65535, int16: -32768..32767), in the definition's order.
+/// Allocates: call at the feedback rate.
+std::vector<ModbusWrite> build_modbus_feedback(const panels::PanelDefinition& definition, std::size_t source,
+                                               const FeedbackRequest& request, const PanelSnapshot& snapshot);
+
 /// value → raw display units: round(value · 10^decimals), saturated to int32.
 int32_t display_raw(float value, uint8_t decimals);
 

@@ -70,9 +70,11 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
           if (other.is_multiplexer) b.multiplexer = &other;
       binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
       sources_[c.source].dbc.push_back(b);
-    } else if (!c.hid_signal.empty()) {
+    } else if (!c.hid_signal.empty() || c.modbus_point) {
       DbcBinding b;
       b.hid_raw = c.kind == ControlKind::Switch;
+      b.modbus = c.modbus_point;
+      b.modbus_type = c.modbus_type;
       binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
       sources_[c.source].dbc.push_back(b);
     } else {
@@ -101,10 +103,7 @@ bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, s
     }
     if (b.multiplexer && static_cast<uint64_t>(fp::extract_raw(*b.multiplexer, data)) != b.signal->multiplexer_value)
       continue;  // this frame carries another multiplexed page
-    const double value = fp::physical_value(*b.signal, fp::extract_raw(*b.signal, data));
-    changed = changed || b.last_us == 0 || value != b.value;
-    b.value = value;
-    b.last_us = now_us;
+    changed = take(b, fp::physical_value(*b.signal, fp::extract_raw(*b.signal, data)), now_us) || changed;
   }
   if (!matched) {
     s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
@@ -201,6 +200,26 @@ bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> rep
   s.status.frames_ok++;
   s.last_any_valid_us = now_us;
   s.hid_last_us = now_us;
+  return changed;
+}
+
+bool PanelMapper::take(DbcBinding& b, double value, int64_t now_us) {
+  const bool changed = b.last_us == 0 || value != b.value;
+  b.value = value;
+  b.last_us = now_us;
+  return changed;
+}
+
+bool PanelMapper::on_modbus_poll(std::size_t source, const ModbusPoll& poll, int64_t now_us) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  s.poll_last_us = s.last_any_valid_us = now_us;
+  s.status.frames_ok++;
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  bool changed = false;
+  for (DbcBinding& b : s.dbc)
+    if (const std::optional<uint16_t> raw = b.modbus ? poll.value(*b.modbus) : std::nullopt)
+      changed = take(b, b.modbus->is_bit() ? *raw : panels::modbus_number(*raw, b.modbus_type), now_us) || changed;
   return changed;
 }
 
@@ -313,6 +332,7 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   if (!connected) {
     for (auto& b : s.dbc) b.last_us = 0;
     s.hid_last_us = 0;
+    s.poll_last_us = 0;
     s.decoder.reset();
     s.last_valid_us.fill(0);
     s.status.heartbeat_seen = false;
@@ -348,6 +368,20 @@ bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::stri
     const int64_t age_us = now_us - s.hid_last_us;
     if (timeout_us > 0 && age_us > timeout_us) {
       *reason = name + ": stale (no report for " + std::to_string(age_us / 1000) + " ms)";
+      return false;
+    }
+    return true;
+  }
+  if (def.is_generic_modbus()) {
+    // A third-party device has no alive counter or CRC of ours: it is
+    // trusted while its polls are answered.
+    if (s.poll_last_us == 0) {
+      *reason = name + ": no poll answered yet";
+      return false;
+    }
+    const int64_t age_us = now_us - s.poll_last_us;
+    if (age_us > timeout_us) {
+      *reason = name + ": stale (no poll answered for " + std::to_string(age_us / 1000) + " ms)";
       return false;
     }
     return true;
@@ -497,6 +531,12 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
             // A DBC signal's value is the position index (its VAL_ table names them).
             const double value = s.dbc[static_cast<std::size_t>(b)].value;
             position = value >= 0.0 && value < 255.0 ? static_cast<uint8_t>(std::lround(value)) : fp::kSwitchInvalid;
+            if (c.modbus_point && position >= c.positions.size()) {
+              // A register's number: no "not available" value.
+              set_safe(c, v);
+              append_reason(reasons, c.name + ": position " + std::to_string(std::lround(value)) + " unknown");
+              break;
+            }
           }
           if (position >= c.positions.size()) {
             set_safe(c, v);

@@ -16,6 +16,7 @@
 #include "hil/control_transforms.hpp"
 #include "hil/io/can_error.hpp"
 #include "firmware_protocol/console_modbus.hpp"
+#include "hil/modbus_poll.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace rise::hil {
@@ -77,6 +78,11 @@ class PanelMapper {
   /// every signal's age. Returns true when a bound control's raw value
   /// changed. No throw; allocates nothing.
   bool on_inputs(std::size_t source, const firmware_protocol::ConsoleInputs& inputs, int64_t now_us);
+
+  /// Feeds one answered poll of a `modbus` source (every read of its plan
+  /// answered): each bound point's value, which refreshes the source's age.
+  /// Returns true when a bound value changed. No throw; allocates nothing.
+  bool on_modbus_poll(std::size_t source, const ModbusPoll& poll, int64_t now_us);
 
   /// A `hid` source's device was (re)opened with this report descriptor:
   /// binds every control's signal name to it. False, with `error` set and
@@ -141,6 +147,8 @@ class PanelMapper {
     int64_t last_us = 0;  // 0 = never
     std::size_t hid_signal = 0;  // hid sources: index into the decoder's signals
     bool hid_raw = false;        // hid switches take the raw value
+    std::optional<panels::ModbusPoint> modbus;  // modbus sources: the point read
+    panels::ModbusValueType modbus_type = panels::ModbusValueType::UInt16;
   };
   struct SourceState {
     explicit SourceState(firmware_protocol::Decoder d) : decoder(d) {}
@@ -149,6 +157,7 @@ class PanelMapper {
     std::vector<firmware_protocol::HidSignalValue> hid_values;
     std::string hid_error;  // why the last attach failed
     int64_t hid_last_us = 0;  // last decoded report since connecting, 0 = none
+    int64_t poll_last_us = 0;  // modbus sources: last answered poll since connecting, 0 = none
     firmware_protocol::Decoder decoder;
     SourceStatus status;
     std::array<int64_t, firmware_protocol::kFrameTypeCount> last_valid_us{};  // 0 = never
@@ -165,6 +174,8 @@ class PanelMapper {
   };
 
   void count_valid(SourceState& s);
+  // A bound signal's value at now_us; true when it changed (or came first since a loss).
+  static bool take(DbcBinding& b, double value, int64_t now_us);
   bool source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const;
 
   panels::PanelDefinition definition_;

@@ -68,22 +68,23 @@ class CanFeed final : public CaptureReplay::Feed {
 };
 
 // A Modbus trace, replayed as the bridge's poll cycle (modbus_source_loop)
-// went: input registers then discrete inputs make one poll, applied when the
-// second answer came; a failed request is counted when its answer (or
-// timeout) came; reopens connect or disconnect the source.
+// went: the reads of one poll (modbus_poll_reads: rise-modbus-v1's input
+// registers then discrete inputs, a modbus device's tables) are applied
+// when the last one's answer came; a failed request is counted when its
+// answer (or timeout) came; reopens connect or disconnect the source.
 class ModbusFeed final : public CaptureReplay::Feed {
  public:
-  ModbusFeed(const std::string& path, std::size_t source) : Feed(source), reader_(path) { fetch(); }
+  ModbusFeed(const std::string& path, std::size_t source, std::vector<ModbusRead> reads)
+      : Feed(source), reader_(path), poll_(std::move(reads)) {
+    fetch();
+  }
   void apply(PanelMapper& mapper) override {
     const int64_t now = *time_us;
     switch (action_) {
       case Action::Poll:
         if (apply_modbus_result(mapper, source, record_.result, !record_.closed, now)) {
           mapper.on_connection(source, true, now);
-          if (record_.result.ok()) {
-            std::vector<uint8_t> bits(record_.values.begin(), record_.values.end());
-            apply_modbus_inputs(mapper, source, registers_, bits, last_counter_, now);
-          }
+          if (record_.result.ok()) apply_modbus_poll(mapper, source, poll_, last_counter_, now);
         }
         break;
       case Action::Write: apply_modbus_result(mapper, source, record_.result, !record_.closed, now); break;
@@ -100,7 +101,7 @@ class ModbusFeed final : public CaptureReplay::Feed {
 
   void fetch() {
     time_us.reset();
-    bool have_registers = false;
+    std::size_t answered = 0;  // reads of the poll answered so far
     while (reader_.next(record_)) {
       using Kind = io::ModbusTraceRecord::Kind;
       switch (record_.kind) {
@@ -120,26 +121,43 @@ class ModbusFeed final : public CaptureReplay::Feed {
       if (write) {
         if (record_.result.ok()) continue;  // nothing for the mapper
         action_ = Action::Write;
-      } else if (record_.function == Fn::ReadInputRegisters && record_.result.ok() && !record_.closed) {
-        registers_.assign(record_.values.begin(), record_.values.end());
-        have_registers = true;
-        continue;  // the discrete inputs complete the poll
       } else {
-        // A failed read, or the discrete inputs after the registers.
-        if (record_.function == Fn::ReadDiscreteInputs && record_.result.ok() && !have_registers)
-          throw std::runtime_error(reader_.path() + ":" + std::to_string(record_.line) +
-                                   ": discrete inputs without the input registers before them");
-        action_ = Action::Poll;
+        const auto i = poll_.find(record_.function, record_.address, record_.count);
+        if (!i) throw bad_line("is not a read of this source's poll (" + describe_reads() + ")");
+        if (*i == 0) answered = 0;  // a poll begins
+        if (record_.result.ok()) {
+          if (*i != answered) throw bad_line("without the reads before it in the poll (" + describe_reads() + ")");
+          poll_.store(*i, record_.values);
+          if (++answered < poll_.reads().size()) continue;  // the next read completes the poll
+        }
+        action_ = Action::Poll;  // complete, or a failed read
       }
       time_us = record_.answer_us();
       return;
     }
   }
 
+  // "fc=04 addr=0 count=18", as the trace writes a request.
+  static std::string request_text(Fn function, uint16_t address, uint16_t count) {
+    const auto fc = static_cast<int>(function);
+    return std::string("fc=") + (fc < 10 ? "0" : "") + std::to_string(fc) + " addr=" + std::to_string(address) +
+           " count=" + std::to_string(count);
+  }
+  std::runtime_error bad_line(const std::string& what) const {
+    return std::runtime_error(reader_.path() + ":" + std::to_string(record_.line) + ": " +
+                              request_text(record_.function, record_.address, record_.count) + " " + what);
+  }
+  std::string describe_reads() const {
+    std::string text;
+    for (const ModbusRead& r : poll_.reads())
+      text += (text.empty() ? "" : ", ") + request_text(r.function, r.address, r.count);
+    return text;
+  }
+
   io::ModbusTraceReader reader_;
   io::ModbusTraceRecord record_;
   Action action_ = Action::Poll;
-  std::vector<uint16_t> registers_;
+  ModbusPoll poll_;
   std::optional<uint16_t> last_counter_;
 };
 
@@ -232,7 +250,8 @@ CaptureReplay::CaptureReplay(const panels::PanelDefinition& definition, std::vec
       throw std::invalid_argument(c.path + ": source index " + std::to_string(c.source) + " is not in the panel");
     const auto& s = definition.sources[c.source];
     if (s.is_hid()) throw std::invalid_argument(c.path + ": HID captures are not replayed");
-    if (s.is_modbus()) feeds_.push_back(std::make_unique<ModbusFeed>(c.path, c.source));
+    if (s.is_modbus())
+      feeds_.push_back(std::make_unique<ModbusFeed>(c.path, c.source, modbus_poll_reads(definition, c.source)));
     else feeds_.push_back(std::make_unique<CanFeed>(c.path, c.source));
   }
   bool any = false;

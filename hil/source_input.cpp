@@ -54,4 +54,10 @@ bool apply_modbus_inputs(PanelMapper& mapper, std::size_t source, std::span<cons
   return false;
 }
 
+bool apply_modbus_poll(PanelMapper& mapper, std::size_t source, const ModbusPoll& poll,
+                       std::optional<uint16_t>& last_counter, int64_t now_us) {
+  if (mapper.definition().sources[source].is_generic_modbus()) return mapper.on_modbus_poll(source, poll, now_us);
+  return apply_modbus_inputs(mapper, source, poll.registers(0), poll.bits(1), last_counter, now_us);
+}
+
 }  // namespace rise::hil

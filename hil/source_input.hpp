@@ -39,4 +39,11 @@ bool apply_modbus_result(PanelMapper& mapper, std::size_t source, const io::Modb
 bool apply_modbus_inputs(PanelMapper& mapper, std::size_t source, std::span<const uint16_t> registers,
                          std::span<const uint8_t> bits, std::optional<uint16_t>& last_counter, int64_t now_us);
 
+/// One poll of a Modbus source whose every read was answered (`poll` holds
+/// modbus_poll_reads()' reads): a rise-modbus-v1 block goes through
+/// apply_modbus_inputs(), a modbus device's points to the mapper. True when
+/// a bound control changed. No throw; allocates nothing.
+bool apply_modbus_poll(PanelMapper& mapper, std::size_t source, const ModbusPoll& poll,
+                       std::optional<uint16_t>& last_counter, int64_t now_us);
+
 }  // namespace rise::hil

@@ -2,8 +2,10 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -85,6 +87,67 @@ class Context {
 
 std::string control_key(const std::string& name) { return "controls." + name; }
 
+// range: [min, max] of an axis' raw value, which maps to -1..1.
+void read_range(const Context& ctx, const YAML::Node& range, const std::string& where, ControlDefinition& c) {
+  if (!range.IsSequence() || range.size() != 2) ctx.fail(range, where + ".range", "expected [min, max]");
+  c.range_min = ctx.as<double>(range[0], where + ".range");
+  c.range_max = ctx.as<double>(range[1], where + ".range");
+}
+
+const char* const kModbusSignals =
+    "input_register.N, holding_register.N, discrete_input.N, coil.N, input_register.N.bit.B, "
+    "holding_register.N.bit.B; N 0..65535, B 0..15";
+
+ModbusPoint read_modbus_point(const Context& ctx, const YAML::Node& node, const std::string& where) {
+  const auto text = ctx.require<std::string>(node, "signal", where);
+  const auto point = parse_modbus_point(text);
+  if (!point) ctx.fail(node["signal"], where + ".signal", "unknown signal '" + text + "' (" + kModbusSignals + ")");
+  return *point;
+}
+
+ModbusValueType read_modbus_type(const Context& ctx, const YAML::Node& node, const std::string& where) {
+  const auto type = ctx.get<std::string>(node, "type", where, "uint16");
+  if (type == "uint16") return ModbusValueType::UInt16;
+  if (type == "int16") return ModbusValueType::Int16;
+  ctx.fail(node["type"], where + ".type", "unknown type '" + type + "' (uint16, int16)");
+}
+
+// A control of a "modbus" source: the point it reads; a whole register's
+// number type; an axis' range of that number.
+void parse_modbus_binding(const Context& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+  if (node["bits"])
+    ctx.fail(node["bits"], where + ".bits", "not for a modbus source: bind the register whose value is the position");
+  const ModbusPoint point = read_modbus_point(ctx, node, where);
+  const std::string text = to_string(point);
+  c.modbus_point = point;
+  if (const YAML::Node type = node["type"]) {
+    if (point.is_bit()) ctx.fail(type, where + ".type", text + " is one bit: only a whole register has a type");
+    if (c.kind == ControlKind::Button)
+      ctx.fail(type, where + ".type", "not used by a button (pressed while the register is not 0)");
+  }
+  c.modbus_type = read_modbus_type(ctx, node, where);
+  if (c.kind == ControlKind::Axis) {
+    if (point.is_bit())
+      ctx.fail(node["signal"], where + ".signal",
+               "an axis reads a whole register (input_register.N, holding_register.N), not " + text);
+    const YAML::Node range = node["range"];
+    if (!range) ctx.fail(node, where + ".range", "missing: an axis of a modbus source maps range: [min, max] to -1..1");
+    read_range(ctx, range, where, c);
+    if (!(c.range_max > c.range_min)) ctx.fail(range, where + ".range", "needs min < max");
+    const bool int16 = c.modbus_type == ModbusValueType::Int16;
+    if (c.range_min < (int16 ? -32768.0 : 0.0) || c.range_max > (int16 ? 32767.0 : 65535.0))
+      ctx.fail(range, where + ".range",
+               std::string("outside what a register holds as ") + (int16 ? "int16 (-32768..32767)" : "uint16 (0..65535)") +
+                   (int16 || c.range_min >= 0.0 ? "" : "; type: int16 reads it signed"));
+  } else if (node["range"]) {
+    ctx.fail(node["range"], where + ".range", "only for an axis");
+  }
+  const YAML::Node positions = node["positions"];
+  if (c.kind == ControlKind::Switch && point.is_bit() && positions.IsSequence() && positions.size() > 2)
+    ctx.fail(node["signal"], where + ".signal",
+             text + " is one bit: two positions at most (a register holds more)");
+}
+
 SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::size_t i, const std::string& file) {
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
@@ -93,9 +156,10 @@ SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::s
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
-  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "dbc" && s.protocol != "hid")
+  if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "modbus" && s.protocol != "dbc" &&
+      s.protocol != "hid")
     ctx.fail(node["protocol"], where + ".protocol",
-             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, dbc, hid)");
+             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, hid)");
   if (s.is_hid()) {
     s.device = ctx.get<std::string>(node, "device", where, "");
     if (!s.device.empty() && s.device.rfind("hid://", 0) != 0)
@@ -121,9 +185,15 @@ SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::s
   } else if (node["dbc"]) {
     ctx.fail(node["dbc"], where + ".dbc", "only for protocol dbc");
   }
+  if (s.is_generic_modbus())
+    for (const char* k : {"node", "max_counter_delta", "recovery_frames"})
+      if (node[k])
+        ctx.fail(node[k], where + "." + k,
+                 "not used by protocol modbus (no alive counter or CRC: stale when no poll is answered within "
+                 "timeout_ms)");
   if (!s.is_modbus() && (node["poll_hz"] || node["unit"]))
     ctx.fail(node["poll_hz"] ? node["poll_hz"] : node["unit"], where + (node["poll_hz"] ? ".poll_hz" : ".unit"),
-             "only for protocol rise-modbus-v1");
+             "only for protocols rise-modbus-v1 and modbus");
   s.poll_hz = ctx.get<double>(node, "poll_hz", where, 50.0);
   if (!(s.poll_hz >= 1.0 && s.poll_hz <= 1000.0))
     ctx.fail(node["poll_hz"], where + ".poll_hz", "must be 1..1000");
@@ -165,7 +235,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
                                 const YAML::Node& node, std::size_t i) {
   std::string where = "controls[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
-                {"name", "kind", "source", "signal", "bits", "encoding", "range", "role", "motion", "deadband",
+                {"name", "kind", "source", "signal", "bits", "encoding", "range", "type", "role", "motion", "deadband",
                  "invert", "scale", "expo", "lowpass_ms", "mode", "debounce_ms", "long_press_ms",
                  "pulse_ms", "safe", "positions"});
   ControlDefinition c;
@@ -182,6 +252,8 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
 
   c.source = resolve_source(ctx, def, node, where);
   const SourceDefinition& source = def.sources[c.source];
+  // Sources whose controls bind names of the device, not axis.N / button.N / switch.N.
+  const bool named_signals = source.is_dbc() || source.is_hid() || source.is_generic_modbus();
   if (source.is_dbc()) {
     // MESSAGE.SIGNAL of the source's DBC.
     const auto text = ctx.require<std::string>(node, "signal", where);
@@ -198,9 +270,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
     c.dbc_signal = signal;
     if (c.kind == ControlKind::Axis) {
       if (const YAML::Node range = node["range"]) {
-        if (!range.IsSequence() || range.size() != 2) ctx.fail(range, where + ".range", "expected [min, max]");
-        c.range_min = ctx.as<double>(range[0], where + ".range");
-        c.range_max = ctx.as<double>(range[1], where + ".range");
+        read_range(ctx, range, where, c);
       } else {
         c.range_min = signal->minimum;
         c.range_max = signal->maximum;
@@ -209,9 +279,11 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
         ctx.fail(node["range"] ? node["range"] : node, where + ".range",
                  "needs min < max (the DBC gives none for " + text + ")");
     }
-  } else if (node["range"]) {
-    ctx.fail(node["range"], where + ".range", "only for controls of a dbc source");
+  } else if (node["range"] && !source.is_generic_modbus()) {
+    ctx.fail(node["range"], where + ".range", "only for controls of a dbc or modbus source");
   }
+  if (source.is_generic_modbus()) parse_modbus_binding(ctx, node, where, c);
+  else if (node["type"]) ctx.fail(node["type"], where + ".type", "only for controls of a modbus source");
   if (source.is_hid()) {
     c.hid_signal = ctx.require<std::string>(node, "signal", where);
     if (c.hid_signal.empty()) ctx.fail(node["signal"], where + ".signal", "must not be empty");
@@ -220,7 +292,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
     c.range_min = -1.0;
     c.range_max = 1.0;
   }
-  if (source.is_dbc() || source.is_hid()) {
+  if (named_signals) {
     // no protocol signal to parse
   } else if (const YAML::Node bits = node["bits"]) {
     // A switch read from several button inputs: no switch signal of its own.
@@ -243,7 +315,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   } else if (node["encoding"]) {
     ctx.fail(node["encoding"], where + ".encoding", "only with bits");
   }
-  const auto signal_text = source.is_dbc() || source.is_hid() ? std::string("axis.0")
+  const auto signal_text = named_signals ? std::string("axis.0")
                            : c.bits.empty() ? ctx.require<std::string>(node, "signal", where)
                                             : to_string(c.signal);
   const auto signal = parse_signal(signal_text);
@@ -251,7 +323,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
     ctx.fail(node["signal"], where + ".signal",
              "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
   c.signal = *signal;
-  const bool kind_matches = !c.bits.empty() || source.is_dbc() || source.is_hid() ||
+  const bool kind_matches = !c.bits.empty() || named_signals ||
       (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
       (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
       (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
@@ -344,9 +416,25 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   return c;
 }
 
+// What a modbus source's LED or display writes: a coil (LEDs only) or a
+// whole holding register, each written by one of them only.
+ModbusPoint read_written_point(const Context& ctx, const YAML::Node& n, const std::string& where, bool led,
+                               std::set<std::pair<std::size_t, ModbusPoint>>& written, std::size_t source) {
+  const ModbusPoint point = read_modbus_point(ctx, n, where);
+  const bool coil = point.table == ModbusTable::Coils;
+  if (!(point.table == ModbusTable::HoldingRegisters && point.bit < 0) && !(led && coil))
+    ctx.fail(n["signal"], where + ".signal",
+             to_string(point) + " cannot be written: " +
+                 (led ? "an LED is a coil.N or a holding_register.N (written 1 / 0)" : "a display is a holding_register.N"));
+  if (!written.insert({source, point}).second)
+    ctx.fail(n["signal"], where + ".signal", to_string(point) + " is already written by another LED or display");
+  return point;
+}
+
 void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& node) {
   ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer"});
   std::set<std::string> names;
+  std::set<std::pair<std::size_t, ModbusPoint>> written;  // modbus sources' points
   if (const YAML::Node leds = node["leds"]) {
     if (!leds.IsSequence()) ctx.fail(leds, "feedback.leds", "expected a list");
     std::set<std::pair<std::size_t, int>> bits;
@@ -373,7 +461,15 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
         def.leds.push_back(led);
         continue;
       }
-      if (n["signal"]) ctx.fail(n["signal"], where + ".signal", "only for an LED of a hid source (here: bit: 0..31)");
+      if (def.sources[led.source].is_generic_modbus()) {
+        if (n["bit"])
+          ctx.fail(n["bit"], where + ".bit", "a modbus source's LED is a coil or a holding register: signal: coil.N");
+        led.modbus_point = read_written_point(ctx, n, where, true, written, led.source);
+        def.leds.push_back(led);
+        continue;
+      }
+      if (n["signal"])
+        ctx.fail(n["signal"], where + ".signal", "only for an LED of a hid source (here: bit: 0..31)");
       const int bit = ctx.require<int>(n, "bit", where);
       if (bit < 0 || bit >= static_cast<int>(fp::kMaxLeds))
         ctx.fail(n["bit"], where + ".bit", "must be 0..31");
@@ -388,16 +484,25 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
     for (std::size_t i = 0; i < displays.size(); ++i) {
       const YAML::Node n = displays[i];
       std::string where = "feedback.displays[" + std::to_string(i) + "]";
-      ctx.only_keys(n, where, {"name", "source", "index", "decimals"});
+      ctx.only_keys(n, where, {"name", "source", "index", "signal", "type", "decimals"});
       DisplayDefinition d;
       d.name = ctx.require<std::string>(n, "name", where);
       where = "feedback.displays." + d.name;
       if (!names.insert(d.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
       d.source = resolve_source(ctx, def, n, where);
       if (def.sources[d.source].is_hid()) ctx.fail(n, where + ".source", "a hid source has no displays");
-      const int index = ctx.require<int>(n, "index", where);
-      if (index < 0 || index > 255) ctx.fail(n["index"], where + ".index", "must be 0..255");
-      d.index = static_cast<uint8_t>(index);
+      if (def.sources[d.source].is_generic_modbus()) {
+        if (n["index"])
+          ctx.fail(n["index"], where + ".index", "a modbus source's display is a holding register: signal: holding_register.N");
+        d.modbus_point = read_written_point(ctx, n, where, false, written, d.source);
+        d.modbus_type = read_modbus_type(ctx, n, where);
+      } else {
+        for (const char* k : {"signal", "type"})
+          if (n[k]) ctx.fail(n[k], where + "." + k, "only for a display of a modbus source (here: index: 0..255)");
+        const int index = ctx.require<int>(n, "index", where);
+        if (index < 0 || index > 255) ctx.fail(n["index"], where + ".index", "must be 0..255");
+        d.index = static_cast<uint8_t>(index);
+      }
       const int decimals = ctx.get<int>(n, "decimals", where, 0);
       if (decimals < 0 || decimals > 9) ctx.fail(n["decimals"], where + ".decimals", "must be 0..9");
       d.decimals = static_cast<uint8_t>(decimals);
@@ -408,6 +513,53 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
     ctx.only_keys(buzzer, "feedback.buzzer", {"source"});
     def.buzzer_source = resolve_source(ctx, def, buzzer, "feedback.buzzer");
     if (def.sources[*def.buzzer_source].is_hid()) ctx.fail(buzzer, "feedback.buzzer.source", "a hid source has no buzzer");
+    if (def.sources[*def.buzzer_source].is_generic_modbus())
+      ctx.fail(buzzer, "feedback.buzzer.source", "a modbus source has no buzzer (light an LED on its coil instead)");
+  }
+}
+
+
+// The points of a modbus source that its controls read: never one its
+// feedback writes (the control would read our own LED back), and each
+// table's span from the lowest to the highest address within one request,
+// as the bridge reads each table in one request per poll (Modbus
+// Application Protocol V1.1b3 §6.1-6.4: 2000 bits, 125 registers). A
+// modbus source is healthy while its polls are answered: it needs a point
+// to poll.
+void check_modbus_points(const Context& ctx, const PanelDefinition& def, const YAML::Node& root) {
+  const YAML::Node controls = root["controls"];
+  for (std::size_t s = 0; s < def.sources.size(); ++s)
+    if (def.sources[s].is_generic_modbus() &&
+        std::none_of(def.controls.begin(), def.controls.end(), [&](const auto& c) { return c.source == s; }))
+      ctx.fail(root["sources"][s], "sources[" + std::to_string(s) + "]",
+               "no control reads source '" + def.sources[s].name +
+                   "': a modbus source is trusted while its polls are answered, and it needs a point to poll");
+  std::map<std::pair<std::size_t, ModbusTable>, std::pair<uint16_t, uint16_t>> spans;
+  for (std::size_t i = 0; i < def.controls.size(); ++i) {
+    const ControlDefinition& c = def.controls[i];
+    if (!c.modbus_point) continue;
+    const ModbusPoint& p = *c.modbus_point;
+    const YAML::Node at = controls[i]["signal"];
+    const std::string where = control_key(c.name) + ".signal";
+    for (const auto& led : def.leds)
+      if (led.source == c.source && led.modbus_point && p.table == led.modbus_point->table &&
+          p.address == led.modbus_point->address)
+        ctx.fail(at, where, to_string(p) + " is written by the LED '" + led.name + "': a control cannot read it");
+    for (const auto& d : def.displays)
+      if (d.source == c.source && d.modbus_point && p.table == d.modbus_point->table &&
+          p.address == d.modbus_point->address)
+        ctx.fail(at, where, to_string(p) + " is written by the display '" + d.name + "': a control cannot read it");
+    const auto it = spans.try_emplace({c.source, p.table}, p.address, p.address).first;
+    auto& [lo, hi] = it->second;
+    lo = std::min(lo, p.address);
+    hi = std::max(hi, p.address);
+    const int count = hi - lo + 1;
+    const int most = p.bit_table() ? 2000 : 125;
+    if (count > most)
+      ctx.fail(at, where,
+               to_string(p) + " makes the poll read " + to_string(p.table) + "s " + std::to_string(lo) + ".." +
+                   std::to_string(hi) + " (" + std::to_string(count) + "), more than one request reads (" +
+                   std::to_string(most) + ")");
   }
 }
 
@@ -486,15 +638,17 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
   std::set<std::tuple<std::size_t, int, int>> bound;
   std::set<std::pair<std::size_t, const void*>> dbc_bound;
   std::set<std::pair<std::size_t, std::string>> hid_bound;
+  std::set<std::pair<std::size_t, ModbusPoint>> modbus_bound;
   bool has_deadman = false;
   bool has_motion = false;
   for (std::size_t i = 0; i < controls.size(); ++i) {
     auto c = parse_control(ctx, def, controls[i], i);
     if (def.find_control(c.name))
       ctx.fail(controls[i]["name"], control_key(c.name) + ".name", "duplicate control name");
-    if (c.dbc_signal || !c.hid_signal.empty()) {
-      if (c.dbc_signal ? !dbc_bound.insert({c.source, c.dbc_signal}).second
-                       : !hid_bound.insert({c.source, c.hid_signal}).second)
+    if (c.dbc_signal || !c.hid_signal.empty() || c.modbus_point) {
+      if (c.dbc_signal     ? !dbc_bound.insert({c.source, c.dbc_signal}).second
+          : c.modbus_point ? !modbus_bound.insert({c.source, *c.modbus_point}).second
+                           : !hid_bound.insert({c.source, c.hid_signal}).second)
         ctx.fail(controls[i]["signal"], control_key(c.name) + ".signal", "signal already bound to another control");
       if (c.role == ControlRole::Deadman) {
         if (has_deadman) ctx.fail(controls[i]["role"], control_key(c.name) + ".role", "a second dead-man");
@@ -522,6 +676,7 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
     ctx.fail(controls, "controls", "motion controls need a control with role: deadman");
 
   if (const YAML::Node feedback = root["feedback"]) parse_feedback(ctx, def, feedback);
+  check_modbus_points(ctx, def, root);
   return def;
 }
 

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "panels/modbus_point.hpp"
+
 namespace rise::firmware_protocol {
 class DbcDatabase;
 struct DbcMessage;
@@ -84,12 +86,17 @@ struct ControlDefinition {
   // descriptor (firmware_protocol::hid_signals: x, hat_switch, button_3...).
   // Known only once the device is open: the bridge checks it then.
   std::string hid_signal;
+  // Controls of a "modbus" source: the point read (axes: range_min..max of
+  // its number → -1..1; buttons: pressed when ≠ 0; switches: the number is
+  // the position) and how a whole register reads as a number.
+  std::optional<ModbusPoint> modbus_point;
+  ModbusValueType modbus_type = ModbusValueType::UInt16;
   int line = 0;                        ///< line in the definition file (for messages)
 };
 
 struct SourceDefinition {
   std::string name;
-  std::string protocol;           ///< "rise-can-v1" or "rise-modbus-v1"
+  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc" or "hid"
   uint8_t node = 0;               ///< console node id on the bus (0..15), CAN
   double poll_hz = 50.0;          ///< Modbus: input polls per second
   uint8_t unit = 1;               ///< Modbus: slave / unit id (1..247)
@@ -107,7 +114,12 @@ struct SourceDefinition {
   /// a disconnect makes the source unsafe.
   std::string device;
   bool is_hid() const { return protocol == "hid"; }
-  bool is_modbus() const { return protocol == "rise-modbus-v1"; }
+  /// On a Modbus link: our register map (rise-modbus-v1) or any device's (modbus).
+  bool is_modbus() const { return protocol == "rise-modbus-v1" || protocol == "modbus"; }
+  /// protocol "modbus": a third-party device whose controls bind its points
+  /// (panels/modbus_point.hpp); no alive counter or CRC of ours: stale when
+  /// no poll was answered within timeout_ms.
+  bool is_generic_modbus() const { return protocol == "modbus"; }
   bool is_dbc() const { return protocol == "dbc"; }
 };
 
@@ -119,6 +131,8 @@ struct LedDefinition {
   /// lights it (firmware_protocol::hid_signals, e.g. usage_0008_0001 for the
   /// LED page's first usage); known only once the device is open.
   std::string hid_signal;
+  /// modbus sources: the coil (or holding register, written 1 / 0) that lights it.
+  std::optional<ModbusPoint> modbus_point;
   int line = 0;  ///< line in the definition file (for messages)
 };
 struct DisplayDefinition {
@@ -126,6 +140,10 @@ struct DisplayDefinition {
   std::size_t source = 0;
   uint8_t index = 0;
   uint8_t decimals = 0;
+  /// modbus sources: the holding register written with the raw value
+  /// (value · 10^decimals, saturated to the type's range).
+  std::optional<ModbusPoint> modbus_point;
+  ModbusValueType modbus_type = ModbusValueType::UInt16;
 };
 
 struct PanelDefinition {

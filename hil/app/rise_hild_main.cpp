@@ -14,6 +14,7 @@
 #include "hil/app/inspect_commands.hpp"
 #include "hil/app/verify_command.hpp"
 #include "hil/bridge.hpp"
+#include "hil/io/replay_modbus_link.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
 #include "panels/data_path.hpp"
@@ -43,8 +44,9 @@ int main(int argc, char** argv) {
   // --can is the old name, from when every source was a CAN bus.
   app.add_option("--source,--can", source_urls,
                  "transport of each source, one per source in the definition's order: rise-can-v1: "
-                 "socketcan://IFACE, socketcand://HOST:PORT/BUS, mem://NAME; rise-modbus-v1: "
-                 "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N; "
+                 "socketcan://IFACE, socketcand://HOST:PORT/BUS, mem://NAME; rise-modbus-v1 and modbus: "
+                 "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N, "
+                 "replay://FILE.modbus.log?speed=1&loop=0&start=S&stop=S&fast=0 (a recorded trace as the slave); "
                  "hid: hid://VID:PID[?serial=S][&name=TEXT][&interface=N], or - for the definition's device:");
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
@@ -137,13 +139,19 @@ int main(int argc, char** argv) {
         transports.push_back(std::move(t));
         continue;
       }
-      const bool modbus_url = rise::io::is_modbus_url(source_urls[i]);
+      // replay://FILE.modbus.log: a recorded trace answers as the slave did.
+      const bool modbus_replay = source.is_modbus() && rise::io::is_replay_url(source_urls[i]);
+      const bool modbus_url = rise::io::is_modbus_url(source_urls[i]) || modbus_replay;
       if (modbus_url != source.is_modbus())
         throw std::runtime_error("source '" + source.name + "' speaks " + source.protocol + ": '" + source_urls[i] +
-                                 "' is not a " + (source.is_modbus() ? "modbus+tcp:// or modbus+rtu://" : "CAN") +
+                                 "' is not a " +
+                                 (source.is_modbus() ? "modbus+tcp://, modbus+rtu:// or replay://FILE.modbus.log"
+                                                     : "CAN") +
                                  " URL");
       rise::hil::SourceTransport t;
-      if (modbus_url) {
+      if (modbus_replay) {
+        t.modbus = rise::io::open_modbus_link(source_urls[i]);
+      } else if (modbus_url) {
         // The definition's unit unless the URL names one.
         auto address = rise::io::parse_modbus_url(source_urls[i]);
         if (source_urls[i].find("unit=") == std::string::npos) address.unit = source.unit;
@@ -163,8 +171,9 @@ int main(int argc, char** argv) {
       recorder = std::make_unique<rise::hil::SessionRecorder>(record_dir);
       for (std::size_t i = 0; i < transports.size(); ++i) {
         const auto& source = definition.sources[i];
-        const int unit = source.is_modbus() ? rise::io::parse_modbus_url(source_urls[i]).unit : 0;
-        const bool url_unit = source_urls[i].find("unit=") != std::string::npos;
+        const bool url_unit =
+            rise::io::is_modbus_url(source_urls[i]) && source_urls[i].find("unit=") != std::string::npos;
+        const int unit = url_unit ? rise::io::parse_modbus_url(source_urls[i]).unit : 0;
         if (!recorder->record_source(source.name, transports[i], url_unit ? unit : source.unit))
           spdlog::warn("--record: source '{}' ({}) is not recorded", source.name, source.protocol);
       }

@@ -2,6 +2,8 @@
 
 #include <modbus.h>
 
+#include "hil/io/replay_modbus_link.hpp"
+
 #include <cerrno>
 #include <stdexcept>
 #include <string>
@@ -52,9 +54,19 @@ class LibmodbusLink final : public ModbusLink {
   LibmodbusLink(const LibmodbusLink&) = delete;
   LibmodbusLink& operator=(const LibmodbusLink&) = delete;
 
+  ModbusResult read_coils(uint16_t address, std::span<uint8_t> bits) override {
+    if (!open_) return count({ModbusStatus::Disconnected, 0});
+    const int rc = modbus_read_bits(ctx_, address, static_cast<int>(bits.size()), bits.data());
+    return finish(rc);
+  }
   ModbusResult read_discrete_inputs(uint16_t address, std::span<uint8_t> bits) override {
     if (!open_) return count({ModbusStatus::Disconnected, 0});
     const int rc = modbus_read_input_bits(ctx_, address, static_cast<int>(bits.size()), bits.data());
+    return finish(rc);
+  }
+  ModbusResult read_holding_registers(uint16_t address, std::span<uint16_t> registers) override {
+    if (!open_) return count({ModbusStatus::Disconnected, 0});
+    const int rc = modbus_read_registers(ctx_, address, static_cast<int>(registers.size()), registers.data());
     return finish(rc);
   }
   ModbusResult read_input_registers(uint16_t address, std::span<uint16_t> registers) override {
@@ -139,6 +151,7 @@ std::unique_ptr<ModbusLink> open_modbus_link(const ModbusAddress& address) {
 }
 
 std::unique_ptr<ModbusLink> open_modbus_link(std::string_view url) {
+  if (is_replay_url(url)) return open_modbus_replay(url);
   return open_modbus_link(parse_modbus_url(url));
 }
 

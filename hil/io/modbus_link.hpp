@@ -47,9 +47,14 @@ class ModbusLink {
  public:
   virtual ~ModbusLink() = default;
 
+  /// Reads bits.size() coils (function 01) starting at `address`; bits[i]
+  /// is 0 or 1. Blocks at most timeout_ms. No throw.
+  virtual ModbusResult read_coils(uint16_t address, std::span<uint8_t> bits) = 0;
   /// Reads bits.size() discrete inputs (function 02) starting at `address`;
   /// bits[i] is 0 or 1. Blocks at most timeout_ms. No throw.
   virtual ModbusResult read_discrete_inputs(uint16_t address, std::span<uint8_t> bits) = 0;
+  /// Reads holding registers (function 03). Blocks at most timeout_ms. No throw.
+  virtual ModbusResult read_holding_registers(uint16_t address, std::span<uint16_t> registers) = 0;
   /// Reads input registers (function 04). Blocks at most timeout_ms. No throw.
   virtual ModbusResult read_input_registers(uint16_t address, std::span<uint16_t> registers) = 0;
   /// Writes coils (function 15). No throw.
@@ -69,9 +74,11 @@ class ModbusLink {
   ModbusCounters counters_;
 };
 
-/// Opens a client link for modbus+tcp:// or modbus+rtu://. Throws
-/// std::invalid_argument for a bad URL; a peer that is not there yet leaves
-/// the link closed (is_open() false) for the caller to reopen().
+/// Opens a client link for modbus+tcp:// or modbus+rtu://, or a replay of a
+/// recorded trace for replay://FILE.modbus.log (hil/io/replay_modbus_link.hpp).
+/// Throws std::invalid_argument for a bad URL (std::runtime_error for a
+/// trace that cannot be read); a peer that is not there yet leaves the link
+/// closed (is_open() false) for the caller to reopen().
 std::unique_ptr<ModbusLink> open_modbus_link(std::string_view url);
 std::unique_ptr<ModbusLink> open_modbus_link(const ModbusAddress& address);
 

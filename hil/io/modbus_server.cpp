@@ -86,6 +86,30 @@ void ModbusServer::holding_registers(std::span<uint16_t> out) const {
   std::copy_n(mapping_->tab_registers, n, out.begin());
 }
 
+template <typename T>
+void ModbusServer::put(T* table, int size, uint16_t address, std::span<const T> from) {
+  std::lock_guard lock(mutex_);  // the table pointers themselves never change
+  for (std::size_t i = 0; i < from.size() && address + i < static_cast<std::size_t>(size); ++i)
+    table[address + i] = from[i];
+}
+
+void ModbusServer::set_coils(uint16_t a, std::span<const uint8_t> b) { put(mapping_->tab_bits, mapping_->nb_bits, a, b); }
+void ModbusServer::set_discrete_inputs(uint16_t a, std::span<const uint8_t> b) {
+  put(mapping_->tab_input_bits, mapping_->nb_input_bits, a, b);
+}
+void ModbusServer::set_holding_registers(uint16_t a, std::span<const uint16_t> r) {
+  put(mapping_->tab_registers, mapping_->nb_registers, a, r);
+}
+void ModbusServer::set_input_registers(uint16_t a, std::span<const uint16_t> r) {
+  put(mapping_->tab_input_registers, mapping_->nb_input_registers, a, r);
+}
+
+void ModbusServer::coils(uint16_t address, std::span<uint8_t> out) const {
+  std::lock_guard lock(mutex_);
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out[i] = address + i < static_cast<std::size_t>(mapping_->nb_bits) ? mapping_->tab_bits[address + i] : 0;
+}
+
 void ModbusServer::reply(const uint8_t* query, int length) {
   const int offset = modbus_get_header_length(ctx_);
   const uint8_t function = query[offset];

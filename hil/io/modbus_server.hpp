@@ -42,6 +42,15 @@ class ModbusServer {
   /// Thread-safe: coils (bit i = coil i, first 32) and holding registers.
   uint32_t coil_bits() const;
   void holding_registers(std::span<uint16_t> out) const;
+  /// Thread-safe: one table's values from `address` on, as a device's own
+  /// logic sets them (a third-party device's points; bits are 0/1). What
+  /// lies outside the table is left out.
+  void set_coils(uint16_t address, std::span<const uint8_t> bits);
+  void set_discrete_inputs(uint16_t address, std::span<const uint8_t> bits);
+  void set_holding_registers(uint16_t address, std::span<const uint16_t> registers);
+  void set_input_registers(uint16_t address, std::span<const uint16_t> registers);
+  /// Thread-safe: coils from `address` on, 0/1.
+  void coils(uint16_t address, std::span<uint8_t> out) const;
   /// Requests answered that wrote coils or registers (functions 05, 06, 15, 16).
   int64_t writes_served() const { return writes_.load(); }
   int64_t requests_served() const { return requests_.load(); }
@@ -52,6 +61,9 @@ class ModbusServer {
   void serve_tcp();
   void serve_rtu();
   void reply(const uint8_t* query, int length);
+  // Copies `from` into table[address..] of a table of `size`: what fits.
+  template <typename T>
+  void put(T* table, int size, uint16_t address, std::span<const T> from);
 
   ModbusAddress address_;
   _modbus* ctx_ = nullptr;

@@ -90,7 +90,8 @@ bool parse_field(std::string_view token, std::string_view key, T& value, int bas
 }  // namespace
 
 bool is_bit_function(ModbusFunction function) {
-  return function == ModbusFunction::ReadDiscreteInputs || function == ModbusFunction::WriteMultipleCoils;
+  return function == ModbusFunction::ReadCoils || function == ModbusFunction::ReadDiscreteInputs ||
+         function == ModbusFunction::WriteMultipleCoils;
 }
 
 void append_modbus_transaction(std::string& out, int64_t time_us, std::string_view source, int unit,
@@ -181,8 +182,8 @@ ModbusTraceParse parse_modbus_trace_line(std::string_view line) {
   if (tok.size() < 7) return fail("a transaction needs unit= fc= addr= count= rtt_us= and a result");
   unsigned fc = 0;
   if (!parse_field(tok[1], "unit=", r.unit)) return fail("bad unit= field '" + std::string(tok[1]) + "'");
-  if (!parse_field(tok[2], "fc=", fc) || (fc != 2 && fc != 4 && fc != 15 && fc != 16))
-    return fail("bad fc= field '" + std::string(tok[2]) + "' (02, 04, 15 or 16)");
+  if (!parse_field(tok[2], "fc=", fc) || !((fc >= 1 && fc <= 4) || fc == 15 || fc == 16))
+    return fail("bad fc= field '" + std::string(tok[2]) + "' (01, 02, 03, 04, 15 or 16)");
   r.function = static_cast<ModbusFunction>(fc);
   if (!parse_field(tok[3], "addr=", r.address)) return fail("bad addr= field '" + std::string(tok[3]) + "'");
   if (!parse_field(tok[4], "count=", r.count)) return fail("bad count= field '" + std::string(tok[4]) + "'");

@@ -17,9 +17,10 @@
 //
 // The time is when the request went out (wall clock, µs since the Unix
 // epoch); rtt_us is how long the answer (or the timeout) took. fc is the
-// Modbus function code in decimal, two digits: 02 read discrete inputs, 04
-// read input registers, 15 write multiple coils, 16 write multiple
-// registers. The result is ok, timeout, exception=CC (the slave's exception
+// Modbus function code in decimal, two digits: 01 read coils, 02 read
+// discrete inputs, 03 read holding registers, 04 read input registers, 15
+// write multiple coils, 16 write multiple registers (01 and 03 are what a
+// protocol "modbus" source polls besides 02 and 04). The result is ok, timeout, exception=CC (the slave's exception
 // code, hex), crc (an RTU frame with a bad CRC), disconnected or error;
 // "closed" follows when the request left the link closed (a TCP timeout, a
 // broken connection). Values: registers as four hex digits each, bits as one
@@ -51,12 +52,14 @@ namespace rise::io {
 
 /// Function codes the trace knows (Modbus Application Protocol V1.1b3 §6).
 enum class ModbusFunction : uint8_t {
+  ReadCoils = 1,
   ReadDiscreteInputs = 2,
+  ReadHoldingRegisters = 3,
   ReadInputRegisters = 4,
   WriteMultipleCoils = 15,
   WriteMultipleRegisters = 16,
 };
-/// True for the functions whose values are bits (02, 15).
+/// True for the functions whose values are bits (01, 02, 15).
 bool is_bit_function(ModbusFunction function);
 
 struct ModbusTraceRecord {
@@ -80,8 +83,8 @@ struct ModbusTraceRecord {
   int64_t answer_us() const { return time_us + rtt_us; }
 };
 
-/// Appends one transaction line (no newline). `values` are registers for 04
-/// and 16, bits (0/1) for 02 and 15. Allocates nothing when `out` has the
+/// Appends one transaction line (no newline). `values` are registers for 03,
+/// 04 and 16, bits (0/1) for 01, 02 and 15. Allocates nothing when `out` has the
 /// room (about 40 + 5 per register bytes plus the source name); no throw then.
 void append_modbus_transaction(std::string& out, int64_t time_us, std::string_view source, int unit,
                                ModbusFunction function, uint16_t address, uint16_t count, int64_t rtt_us,

@@ -32,6 +32,19 @@ ModbusResult RecordingModbusLink::transact(ModbusFunction function, uint16_t add
   return count(result);
 }
 
+ModbusResult RecordingModbusLink::read_coils(uint16_t address, std::span<uint8_t> bits) {
+  const int64_t time_us = now_epoch_us();
+  const auto start = Clock::now();
+  return transact(ModbusFunction::ReadCoils, address, bits, link_->read_coils(address, bits), time_us, start);
+}
+
+ModbusResult RecordingModbusLink::read_holding_registers(uint16_t address, std::span<uint16_t> registers) {
+  const int64_t time_us = now_epoch_us();
+  const auto start = Clock::now();
+  return transact(ModbusFunction::ReadHoldingRegisters, address, registers,
+                  link_->read_holding_registers(address, registers), time_us, start);
+}
+
 ModbusResult RecordingModbusLink::read_discrete_inputs(uint16_t address, std::span<uint8_t> bits) {
   const int64_t time_us = now_epoch_us();
   const auto start = Clock::now();

@@ -27,7 +27,9 @@ class RecordingModbusLink final : public ModbusLink {
   /// Each passes the request on and writes its line. A failed write (disk
   /// full) is counted in write_errors(), never thrown; no allocation once
   /// the line buffer has grown to a line's length.
+  ModbusResult read_coils(uint16_t address, std::span<uint8_t> bits) override;
   ModbusResult read_discrete_inputs(uint16_t address, std::span<uint8_t> bits) override;
+  ModbusResult read_holding_registers(uint16_t address, std::span<uint16_t> registers) override;
   ModbusResult read_input_registers(uint16_t address, std::span<uint16_t> registers) override;
   ModbusResult write_coils(uint16_t address, std::span<const uint8_t> bits) override;
   ModbusResult write_registers(uint16_t address, std::span<const uint16_t> registers) override;

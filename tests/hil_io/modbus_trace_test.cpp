@@ -29,6 +29,8 @@ TEST_CASE("modbus trace lines read back as they were written", "[hil_io]") {
   const std::string line = GENERATE(as<std::string>{},
       "(1700000000.001234) console unit=1 fc=04 addr=0 count=3 rtt_us=412 ok 0000 3333 FFFF",
       "(1700000000.001700) console unit=1 fc=02 addr=0 count=8 rtt_us=288 ok 10000001",
+      "(1700000000.001800) plc unit=3 fc=01 addr=8 count=3 rtt_us=120 ok 011",
+      "(1700000000.001900) plc unit=3 fc=03 addr=3 count=2 rtt_us=130 ok 0002 FE0C",
       "(1700000000.011234) console unit=1 fc=15 addr=0 count=4 rtt_us=301 ok 1010",
       "(1700000000.011600) console unit=17 fc=16 addr=100 count=2 rtt_us=350 ok 0000 002A",
       "(1700000000.021234) console unit=1 fc=04 addr=0 count=18 rtt_us=100087 timeout closed",
@@ -71,7 +73,7 @@ TEST_CASE("a malformed modbus trace line is refused with what is wrong", "[hil_i
       {"console unit=1 fc=04 addr=0 count=1 rtt_us=1 ok 0000", "no (seconds.micros) time"},
       {"(1.0) console", "no source and event"},
       {"(1.0) console link maybe", "expected 'link open' or 'link closed'"},
-      {"(1.0) console unit=1 fc=03 addr=0 count=1 rtt_us=1 ok 0000", "bad fc= field 'fc=03'"},
+      {"(1.0) console unit=1 fc=05 addr=0 count=1 rtt_us=1 ok 0000", "bad fc= field 'fc=05' (01, 02, 03, 04, 15 or 16)"},
       {"(1.0) console unit=1 fc=04 addr=x count=1 rtt_us=1 ok 0000", "bad addr= field"},
       {"(1.0) console unit=1 fc=04 addr=0 count=2 rtt_us=1 ok 0000", "count=2 but 1 registers"},
       {"(1.0) console unit=1 fc=04 addr=0 count=1 rtt_us=1 ok 00000", "is not four hex digits"},
@@ -159,6 +161,36 @@ TEST_CASE("a recorded modbus link writes every request with its answer, timing a
   CHECK(records[6].kind == ModbusTraceRecord::Kind::Reopen);
   CHECK(records[6].open);
   for (std::size_t i = 1; i < records.size(); ++i) CHECK(records[i].time_us >= records[i - 1].time_us);
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("a recorded modbus link reads a device's coils and holding registers with functions 01 and 03",
+          "[hil_io]") {
+  ModbusServer server("modbus+tcp-listen://127.0.0.1:0?unit=1", ModbusTableSizes{});
+  server.set_coils(2, std::array<uint8_t, 3>{1, 0, 1});
+  server.set_holding_registers(3, std::array<uint16_t, 2>{2, 0xFE0C});
+  const std::string dir = temp_dir("rise-mbrec03");
+  const std::string path = dir + "/plc.modbus.log";
+  const std::string url = "modbus+tcp://127.0.0.1:" + std::to_string(server.port()) + "?unit=1&timeout_ms=200";
+  {
+    RecordingModbusLink link(open_modbus_link(url), path, "plc", 1);
+    std::array<uint8_t, 3> coils{};
+    std::array<uint16_t, 2> holding{};
+    REQUIRE(link.read_coils(2, coils).ok());
+    CHECK(coils == std::array<uint8_t, 3>{1, 0, 1});
+    REQUIRE(link.read_holding_registers(3, holding).ok());
+    CHECK(holding == std::array<uint16_t, 2>{2, 0xFE0C});
+  }
+  std::vector<ModbusTraceRecord> records;
+  ModbusTraceReader reader(path);
+  for (ModbusTraceRecord r; reader.next(r);) records.push_back(r);
+  REQUIRE(records.size() == 3);
+  CHECK(records[1].function == ModbusFunction::ReadCoils);
+  CHECK(records[1].address == 2);
+  CHECK(records[1].values == std::vector<uint16_t>{1, 0, 1});
+  CHECK(records[2].function == ModbusFunction::ReadHoldingRegisters);
+  CHECK(records[2].values == std::vector<uint16_t>{2, 0xFE0C});
+  CHECK(format_modbus_trace_line(records[2]).find(" fc=03 addr=3 count=2 ") != std::string::npos);
   std::filesystem::remove_all(dir);
 }
 
