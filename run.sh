@@ -20,7 +20,7 @@ build=${RISE_BUILD_DIR:-$root/build}
 # change how the machine boots.
 packages=(
   cmake ninja-build g++ pkg-config
-  libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2
+  libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2 liburdfdom-dev
   python3 python3-can socat
   clang libclang-rt-14-dev
   qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils

@@ -1,9 +1,12 @@
 #include "sim/robot_description.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
+#include <tuple>
 #include <sstream>
 
+#include "sim/urdf_robot.hpp"
 #include "sim/yaml_reader.hpp"
 
 namespace rise::sim {
@@ -31,7 +34,7 @@ std::pair<std::string, std::string> parse_enable(const YamlReader& r, const YAML
 }
 
 ArmJointMapping parse_arm_joint(const YamlReader& r, const YAML::Node& n, const std::string& joint,
-                                const std::string& where) {
+                                const std::string& where, bool limits_here) {
   r.only_keys(n, where, {"axis", "max_radps", "invert", "min_deg", "max_deg", "max_torque_nm", "break_torque_nm"});
   ArmJointMapping j;
   j.joint = joint;
@@ -40,9 +43,12 @@ ArmJointMapping parse_arm_joint(const YamlReader& r, const YAML::Node& n, const 
   if (!n["max_radps"]) r.fail(n, where + ".max_radps", "missing");
   j.axis.max = r.positive(n, "max_radps", where, 0.0);
   if (n["invert"]) j.axis.invert = r.as<bool>(n["invert"], where + ".invert");
+  for (const char* key : {"min_deg", "max_deg"})
+    if (!limits_here && n[key]) r.fail(n[key], where + "." + key, "comes from the URDF joint's limit");
   if (n["min_deg"]) j.min_rad = r.as<double>(n["min_deg"], where + ".min_deg") * kDeg;
   if (n["max_deg"]) j.max_rad = r.as<double>(n["max_deg"], where + ".max_deg") * kDeg;
-  if (!(j.min_rad < 0.0 && j.max_rad > 0.0)) r.fail(n, where + ".min_deg", "limits must include 0 (min < 0 < max)");
+  if (limits_here && !(j.min_rad < 0.0 && j.max_rad > 0.0))
+    r.fail(n, where + ".min_deg", "limits must include 0 (min < 0 < max)");
   j.max_torque_nm = r.positive(n, "max_torque_nm", where, j.max_torque_nm);
   j.break_torque_nm = r.positive(n, "break_torque_nm", where, j.break_torque_nm);
   return j;
@@ -127,6 +133,59 @@ SensorsDescription parse_sensors(const YamlReader& r, const YAML::Node& n) {
   return s;
 }
 
+/// The URDF joint names listed at map[key].joints (four names).
+std::array<std::string, 4> joint_names(const YamlReader& r, const YAML::Node& map, const std::string& key) {
+  const YAML::Node j = map["joints"];
+  const std::string k = key + ".joints";
+  if (!j || !j.IsSequence() || j.size() != 4) r.fail(j ? j : map, k, "expected a list of 4 URDF joint names");
+  std::array<std::string, 4> names;
+  for (std::size_t i = 0; i < 4; ++i) names[i] = r.as<std::string>(j[i], k);
+  return names;
+}
+
+/// Fills the chassis, wheel and arm geometry from the URDF that root["urdf"]
+/// names (relative to the robot file); returns the arm's joint limits.
+std::vector<std::pair<double, double>> apply_urdf(const YamlReader& r, const YAML::Node& root, RobotDescription& d) {
+  const YAML::Node urdf = root["urdf"];
+  const auto name = r.as<std::string>(urdf, "urdf");
+  if (const YAML::Node c = root["chassis"]) {
+    if (d.kind == RobotKind::SkidSteer)
+      r.fail(c, "chassis", "comes from the URDF (clearance from the wheel joints' height)");
+    r.only_keys(c, "chassis", {"clearance_m"});
+    d.chassis.clearance_m = r.positive(c, "clearance_m", "chassis", d.chassis.clearance_m, true);
+  }
+  UrdfJointNames joints;
+  if (d.kind == RobotKind::SkidSteer) {
+    const YAML::Node w = root["wheels"];
+    if (!w.IsMap() || !w["joints"]) r.fail(w, "wheels.joints", "missing: the URDF joints of the wheels (fl, fr, rl, rr)");
+    joints.wheels = joint_names(r, w, "wheels");
+  }
+  if (const YAML::Node a = root["arm"]) {
+    r.only_keys(a, "arm", {"joints"});
+    joints.arm = joint_names(r, a, "arm");
+  }
+  const std::filesystem::path path = std::filesystem::path(r.file()).parent_path() / name;
+  UrdfRobot u;
+  try {
+    u = read_urdf_robot(path.string(), joints);
+  } catch (const std::runtime_error& e) {
+    r.fail(urdf, "urdf", name + ": " + e.what());
+  }
+  d.chassis.size_m = u.chassis_size_m;
+  d.chassis.mass_kg = u.chassis_mass_kg;
+  if (u.clearance_m) d.chassis.clearance_m = *u.clearance_m;
+  if (u.wheels) {
+    d.wheels.radius_m = u.wheels->radius_m;
+    d.wheels.width_m = u.wheels->width_m;
+    d.wheels.mass_kg = u.wheels->mass_kg;
+    d.wheels.wheelbase_m = u.wheels->wheelbase_m;
+    d.wheels.track_m = u.wheels->track_m;
+  }
+  d.arm = u.arm;
+  if (!u.arm) return {};
+  return {u.arm_limits_rad.begin(), u.arm_limits_rad.end()};
+}
+
 }  // namespace
 
 std::string read_text_file(const std::string& path) {
@@ -141,7 +200,7 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with robot, chassis, wheels, control");
-  r.only_keys(root, "", {"robot", "kind", "chassis", "wheels", "tracks", "arm", "control", "sensors"});
+  r.only_keys(root, "", {"robot", "kind", "urdf", "chassis", "wheels", "tracks", "arm", "control", "sensors"});
   RobotDescription d;
   d.file = file;
   if (!root["robot"]) r.fail(root, "robot", "missing");
@@ -153,39 +212,49 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
     else r.fail(k, "kind", "expected skid_steer or tracked");
   }
 
+  const YAML::Node urdf = root["urdf"];
+  std::vector<std::pair<double, double>> urdf_arm_limits;
   const YAML::Node chassis = root["chassis"];
-  if (!chassis) r.fail(root, "chassis", "missing");
-  r.only_keys(chassis, "chassis", {"size_m", "mass_kg", "clearance_m"});
-  if (const YAML::Node size = chassis["size_m"]) {
-    if (!size.IsSequence() || size.size() != 3) r.fail(size, "chassis.size_m", "expected [length, width, height]");
-    for (std::size_t i = 0; i < 3; ++i) {
-      d.chassis.size_m[i] = r.as<double>(size[i], "chassis.size_m");
-      if (!(d.chassis.size_m[i] > 0)) r.fail(size[i], "chassis.size_m", "must be > 0");
-    }
-  }
-  d.chassis.mass_kg = r.positive(chassis, "mass_kg", "chassis", d.chassis.mass_kg);
-  d.chassis.clearance_m = r.positive(chassis, "clearance_m", "chassis", d.chassis.clearance_m, true);
-
   const YAML::Node wheels = root["wheels"];
   if (d.kind == RobotKind::Tracked && wheels) r.fail(wheels, "wheels", "a tracked robot has tracks, not wheels");
   if (d.kind == RobotKind::SkidSteer && root["tracks"])
     r.fail(root["tracks"], "tracks", "a skid_steer robot has wheels");
+  if (d.kind == RobotKind::SkidSteer && !wheels) r.fail(root, "wheels", "missing");
+  if (urdf) {
+    urdf_arm_limits = apply_urdf(r, root, d);
+  } else {
+    if (!chassis) r.fail(root, "chassis", "missing");
+    r.only_keys(chassis, "chassis", {"size_m", "mass_kg", "clearance_m"});
+    if (const YAML::Node size = chassis["size_m"]) {
+      if (!size.IsSequence() || size.size() != 3) r.fail(size, "chassis.size_m", "expected [length, width, height]");
+      for (std::size_t i = 0; i < 3; ++i) {
+        d.chassis.size_m[i] = r.as<double>(size[i], "chassis.size_m");
+        if (!(d.chassis.size_m[i] > 0)) r.fail(size[i], "chassis.size_m", "must be > 0");
+      }
+    }
+    d.chassis.mass_kg = r.positive(chassis, "mass_kg", "chassis", d.chassis.mass_kg);
+    d.chassis.clearance_m = r.positive(chassis, "clearance_m", "chassis", d.chassis.clearance_m, true);
+  }
+
   if (d.kind == RobotKind::SkidSteer) {
-    if (!wheels) r.fail(root, "wheels", "missing");
-    r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",
-                                   "max_torque_nm", "max_speed_radps"});
     auto& w = d.wheels;
-    w.radius_m = r.positive(wheels, "radius_m", "wheels", w.radius_m);
-    w.width_m = r.positive(wheels, "width_m", "wheels", w.width_m);
-    w.mass_kg = r.positive(wheels, "mass_kg", "wheels", w.mass_kg);
+    if (urdf) {
+      r.only_keys(wheels, "wheels", {"joints", "friction", "max_torque_nm", "max_speed_radps"});
+    } else {
+      r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",
+                                     "max_torque_nm", "max_speed_radps"});
+      w.radius_m = r.positive(wheels, "radius_m", "wheels", w.radius_m);
+      w.width_m = r.positive(wheels, "width_m", "wheels", w.width_m);
+      w.mass_kg = r.positive(wheels, "mass_kg", "wheels", w.mass_kg);
+      w.wheelbase_m = r.positive(wheels, "wheelbase_m", "wheels", w.wheelbase_m);
+      w.track_m = r.positive(wheels, "track_m", "wheels", w.track_m);
+      if (w.track_m <= w.width_m) r.fail(wheels["track_m"], "wheels.track_m", "must be wider than a wheel");
+      if (w.radius_m <= d.chassis.clearance_m)
+        r.fail(wheels["radius_m"], "wheels.radius_m", "must exceed chassis.clearance_m");
+    }
     w.friction = r.positive(wheels, "friction", "wheels", w.friction);
-    w.wheelbase_m = r.positive(wheels, "wheelbase_m", "wheels", w.wheelbase_m);
-    w.track_m = r.positive(wheels, "track_m", "wheels", w.track_m);
     w.max_torque_nm = r.positive(wheels, "max_torque_nm", "wheels", w.max_torque_nm);
     w.max_speed_radps = r.positive(wheels, "max_speed_radps", "wheels", w.max_speed_radps);
-    if (w.track_m <= w.width_m) r.fail(wheels["track_m"], "wheels.track_m", "must be wider than a wheel");
-    if (w.radius_m <= d.chassis.clearance_m)
-      r.fail(wheels["radius_m"], "wheels.radius_m", "must exceed chassis.clearance_m");
   } else {
     const YAML::Node tracks = root["tracks"];
     if (!tracks) r.fail(root, "tracks", "missing");
@@ -205,7 +274,7 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
       r.fail(tracks["radius_m"], "tracks.radius_m", "the tracks must reach above chassis.clearance_m");
   }
 
-  if (const YAML::Node arm = root["arm"]) {
+  if (const YAML::Node arm = root["arm"]; arm && !urdf) {
     r.only_keys(arm, "arm", {"mount_m", "upper_length_m", "forearm_length_m", "link_mass_kg", "link_width_m",
                              "gripper_stroke_m"});
     ArmDescription a;
@@ -257,7 +326,8 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
     for (const char* joint : {"shoulder_yaw", "shoulder_pitch", "elbow_pitch"}) {
       const std::string where = std::string("control.arm.") + joint;
       if (!arm_control[joint]) r.fail(arm_control, where, "missing");
-      a.joints.push_back(parse_arm_joint(r, arm_control[joint], joint, where));
+      a.joints.push_back(parse_arm_joint(r, arm_control[joint], joint, where, urdf_arm_limits.empty()));
+      if (!urdf_arm_limits.empty()) std::tie(a.joints.back().min_rad, a.joints.back().max_rad) = urdf_arm_limits[a.joints.size() - 1];
     }
     const YAML::Node g = arm_control["gripper"];
     if (!g) r.fail(arm_control, "control.arm.gripper", "missing");

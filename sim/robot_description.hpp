@@ -2,7 +2,8 @@
 
 // What the simulator needs to know about a robot: its body, its running gear
 // (wheels or tracks), an optional arm, and its control mapping — which panel
-// controls drive which actuators. Loaded from YAML (sim/robots/*.yaml).
+// controls drive which actuators. Loaded from YAML (sim/robots/*.yaml), whose
+// `urdf` key may take the geometry from a URDF (sim/urdf_robot.hpp).
 
 #include <array>
 #include <cmath>
@@ -20,6 +21,8 @@ struct ChassisDescription {
   std::array<double, 3> size_m{0.8, 0.5, 0.25};  ///< length (x), width (y), height (z)
   double mass_kg = 40.0;
   double clearance_m = 0.05;  ///< ground to chassis bottom at rest
+
+  bool operator==(const ChassisDescription&) const = default;
 };
 
 struct WheelsDescription {
@@ -31,6 +34,8 @@ struct WheelsDescription {
   double track_m = 0.6;           ///< left to right wheel centre
   double max_torque_nm = 20.0;    ///< per wheel motor
   double max_speed_radps = 12.0;  ///< per wheel motor
+
+  bool operator==(const WheelsDescription&) const = default;
 };
 
 /// Two rigid tracks whose ground contacts move at the track speed (contact
@@ -46,6 +51,8 @@ struct TracksDescription {
   double friction = 1.2;           ///< μ along the track
   double lateral_friction = 0.7;   ///< μ across the track
   double max_speed_mps = 1.0;
+
+  bool operator==(const TracksDescription&) const = default;
 };
 
 /// A 3-joint arm (shoulder yaw, shoulder pitch, elbow pitch) and a one-finger
@@ -58,6 +65,8 @@ struct ArmDescription {
   double link_mass_kg = 3.0;
   double link_width_m = 0.06;
   double gripper_stroke_m = 0.08;
+
+  bool operator==(const ArmDescription&) const = default;
 };
 
 /// One axis of motion driven by a panel axis: command = value · max.
@@ -65,6 +74,8 @@ struct AxisMapping {
   std::string axis;
   double max = 0.0;  ///< m/s for linear, rad/s for angular and arm joints
   bool invert = false;
+
+  bool operator==(const AxisMapping&) const = default;
 };
 
 /// A velocity-controlled arm joint: the panel axis sets the target rate.
@@ -75,6 +86,8 @@ struct ArmJointMapping {
   double max_rad = M_PI;
   double max_torque_nm = 50.0;     ///< motor
   double break_torque_nm = 500.0;  ///< constraint torque that breaks the joint (sustained 20 ms)
+
+  bool operator==(const ArmJointMapping&) const = default;
 };
 
 struct ArmMapping {
@@ -84,6 +97,8 @@ struct ArmMapping {
   std::string close_button;
   double gripper_speed_mps = 0.05;
   double gripper_max_force_n = 80.0;
+
+  bool operator==(const ArmMapping&) const = default;
 };
 
 struct ControlMapping {
@@ -97,6 +112,8 @@ struct ControlMapping {
   std::optional<std::string> estop_button;
   /// Present iff the robot has an arm.
   std::optional<ArmMapping> arm;
+
+  bool operator==(const ControlMapping&) const = default;
 };
 
 struct RobotDescription {
@@ -109,10 +126,15 @@ struct RobotDescription {
   std::optional<ArmDescription> arm;
   ControlMapping control;
   SensorsDescription sensors;  ///< optional `sensors` section
+
+  bool operator==(const RobotDescription&) const = default;
 };
 
-/// Loads a robot file. Throws std::runtime_error "file:line: key: message"
-/// for unknown keys, missing or out-of-range values.
+/// Loads a robot file (and the URDF it names, relative to it). Throws
+/// std::runtime_error "file:line: key: message" for unknown keys, missing or
+/// out-of-range values, and "file:line: urdf: <urdf>: reason" for a URDF that
+/// liburdfdom refuses or that does not fit the simulator's model. Not for the
+/// cyclic path.
 RobotDescription load_robot_description(const std::string& path);
 RobotDescription parse_robot_description(const std::string& text, const std::string& file);
 

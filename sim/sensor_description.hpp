@@ -32,6 +32,8 @@ struct Mount {
              Eigen::AngleAxisd(rpy_rad[0], Eigen::Vector3d::UnitX()));
     return T;
   }
+
+  bool operator==(const Mount&) const = default;
 };
 
 /// The 3D mode: the scan plane (the sensor's x–y plane) turned about one of
@@ -46,6 +48,8 @@ struct LaserRotation {
     if (sweep_rad >= 2 * M_PI - 1e-9) return sweep_rad * k / steps;
     return steps == 1 ? 0.0 : -sweep_rad / 2 + sweep_rad * k / (steps - 1);
   }
+
+  bool operator==(const LaserRotation&) const = default;
 };
 
 /// A time-of-flight line scanner: beams in the sensor's x–y plane from
@@ -68,6 +72,8 @@ struct LaserDescription {
   int lines() const { return rotating ? rotating->steps : 1; }
   /// Angle of beam i in the scan plane (rad).
   double beam_angle_rad(int i) const { return -fov_rad / 2 + resolution_rad * i; }
+
+  bool operator==(const LaserDescription&) const = default;
 };
 
 /// Track or wheel odometry: each side's travel is scaled by (1 + e_side),
@@ -77,6 +83,8 @@ struct LaserDescription {
 struct OdometryDescription {
   double scale_sigma = 0.0;
   double noise_per_sqrt_m = 0.0;
+
+  bool operator==(const OdometryDescription&) const = default;
 };
 
 /// An IMU at the chassis centre, axes of the base frame. Each axis has a
@@ -86,12 +94,16 @@ struct ImuDescription {
   double gyro_bias_radps = 0.0;
   double accel_noise_mps2 = 0.0;
   double accel_bias_mps2 = 0.0;
+
+  bool operator==(const ImuDescription&) const = default;
 };
 
 /// A camera for viewers (x forward, y left, z up; the image looks along x).
 struct CameraMount {
   std::string name;
   Mount mount;
+
+  bool operator==(const CameraMount&) const = default;
 };
 
 struct SensorsDescription {
@@ -100,6 +112,8 @@ struct SensorsDescription {
   OdometryDescription odometry;
   ImuDescription imu;
   std::vector<CameraMount> cameras;
+
+  bool operator==(const SensorsDescription&) const = default;
 };
 
 }  // namespace rise::sim

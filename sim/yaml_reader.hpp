@@ -15,6 +15,9 @@ class YamlReader {
  public:
   explicit YamlReader(std::string file) : file_(std::move(file)) {}
 
+  /// The file named in every message (robot files resolve their URDF against it).
+  const std::string& file() const { return file_; }
+
   [[noreturn]] void fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
     const int line = node.IsDefined() ? node.Mark().line + 1 : 0;
     throw std::runtime_error(file_ + ":" + std::to_string(line) + ": " + (key.empty() ? "" : key + ": ") + what);

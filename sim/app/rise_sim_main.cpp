@@ -3,6 +3,8 @@
 // console feedback (the speed display) and every simulation event
 // (SimEvent on rise/<id>/sim_event). With --scan-dir it also writes the
 // robot's 3D laser scans as PCD files with their true pose beside them.
+// SimControl on rise/<id>/sim_control pauses, resumes, single-steps and
+// resets the simulation; each handled command is answered with a SimEvent.
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -17,10 +19,12 @@
 #include <limits>
 #include <optional>
 #include <thread>
+#include <vector>
 
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
+#include "rise_msgs/SimControl.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
@@ -65,6 +69,16 @@ struct PanelListener {
     any = true;
     ++count;
   }
+};
+
+// One step command advances at most an hour of sim time: the loop does not
+// take LCM messages while it steps.
+constexpr int32_t kMaxControlSteps = 3600 * 1000;
+
+// Commands in arrival order, applied by the main loop between steps.
+struct ControlListener {
+  std::vector<rise_msgs::SimControl> pending;
+  void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::SimControl* m) { pending.push_back(*m); }
 };
 
 rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::string& robot_id) {
@@ -198,30 +212,52 @@ int main(int argc, char** argv) {
   double next_scan_s = 0.0;
   const auto format = scan_format == "ascii" ? rise::sim::PcdFormat::Ascii : rise::sim::PcdFormat::Binary;
 
-  rise::sim::Simulation sim(robot, world);
+  const std::string control_channel = "rise/" + id + "/sim_control";
+  ControlListener control;
+  lcm.subscribe(control_channel, &ControlListener::on, &control)->setQueueCapacity(64);
+
+  // Reset rebuilds the whole world and robot: a Simulation is not assignable.
+  std::optional<rise::sim::Simulation> sim;
+  sim.emplace(robot, world);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}, {}", robot.name, robot.file,
-               world.name, fast ? "as fast as possible" : "real time", lcm_url, panel_channel, state_channel,
-               event_channel);
+  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}, {}; control on {}", robot.name,
+               robot.file, world.name, fast ? "as fast as possible" : "real time", lcm_url, panel_channel,
+               state_channel, event_channel, control_channel);
 
   const int steps_per_state = std::max(1, static_cast<int>(std::lround(1.0 / (state_hz * rise::sim::Simulation::kStepS))));
   const int steps_per_feedback = 100;  // 10 Hz
   const auto start = std::chrono::steady_clock::now();
+  const auto state_period = std::chrono::microseconds(static_cast<int64_t>(std::lround(1e6 / state_hz)));
   const auto timeout = std::chrono::milliseconds(panel_timeout_ms);
   std::string last_reason = "-";
-  int64_t step = 0;
-  while (!g_stop && (duration_s <= 0 || sim.time_s() < duration_s)) {
-    // Take every waiting LCM message without blocking the physics.
-    pollfd pfd{lcm.getFileno(), POLLIN, 0};
-    while (::poll(&pfd, 1, 0) > 0) lcm.handle();
+  int64_t step = 0;  // since start or the last reset
+  // Real-time pacing restarts from here after a pause, step or reset.
+  auto paced_from = start;
+  int64_t paced_steps = 0;
+  bool paused = false;
+  auto next_paused_state = start;
 
+  const auto publish_state = [&] {
+    const auto snap = sim->snapshot();
+    const auto msg = to_message(snap, robot.name);
+    lcm.publish(state_channel, &msg);
+    if (snap.stop_reason != last_reason) {
+      if (snap.motors_enabled) spdlog::info("motors enabled");
+      else spdlog::info("motors stopped: {}", snap.stop_reason);
+      last_reason = snap.stop_reason;
+    }
+    return std::make_pair(snap, msg.utime);
+  };
+
+  // One 1 ms step with everything that hangs on it: scans, events, state.
+  const auto advance = [&] {
     // Stop-and-go scanning: the whole scan at one instant of sim time.
-    if (scanner && sim.time_s() >= next_scan_s - 1e-9) {
+    if (scanner && sim->time_s() >= next_scan_s - 1e-9) {
       char name[32];
       std::snprintf(name, sizeof name, "scan_%04d", scans++);
       const auto stem = (std::filesystem::path(scan_dir) / name).string();
-      const auto scan = scanner->scan(sim);
+      const auto scan = scanner->scan(*sim);
       try {
         rise::sim::write_scan(stem, scan, format);
         spdlog::info("scan {:.3f} s: {}.pcd, {} points", scan.time_s, stem, scan.points_sensor.size());
@@ -233,27 +269,20 @@ int main(int argc, char** argv) {
 
     rise::sim::ControlInput input = panel.input;
     input.fresh = panel.any && std::chrono::steady_clock::now() - panel.received <= timeout;
-    sim.set_input(input);
-    sim.step();
+    sim->set_input(input);
+    sim->step();
     ++step;
-    for (const auto& e : sim.take_events()) {
+    for (const auto& e : sim->take_events()) {
       log_event(e);
       const auto msg = to_message(e, robot.name);
       lcm.publish(event_channel, &msg);
     }
 
     if (step % steps_per_state == 0) {
-      const auto snap = sim.snapshot();
-      const auto msg = to_message(snap, robot.name);
-      lcm.publish(state_channel, &msg);
-      if (snap.stop_reason != last_reason) {
-        if (snap.motors_enabled) spdlog::info("motors enabled");
-        else spdlog::info("motors stopped: {}", snap.stop_reason);
-        last_reason = snap.stop_reason;
-      }
+      const auto [snap, utime] = publish_state();
       if (step % steps_per_feedback == 0) {
         rise_msgs::PanelFeedback fb;
-        fb.utime = msg.utime;
+        fb.utime = utime;
         fb.panel_id = "";
         fb.num_leds = 0;  // the bridge owns power/fault/e-stop LEDs
         fb.display_names = {"speed"};
@@ -264,10 +293,74 @@ int main(int argc, char** argv) {
         lcm.publish(feedback_channel, &fb);
       }
     }
-    if (!fast) std::this_thread::sleep_until(start + std::chrono::microseconds(step * 1000));
+  };
+
+  const auto answer = [&](const rise_msgs::SimControl& c, const std::string& kind, const std::string& what) {
+    rise_msgs::SimEvent msg;
+    msg.utime = wall_us();
+    msg.sim_time_s = sim->time_s();
+    msg.robot_id = robot.name;
+    msg.kind = kind;
+    msg.a = c.issuer;
+    msg.detail = "seq " + std::to_string(c.seq) + (what.empty() ? "" : ": " + what);
+    spdlog::info("sim_control {:.3f} s: {} from '{}' {}", msg.sim_time_s, kind, c.issuer, msg.detail);
+    lcm.publish(event_channel, &msg);
+  };
+
+  const auto apply = [&](const rise_msgs::SimControl& c) {
+    if (c.command == "pause") {
+      paused = true;
+      next_paused_state = std::chrono::steady_clock::now();
+      answer(c, "sim_paused", "");
+    } else if (c.command == "resume") {
+      paused = false;
+      answer(c, "sim_resumed", "");
+    } else if (c.command == "step" && c.steps >= 1 && c.steps <= kMaxControlSteps) {
+      paused = true;
+      for (int32_t i = 0; i < c.steps && !g_stop; ++i) advance();
+      answer(c, "sim_stepped", std::to_string(c.steps) + " steps of 1 ms");
+      publish_state();
+      next_paused_state = std::chrono::steady_clock::now() + state_period;
+    } else if (c.command == "reset") {
+      sim.emplace(robot, world);
+      step = 0;
+      next_scan_s = 0.0;
+      last_reason = "-";
+      answer(c, "sim_reset", "world and robot rebuilt, robot at the start pose");
+      publish_state();
+      next_paused_state = std::chrono::steady_clock::now() + state_period;
+    } else {
+      answer(c, "sim_control_refused",
+             "command '" + c.command + "' with steps " + std::to_string(c.steps) + ": expected pause, resume, step " +
+                 "(steps 1.." + std::to_string(kMaxControlSteps) + ") or reset");
+      return;
+    }
+    paced_from = std::chrono::steady_clock::now();
+    paced_steps = 0;
+  };
+
+  while (!g_stop && (duration_s <= 0 || sim->time_s() < duration_s)) {
+    // Take every waiting LCM message without blocking the physics.
+    pollfd pfd{lcm.getFileno(), POLLIN, 0};
+    while (::poll(&pfd, 1, 0) > 0) lcm.handle();
+    for (const auto& c : control.pending) apply(c);
+    control.pending.clear();
+
+    if (paused) {
+      // No stepping; RobotState still goes out, with the same sim time.
+      if (std::chrono::steady_clock::now() >= next_paused_state) {
+        publish_state();
+        next_paused_state += state_period;
+      }
+      ::poll(&pfd, 1, 1);
+      continue;
+    }
+    advance();
+    ++paced_steps;
+    if (!fast) std::this_thread::sleep_until(paced_from + std::chrono::microseconds(paced_steps * 1000));
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} panel states", sim.time_s(),
-               wall_s, wall_s > 0 ? sim.time_s() / wall_s : 0.0, panel.count);
+  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} panel states", sim->time_s(),
+               wall_s, wall_s > 0 ? sim->time_s() / wall_s : 0.0, panel.count);
   return 0;
 }

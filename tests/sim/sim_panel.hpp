@@ -3,6 +3,8 @@
 // Test helpers shared by the sensor tests: a drive panel and stepping.
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include "sim/simulation.hpp"
 
@@ -19,6 +21,17 @@ inline ControlInput drive_panel(float forward, float turn_right) {
   in.switches = {{"mode", 0}, {"speed", 2}};
   in.switch_labels = {{"mode", "drive"}, {"speed", "fast"}};
   return in;
+}
+
+/// The message of the std::runtime_error that f() throws, or "no error".
+template <typename F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
 }
 
 inline void run_for(Simulation& sim, double seconds) {

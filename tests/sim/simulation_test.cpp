@@ -44,7 +44,7 @@ TEST_CASE("the shipped robot file loads", "[sim]") {
 }
 
 TEST_CASE("a broken robot file is refused with file:line and the key", "[sim]") {
-  std::ifstream in(kRobot);
+  std::ifstream in(std::string(RISE_SOURCE_DIR) + "/tests/sim/data/skid4_inline.yaml");  // the inline form
   std::stringstream buf;
   buf << in.rdbuf();
   const std::string good = buf.str();
