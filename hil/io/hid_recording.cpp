@@ -33,14 +33,16 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-// The next blank-separated word of `rest` (empty at the end); `rest` moves past it.
+// Takes the blank-separated words off the front of `rest`, one per call
+// (empty at the end).
 std::string_view next_word(std::string_view& rest) {
-  const auto begin = rest.find_first_not_of(" \t");
-  if (begin == std::string_view::npos) return rest = {}, std::string_view();
-  rest.remove_prefix(begin);
-  const std::size_t end = std::min(rest.find_first_of(" \t"), rest.size());
-  const std::string_view word = rest.substr(0, end);
-  rest.remove_prefix(end);
+  auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  std::size_t i = 0;
+  while (i < rest.size() && blank(rest[i])) ++i;
+  std::size_t j = i;
+  while (j < rest.size() && !blank(rest[j])) ++j;
+  const std::string_view word(rest.data() + i, j - i);
+  rest.remove_prefix(j);
   return word;
 }
 

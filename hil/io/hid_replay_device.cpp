@@ -1,9 +1,6 @@
 #include "hil/io/hid_replay_device.hpp"
 
-#include <sys/prctl.h>
-
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -12,12 +9,6 @@
 
 namespace rise::io {
 namespace {
-
-// Time between the last record of a pass and the first of the next when the
-// pass has a single record (otherwise the pass's mean record gap is used).
-constexpr int64_t kSingleRecordLoopGapUs = 100'000;
-
-int64_t seconds_to_us(double s) { return static_cast<int64_t>(std::llround(s * 1e6)); }
 
 ReplayAddress hid_replay_address(const std::string& url) {
   const CanAddress parsed = parse_can_url(url);
@@ -38,18 +29,15 @@ HidReplayDevice::HidReplayDevice(std::string url, ReplayAddress address)
     : url_(std::move(url)),
       address_(std::move(address)),
       reader_(address_.path),
-      start_us_(seconds_to_us(address_.start_s)),
-      stop_us_(address_.stop_s < 0.0 ? -1 : seconds_to_us(address_.stop_s)) {
+      passes_(address_.start_s, address_.stop_s, address_.loop),
+      clock_(address_.speed) {
   pending_.bytes.reserve(max_hid_report_bytes);
   held_.bytes.reserve(max_hid_report_bytes);
   error_.set("%s: not plugged in yet", address_.path.c_str());
 }
 
 void HidReplayDevice::emit(int64_t ts) {
-  if (pass_played_ == 0) pass_first_played_us_ = ts;
-  pass_last_played_us_ = std::max(pass_last_played_us_, ts);
-  ++pass_played_;
-  pending_ts_us_ = ts + loop_offset_us_;
+  pending_ts_us_ = passes_.play(ts);
   pending_opens_pass_ = new_pass_;
   new_pass_ = false;
   have_pending_ = true;
@@ -57,6 +45,7 @@ void HidReplayDevice::emit(int64_t ts) {
 
 bool HidReplayDevice::fetch() {
   using Kind = HidRecordingRecord::Kind;
+  using Place = ReplayPasses::Place;
   if (have_held_) {
     std::swap(pending_, held_);
     have_held_ = false;
@@ -64,21 +53,10 @@ bool HidReplayDevice::fetch() {
     return true;
   }
   for (;;) {
-    bool end_of_pass = !reader_.next(pending_);
-    const bool more = address_.loop < 0 || loops_done_ < address_.loop;
-    if (!end_of_pass) {
-      int64_t ts = pending_.time_us;
-      if (!pass_started_) {
-        pass_started_ = true;
-        pass_first_record_us_ = ts;
-        pass_last_played_us_ = ts;
-        window_plugged_ = false;
-      }
-      const int64_t since_first = ts - pass_first_record_us_;
-      if (stop_us_ >= 0 && since_first > stop_us_) {
-        end_of_pass = true;
-      } else if (since_first < start_us_) {
-        // Before the window: only whether the device is plugged in, and as what, matters.
+    if (reader_.next(pending_)) {
+      const Place place = passes_.place(pending_.time_us);
+      if (place == Place::Before) {
+        // Before the window only whether the device is plugged in, and as what, matters.
         if (pending_.kind == Kind::Plug) {
           std::swap(window_plug_, pending_);
           window_plugged_ = true;
@@ -86,37 +64,32 @@ bool HidReplayDevice::fetch() {
           window_plugged_ = false;
         }
         continue;
-      } else if (pending_.kind == Kind::End && more) {
-        // The recording's end is only the pass's last time when another pass follows.
-        pass_last_played_us_ = std::max(pass_last_played_us_, ts);
-        continue;
-      } else {
+      }
+      if (place == Place::In) {
+        if (pending_.kind == Kind::End && passes_.more()) {
+          passes_.play(pending_.time_us);  // the recording's end is only the pass's last time
+          continue;
+        }
         if (window_plugged_ && pending_.kind != Kind::Plug) {
-          // The device was plugged in before the window: plugged in at its start.
+          // Plugged in before the window: plugged in at its start.
           std::swap(held_, pending_);
           have_held_ = true;
+          pending_.kind = Kind::Plug;
+          pending_.time_us = passes_.window_start_us();
+          pending_.line = window_plug_.line;
           pending_.bytes = window_plug_.bytes;
           pending_.identity = window_plug_.identity;
-          pending_.kind = Kind::Plug;
-          pending_.line = window_plug_.line;
-          ts = pass_first_record_us_ + start_us_;
-          pending_.time_us = ts;
         }
         window_plugged_ = false;
-        emit(ts);
+        emit(pending_.time_us);
         return true;
       }
     }
-    // A pass that played nothing would loop forever without a record.
-    if (!more || pass_played_ == 0) return false;
-    const int64_t span = pass_last_played_us_ - pass_first_played_us_;
-    const int64_t gap =
-        pass_played_ > 1 ? span / static_cast<int64_t>(pass_played_ - 1) : kSingleRecordLoopGapUs;
-    loop_offset_us_ += span + std::max<int64_t>(gap, 1);
-    ++loops_done_;
+    // The end of a pass: of the file, or of the window.
+    window_plugged_ = false;
+    if (!passes_.next_pass()) return false;
+    loops_done_ = passes_.loops_done();
     reader_.rewind();
-    pass_started_ = false;
-    pass_played_ = 0;
     new_pass_ = true;
   }
 }
@@ -125,31 +98,8 @@ bool HidReplayDevice::next_pending() { return have_pending_ || fetch(); }
 
 bool HidReplayDevice::wait_due(int timeout_ms) {
   if (address_.fast) return true;
-  if (!anchored_) {
-    anchored_ = true;
-    // The default 50 µs timer slack of a thread would be most of the
-    // lateness: a replay wants its sleeps to end on time.
-    ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
-    t0_ = Clock::now();
-    ts_first_us_ = pending_ts_us_;
-  }
-  const auto offset_us =
-      static_cast<int64_t>(std::llround(static_cast<double>(pending_ts_us_ - ts_first_us_) / address_.speed));
-  const Clock::time_point due = t0_ + std::chrono::microseconds(offset_us);
-  const Clock::time_point now = Clock::now();
-  if (due > now) {
-    const auto wait = std::chrono::milliseconds(std::max(timeout_ms, 0));
-    if (due - now > wait) {
-      if (timeout_ms > 0) std::this_thread::sleep_for(wait);
-      return false;
-    }
-    std::this_thread::sleep_until(due);
-  }
-  if (pending_.kind == HidRecordingRecord::Kind::Report) {
-    const int64_t late_us = std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - due).count();
-    if (late_us > max_lateness_us_) max_lateness_us_ = late_us;
-    last_lateness_us_.store(late_us, std::memory_order_relaxed);
-  }
+  if (!clock_.wait(pending_ts_us_, timeout_ms)) return false;
+  if (pending_.kind == HidRecordingRecord::Kind::Report) clock_.count_lateness();
   return true;
 }
 

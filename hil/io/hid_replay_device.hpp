@@ -12,7 +12,7 @@
 // that never comes back (loop=N plays it again first). A file with no E:
 // line plays no report: it plugs in, then ends.
 //
-// Timing as ReplayBus's (replay_bus.hpp): record i is due at
+// Timing as ReplayBus's (replay_schedule.hpp): record i is due at
 // t0 + (ts_i - ts_first) / speed, t0 the steady-clock time of the first
 // call that asked for the first record; no drift accumulates and a late
 // report does not delay the next; max_lateness_us() says how late reports
@@ -26,7 +26,6 @@
 // Used from one thread (the source's); the counters from any.
 
 #include <atomic>
-#include <chrono>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -35,6 +34,7 @@
 #include "hil/io/hid_recording.hpp"
 #include "hil/io/input_device.hpp"
 #include "hil/io/posix_io.hpp"
+#include "hil/io/replay_schedule.hpp"
 
 namespace rise::io {
 
@@ -49,9 +49,9 @@ class HidReplayDevice final : public InputDevice {
   HidReplayDevice(const HidReplayDevice&) = delete;
   HidReplayDevice& operator=(const HidReplayDevice&) = delete;
 
-  /// Ok once the next plug is due (or while the recording has the device
-  /// plugged in: after close()); Disconnected before it and after the end.
-  /// Allocates at a plug (the descriptor); no throw.
+  /// Ok once the next plug is due, or while the recording has the device
+  /// plugged in (open, or closed by close()); Disconnected before the plug
+  /// and after the end. Allocates at a plug (the descriptor); no throw.
   IoStatus reopen() override;
   void close() override { open_ = false; }
   bool is_open() const override { return open_; }
@@ -74,9 +74,9 @@ class HidReplayDevice final : public InputDevice {
   std::string last_error() const override { return error_.get(); }
 
   /// Largest (read time - due time) of a report so far, µs (0 with fast=1).
-  int64_t max_lateness_us() const { return max_lateness_us_; }
+  int64_t max_lateness_us() const { return clock_.max_lateness_us(); }
   /// (read time - due time) of the last report read.
-  int64_t last_lateness_us() const { return last_lateness_us_; }
+  int64_t last_lateness_us() const { return clock_.last_lateness_us(); }
   uint64_t reports_played() const { return reports_played_; }
   /// Plugs handed out by reopen().
   int plugs_played() const { return plugs_played_; }
@@ -88,8 +88,6 @@ class HidReplayDevice final : public InputDevice {
   const HidRecordingReader& reader() const { return reader_; }
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   bool fetch();             // pending_ ← the next record to play; false at the end of the last pass
   bool next_pending();      // have_pending_ || fetch()
   void emit(int64_t ts);    // pending_ (at ts, the file's clock) is the next to play
@@ -100,29 +98,18 @@ class HidReplayDevice final : public InputDevice {
   std::string url_;
   ReplayAddress address_;
   HidRecordingReader reader_;
-  int64_t start_us_;
-  int64_t stop_us_;  // -1: none
+  ReplayPasses passes_;  // the window and the loops
+  ReplayClock clock_;    // anchored when the first record is asked for
 
   HidRecordingRecord pending_;
   bool have_pending_ = false;
   bool pending_opens_pass_ = false;  // pending_ is the first record of a loop's pass
+  bool new_pass_ = false;
   int64_t pending_ts_us_ = 0;        // its time plus the offset of earlier loops
   HidRecordingRecord held_;          // the window's first record, behind the plug made up for it
   bool have_held_ = false;
   HidRecordingRecord window_plug_;   // the last plug before the window
   bool window_plugged_ = false;
-  // Window and loops, as ReplayBus's.
-  bool pass_started_ = false;
-  int64_t pass_first_record_us_ = 0;
-  int64_t pass_first_played_us_ = 0;
-  int64_t pass_last_played_us_ = 0;
-  uint64_t pass_played_ = 0;
-  int64_t loop_offset_us_ = 0;
-  bool new_pass_ = false;
-  // Time anchor.
-  bool anchored_ = false;
-  Clock::time_point t0_;
-  int64_t ts_first_us_ = 0;
 
   bool plugged_ = false;  // the recording has the device plugged in
   std::vector<uint8_t> descriptor_;
@@ -132,8 +119,6 @@ class HidReplayDevice final : public InputDevice {
 
   std::atomic<bool> open_{false};
   std::atomic<bool> ended_{false};
-  std::atomic<int64_t> max_lateness_us_{0};
-  std::atomic<int64_t> last_lateness_us_{0};
   std::atomic<uint64_t> reports_played_{0};
   std::atomic<int> plugs_played_{0};
   std::atomic<int> loops_done_{0};

@@ -11,20 +11,17 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "hil/bridge.hpp"
 #include "hil/io/hid_replay_device.hpp"
-#include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
-#include "hil/session_recorder.hpp"
 #include "panels/panel_definition.hpp"
 #include "tests/hid_test_devices.hpp"
-#include "tests/hil/bridge_test_support.hpp"
 #include "tests/hil/hid_session_support.hpp"
 
 using namespace rise::hil;
-using rise::hil::test::Published;
 using Clock = std::chrono::steady_clock;
 
 namespace {
@@ -34,23 +31,6 @@ const std::string kGolden = std::string(RISE_SOURCE_DIR) + "/tests/data/replay/h
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("rise-hidsession-" + std::to_string(::getpid()) + "-" + name))
       .string();
-}
-
-std::vector<std::string> read_lines(const std::string& path) {
-  std::ifstream in(path);
-  std::vector<std::string> lines;
-  for (std::string l; std::getline(in, l);) lines.push_back(l);
-  return lines;
-}
-
-void write_lines(const std::string& path, const std::vector<std::string>& lines) {
-  std::ofstream out(path);
-  for (const auto& l : lines) out << l << "\n";
-}
-
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 const std::vector<uint8_t> gravis(std::begin(rise::test::gravis_descriptor), std::end(rise::test::gravis_descriptor));
@@ -82,28 +62,9 @@ int64_t write_golden_input(const std::string& path) {
                                                  session);
 }
 
-// Changes the y byte (the report's second) of the first report that moved
-// y away from its previous value back to that value; returns the line's
-// index. Lines are "E: SEC.USEC LEN x y b0 b1".
-std::size_t undo_first_y_change(std::vector<std::string>& lines) {
-  std::string last_y;
-  for (std::size_t i = 0; i < lines.size(); ++i) {
-    if (lines[i].rfind("E: ", 0) != 0) continue;
-    std::istringstream in(lines[i]);
-    std::vector<std::string> words;
-    for (std::string w; in >> w;) words.push_back(w);
-    if (words.size() != 7) continue;  // a corrupt (short) report
-    if (!last_y.empty() && words[4] != last_y) {
-      words[4] = last_y;
-      std::string line = words[0];
-      for (std::size_t w = 1; w < words.size(); ++w) line += " " + words[w];
-      lines[i] = line;
-      return i;
-    }
-    last_y = words[4];
-  }
-  FAIL("no report changes y");
-  return 0;
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
 }  // namespace
@@ -197,38 +158,29 @@ TEST_CASE("a HID session recorded from a replayed pad verifies, and a changed re
   const std::string dir = temp_path("session");
   std::filesystem::remove_all(dir);
   REQUIRE(write_golden_input(input) > 200);
-  Published published;
   {
-    SessionRecorder recorder(dir);
-    std::vector<SourceTransport> transports(1);
-    transports[0].hid = std::make_unique<rise::io::HidReplayDevice>("replay://" + input);
-    REQUIRE(recorder.record_source("pad", transports[0], 0));
-    const auto* recorded = static_cast<const rise::io::RecordingInputDevice*>(transports[0].hid.get());
-    const std::string channel = rise::hil::channel("rec", "panel_state");
-    int64_t seq = 0;
-    Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& snap) {
-      recorder.record_message(channel, to_message(def, snap, "rec", seq++, wall_us(), {}));
-      published.add(snap);
-    });
-    bridge.start();
-    // The session: healthy, then the end of the recording fails it safe for good.
-    REQUIRE(published.wait_for([](const PanelSnapshot& s) { return !s.failsafe; }, 5000));
-    auto ended = [&](const PanelSnapshot& s) { return s.failsafe && s.failsafe_reason == "pad: disconnected"; };
-    REQUIRE(published.wait_for([&](const PanelSnapshot& s) { return s.sources[0].reconnects == 1 && ended(s); }, 10000));
-    bridge.stop();
-    const auto c = recorder.counts();
-    CHECK(c.hid_reports == recorded->reports_recorded());
+    rise::hil::test::RecordedHidSession session(def, std::make_unique<rise::io::HidReplayDevice>("replay://" + input),
+                                                dir);
+    // Healthy, then the end of the recording fails it safe for good (after the re-plug).
+    REQUIRE(session.published.wait_for([](const PanelSnapshot& s) { return !s.failsafe; }, 5000));
+    REQUIRE(session.published.wait_for(
+        [](const PanelSnapshot& s) {
+          return s.sources[0].reconnects == 1 && s.failsafe && s.failsafe_reason == "pad: disconnected";
+        },
+        10000));
+    session.stop();
+    const auto c = session.recorder().counts();
+    CHECK(c.hid_reports == session.recording().reports_recorded());
     CHECK(c.hid_reports > 200);
-    CHECK(c.lcm_events == seq);
+    CHECK(c.lcm_events == session.messages());
     CHECK(c.write_errors == 0);
-    CHECK(recorder.files() == std::vector<std::string>{dir + "/panel_state.lcmlog", dir + "/pad.hid"});
+    CHECK(session.recorder().files() == std::vector<std::string>{dir + "/panel_state.lcmlog", dir + "/pad.hid"});
   }
   // The recording has both plugs, the unplug between them, and its own start.
   rise::io::HidRecordingReader reader(dir + "/pad.hid");
   CHECK(reader.plugs() == 2);
   CHECK(reader.epoch_clock());
   const PanelStateLog golden = read_panel_state_log(dir + "/panel_state.lcmlog");
-  CHECK(golden.messages.size() == published.size());
   const VerifyReport report = verify_replay(def, captures_in(def, dir), golden.messages);
   if (report.difference) INFO(describe(*report.difference));
   CHECK(report.passed());
@@ -237,9 +189,9 @@ TEST_CASE("a HID session recorded from a replayed pad verifies, and a changed re
   CHECK(report.records == reader.reports() + 2 + 2);
 
   SECTION("one report byte changed: the first difference names the control") {
-    std::vector<std::string> lines = read_lines(dir + "/pad.hid");
-    undo_first_y_change(lines);
-    write_lines(dir + "/pad.hid", lines);
+    std::string text = read_text(dir + "/pad.hid");
+    REQUIRE(rise::hil::test::undo_first_change(text, 1) > 0);  // byte 1: y
+    std::ofstream(dir + "/pad.hid") << text;
     const VerifyReport bad = verify_replay(def, captures_in(def, dir), golden.messages);
     REQUIRE_FALSE(bad.passed());
     INFO(describe(*bad.difference));
@@ -270,9 +222,10 @@ TEST_CASE("the recorded HID session replays to its golden PanelState stream", "[
   SECTION("one report byte changed fails at the first message after it") {
     const std::string dir = temp_path("golden-copy");
     std::filesystem::create_directories(dir);
-    std::vector<std::string> lines = read_lines(kGolden + "/pad.hid");
-    const std::size_t changed = undo_first_y_change(lines);
-    write_lines(dir + "/pad.hid", lines);
+    std::string text = read_text(kGolden + "/pad.hid");
+    const int changed = rise::hil::test::undo_first_change(text, 1);  // byte 1: y
+    REQUIRE(changed > 0);
+    std::ofstream(dir + "/pad.hid") << text;
     const VerifyReport bad = verify_replay(def, captures_in(def, dir), golden.messages);
     REQUIRE_FALSE(bad.passed());
     INFO(describe(*bad.difference));
@@ -283,7 +236,7 @@ TEST_CASE("the recorded HID session replays to its golden PanelState stream", "[
       rise::io::HidRecordingRecord r;
       int64_t changed_us = -1;
       while (reader.next(r))
-        if (r.line == static_cast<int>(changed) + 1) changed_us = r.time_us;
+        if (r.line == changed) changed_us = r.time_us;
       REQUIRE(changed_us > 0);
       CHECK(bad.difference->utime >= changed_us);
       CHECK(bad.difference->utime - changed_us < 10'000);  // within a publish period
