@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -238,4 +239,19 @@ TEST_CASE("hid recording reads hid-tools' device files of the shared data as hid
   CHECK(records[0].identity.bus == oracle.bus);
   CHECK(records[0].identity.vendor_id == oracle.vendor_id);
   CHECK(records[0].identity.product_id == oracle.product_id);
+}
+
+TEST_CASE("hid recording on a full disk counts the lost lines and goes on", "[hil_io]") {
+  // /dev/full takes the writes into the stream's buffer and fails its flushes,
+  // which come at least every 100 ms.
+  HidRecordingWriter w("/dev/full", "pad");
+  w.plug(t0, gravis, uhid_gravis());
+  const std::vector<uint8_t> report = {0x7f, 0x7f, 0x00, 0x00};
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  int64_t written = 0;
+  do {
+    w.report(t0 + ++written * 1000, report);
+  } while (w.errors() == 0 && std::chrono::steady_clock::now() < give_up);
+  CHECK(w.errors() > 0);
+  CHECK(w.reports() < written);  // the failed line is not counted as recorded
 }
