@@ -300,7 +300,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
 }
 
 void Bridge::hid_source_loop(std::size_t source) {
-  io::HidDevice& device = *hid_devices_[source];
+  io::InputDevice& device = *hid_devices_[source];
   const panels::PanelDefinition& definition = mapper_.definition();
   bool has_leds = false;
   for (const auto& led : definition.leds) has_leds = has_leds || led.source == source;

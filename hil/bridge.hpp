@@ -18,7 +18,7 @@
 
 #include "hil/feedback.hpp"
 #include "hil/io/can_bus.hpp"
-#include "hil/io/hid_device.hpp"
+#include "hil/io/input_device.hpp"
 #include "hil/io/modbus_link.hpp"
 #include "hil/panel_mapper.hpp"
 
@@ -36,11 +36,12 @@ struct BridgeSettings {
 int64_t monotonic_us();
 
 /// The transport of one source: a CAN bus (rise-can-v1, dbc), a Modbus link
-/// (rise-modbus-v1) or a HID device (hid); exactly one is set.
+/// (rise-modbus-v1) or a HID device (hid: a HidDevice or a HidReplayDevice);
+/// exactly one is set.
 struct SourceTransport {
   std::unique_ptr<io::CanBus> can;
   std::unique_ptr<io::ModbusLink> modbus;
-  std::unique_ptr<io::HidDevice> hid;
+  std::unique_ptr<io::InputDevice> hid;
 };
 
 class Bridge {
@@ -91,7 +92,7 @@ class Bridge {
   PanelMapper mapper_;
   std::vector<std::unique_ptr<io::CanBus>> buses_;            // null for a Modbus source
   std::vector<std::unique_ptr<io::ModbusLink>> modbus_links_;  // null for a CAN source
-  std::vector<std::unique_ptr<io::HidDevice>> hid_devices_;    // null unless a hid source
+  std::vector<std::unique_ptr<io::InputDevice>> hid_devices_;  // null unless a hid source
   PublishFn publish_;
   BridgeSettings settings_;
 

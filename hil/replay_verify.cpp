@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "hil/io/can_log.hpp"
+#include "hil/io/hid_recording.hpp"
 #include "hil/io/modbus_trace.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/source_input.hpp"
@@ -161,6 +162,37 @@ class ModbusFeed final : public CaptureReplay::Feed {
   std::optional<uint16_t> last_counter_;
 };
 
+// A HID recording, replayed as the bridge's HID loop went: each plug
+// attaches its descriptor and connects the source, each report is decoded,
+// each unplug disconnects it. The recording's end (the daemon stopped) is
+// after every message.
+class HidFeed final : public CaptureReplay::Feed {
+ public:
+  HidFeed(const std::string& path, std::size_t source) : Feed(source), reader_(path) { fetch(); }
+  void apply(PanelMapper& mapper) override {
+    using Kind = io::HidRecordingRecord::Kind;
+    switch (record_.kind) {
+      case Kind::Plug:
+        mapper.attach_hid(source, record_.bytes);
+        mapper.on_connection(source, true, *time_us);
+        break;
+      case Kind::Report: mapper.on_hid_report(source, record_.bytes, *time_us); break;
+      case Kind::Unplug: mapper.on_connection(source, false, *time_us); break;
+      case Kind::End: break;
+    }
+    fetch();
+  }
+  bool records_link() const override { return true; }
+
+ private:
+  void fetch() {
+    time_us.reset();
+    if (reader_.next(record_)) time_us = record_.time_us;
+  }
+  io::HidRecordingReader reader_;
+  io::HidRecordingRecord record_;
+};
+
 std::vector<std::string> control_names(const rise_msgs::PanelState& m) {
   std::vector<std::string> names;
   for (const auto& a : m.axes) names.push_back(a.name);
@@ -221,9 +253,11 @@ Capture capture_for(const panels::PanelDefinition& definition, const std::string
                                 "or pass SOURCE=FILE)");
   }
   const auto& source = definition.sources[c.source];
-  if (source.is_hid())
-    throw std::invalid_argument(path + ": source '" + source.name + "' is a HID device: HID captures are not replayed");
   if (!std::filesystem::exists(file)) throw std::invalid_argument(file + ": no such capture file");
+  if (io::looks_like_hid_recording(file) != source.is_hid())
+    throw std::invalid_argument(file + ": source '" + source.name + "' speaks " + source.protocol + " but the file is " +
+                                (source.is_hid() ? "not a hid-recorder file" : "a hid-recorder file"));
+  if (source.is_hid()) return c;
   const bool modbus = io::looks_like_modbus_trace(file);
   if (modbus != source.is_modbus())
     throw std::invalid_argument(file + ": source '" + source.name + "' speaks " + source.protocol + " but the file is " +
@@ -235,7 +269,7 @@ std::vector<Capture> captures_in(const panels::PanelDefinition& definition, cons
   std::vector<Capture> captures;
   for (std::size_t i = 0; i < definition.sources.size(); ++i) {
     const auto& s = definition.sources[i];
-    const std::string path = dir + "/" + s.name + (s.is_modbus() ? ".modbus.log" : ".log");
+    const std::string path = dir + "/" + s.name + (s.is_modbus() ? ".modbus.log" : s.is_hid() ? ".hid" : ".log");
     if (!std::filesystem::exists(path))
       throw std::invalid_argument(path + ": no capture of source '" + s.name + "' in " + dir);
     captures.push_back(capture_for(definition, path));
@@ -249,10 +283,12 @@ CaptureReplay::CaptureReplay(const panels::PanelDefinition& definition, std::vec
     if (c.source >= definition.sources.size())
       throw std::invalid_argument(c.path + ": source index " + std::to_string(c.source) + " is not in the panel");
     const auto& s = definition.sources[c.source];
-    if (s.is_hid()) throw std::invalid_argument(c.path + ": HID captures are not replayed");
-    if (s.is_modbus())
+    if (s.is_hid())
+      feeds_.push_back(std::make_unique<HidFeed>(c.path, c.source));
+    else if (s.is_modbus())
       feeds_.push_back(std::make_unique<ModbusFeed>(c.path, c.source, modbus_poll_reads(definition, c.source)));
-    else feeds_.push_back(std::make_unique<CanFeed>(c.path, c.source));
+    else
+      feeds_.push_back(std::make_unique<CanFeed>(c.path, c.source));
   }
   bool any = false;
   for (const auto& f : feeds_) {

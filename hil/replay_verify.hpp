@@ -7,10 +7,13 @@
 //
 // Captures are what `rise-hild --record DIR` writes: a candump log per CAN
 // source (<source>.log), a Modbus transaction trace per Modbus source
-// (<source>.modbus.log). Frames the daemon sent (" T", "Tx") are left out.
+// (<source>.modbus.log), a hid-recorder file per HID source (<source>.hid:
+// each R: block attaches its descriptor, each E: report is decoded at its
+// time). Frames the daemon sent (" T", "Tx") are left out.
 // Vector ASC and PEAK TRC logs replay too, but their times count from the
 // measurement's start, so only a candump log's epoch times line up with a
-// golden's utime. The records go through the same calls the live bridge
+// golden's utime; so does a hid-recorder file only with our `# start`
+// line (hid-tools' own count from their first report). The records go through the same calls the live bridge
 // makes (hil/source_input.hpp). All of this is offline: it allocates, and
 // throws on bad input; nothing here is for the cyclic path.
 //
@@ -19,7 +22,7 @@
 // capture's first record, and where the golden says a source was
 // (dis)connected the replay follows it (connect before the frames since the
 // previous message, disconnect after them). A Modbus trace records its
-// link's reopens and closes itself.
+// link's reopens and closes itself, a HID recording its plugs and unplugs.
 //
 // A frame and a publish can race by microseconds in the live daemon (and
 // ages in a failsafe reason round to milliseconds), so a golden message
@@ -50,10 +53,11 @@ struct Capture {
 };
 
 /// The source a capture file belongs to, from the name `rise-hild --record`
-/// gives it: SOURCE.log or SOURCE.modbus.log (SOURCE=PATH names it
-/// explicitly); a panel with one source takes any file. Throws
+/// gives it: SOURCE.log, SOURCE.modbus.log or SOURCE.hid (SOURCE=PATH names
+/// it explicitly); a panel with one source takes any file. Throws
 /// std::invalid_argument naming the path when no source fits, or the
-/// file's kind (CAN log, Modbus trace) is not the source's protocol.
+/// file's kind (CAN log, Modbus trace, hid-recorder) is not the source's
+/// protocol.
 Capture capture_for(const panels::PanelDefinition& definition, const std::string& path);
 
 /// The captures `rise-hild --record` wrote into `dir`: one per source of
@@ -65,8 +69,7 @@ class CaptureReplay {
  public:
   /// Opens the captures. Throws std::runtime_error "path:line: what" for
   /// an unreadable line (here or from the calls below: the files are read
-  /// as the replay goes), std::invalid_argument for a HID source (no HID
-  /// capture format yet).
+  /// as the replay goes; a HID recording is checked whole here).
   CaptureReplay(const panels::PanelDefinition& definition, std::vector<Capture> captures);
   ~CaptureReplay();
   CaptureReplay(const CaptureReplay&) = delete;
@@ -86,7 +89,7 @@ class CaptureReplay {
   /// Opens or closes a source's transport at now_us, as the bridge would.
   void set_connected(std::size_t source, bool connected, int64_t now_us);
   bool connected(std::size_t source) const;
-  /// True for the sources whose capture records their link (Modbus traces).
+  /// True for the sources whose capture records their link (Modbus traces, HID recordings).
   bool records_link(std::size_t source) const;
 
   PanelMapper& mapper() { return mapper_; }

@@ -42,6 +42,14 @@ bool SessionRecorder::record_source(const std::string& name, SourceTransport& tr
     files_.push_back(path);
     return true;
   }
+  if (transport.hid) {
+    const std::string path = dir_ + "/" + name + ".hid";
+    auto device = std::make_unique<io::RecordingInputDevice>(std::move(transport.hid), path, name);
+    hid_devices_.push_back(device.get());
+    transport.hid = std::move(device);
+    files_.push_back(path);
+    return true;
+  }
   return false;
 }
 
@@ -79,6 +87,10 @@ SessionRecorder::Counts SessionRecorder::counts() const {
   for (const auto* l : links_) {
     c.modbus_lines += l->lines_recorded();
     c.write_errors += l->write_errors();
+  }
+  for (const auto* h : hid_devices_) {
+    c.hid_reports += h->reports_recorded();
+    c.write_errors += h->write_errors();
   }
   c.lcm_events = lcm_events_;
   c.write_errors += lcm_errors_;

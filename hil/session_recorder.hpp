@@ -5,6 +5,9 @@
 //   <source>.log           CAN: candump -l log (hil/io/recording_bus.hpp), each
 //                          received frame stamped with the time the daemon read it
 //   <source>.modbus.log    Modbus: transaction trace (hil/io/modbus_trace.hpp)
+//   <source>.hid           HID: hid-recorder's format (hil/io/hid_recording.hpp),
+//                          each report stamped with the time the daemon read it,
+//                          each plug with its descriptor, each unplug
 //   panel_state.lcmlog     every PanelState published, in LCM's event log
 //                          format (lcm-logger's: lcm-logplayer, lcm-spy read it)
 // `rise-hild verify --record-dir DIR` replays the captures against the log.
@@ -21,6 +24,7 @@
 
 #include "hil/bridge.hpp"
 #include "hil/io/recording_bus.hpp"
+#include "hil/io/recording_input_device.hpp"
 #include "hil/io/recording_modbus_link.hpp"
 #include "rise_msgs/PanelState.hpp"
 
@@ -35,8 +39,8 @@ class SessionRecorder {
   SessionRecorder& operator=(const SessionRecorder&) = delete;
 
   /// Wraps a source's transport so that its traffic is recorded into
-  /// DIR/<name>.log (CAN) or DIR/<name>.modbus.log (Modbus, `modbus_unit` on
-  /// each line); a HID transport is left as it is (false). Throws
+  /// DIR/<name>.log (CAN), DIR/<name>.modbus.log (Modbus, `modbus_unit` on
+  /// each line) or DIR/<name>.hid (HID); false when it has none. Throws
   /// std::runtime_error when the file cannot be created. The recorder keeps
   /// a pointer to the wrapper for its counts: call counts() only while the
   /// transport (the bridge) lives.
@@ -50,6 +54,7 @@ class SessionRecorder {
   struct Counts {
     int64_t can_frames = 0;
     int64_t modbus_lines = 0;
+    int64_t hid_reports = 0;
     int64_t lcm_events = 0;
     int64_t write_errors = 0;  ///< all files together
   };
@@ -69,6 +74,7 @@ class SessionRecorder {
   std::chrono::steady_clock::time_point last_flush_;
   std::vector<const io::RecordingBus*> buses_;
   std::vector<const io::RecordingModbusLink*> links_;
+  std::vector<const io::RecordingInputDevice*> hid_devices_;
 };
 
 }  // namespace rise::hil

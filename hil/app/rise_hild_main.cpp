@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
                  "socketcan://IFACE, socketcand://HOST:PORT/BUS, mem://NAME; rise-modbus-v1 and modbus: "
                  "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N, "
                  "replay://FILE.modbus.log?speed=1&loop=0&start=S&stop=S&fast=0 (a recorded trace as the slave); "
-                 "hid: hid://VID:PID[?serial=S][&name=TEXT][&interface=N], or - for the definition's device:");
+                 "hid: hid://VID:PID[?serial=S][&name=TEXT][&interface=N], or - for the definition's device:, "
+                 "or replay://FILE.hid?speed=X&loop=N&start=S&stop=S&fast=1 (a hid-recorder file as the device)");
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
   app.add_option("--publish-hz", publish_hz, "PanelState rate (default: the definition's publish_hz, 100)")
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
   std::string record_dir;
   app.add_option("--record", record_dir,
                  "record the session into DIR (created): <source>.log (CAN, candump -l), <source>.modbus.log "
-                 "(Modbus transaction trace), panel_state.lcmlog (every PanelState, lcm-logger's format); "
+                 "(Modbus transaction trace), <source>.hid (HID, hid-recorder's format), panel_state.lcmlog (every PanelState, lcm-logger's format); "
                  "`rise-hild verify --record-dir DIR` replays it")
       ->type_name("DIR");
   // Inspection commands a lab runs before wiring a console in.
@@ -84,8 +85,8 @@ int main(int argc, char** argv) {
                 "exit 0 pass, 1 difference (the first is printed with its time and control), 2 bad input");
   verify->add_option("--panel", verify_options.panel, "panel definition (YAML)")->capture_default_str();
   verify->add_option("--capture", verify_options.captures,
-                     "capture file, named SOURCE.log (CAN: candump, ASC, TRC) or SOURCE.modbus.log (Modbus trace), "
-                     "or SOURCE=FILE; one per source")
+                     "capture file, named SOURCE.log (CAN: candump, ASC, TRC), SOURCE.modbus.log (Modbus trace) or "
+                     "SOURCE.hid (HID, hid-recorder), or SOURCE=FILE; one per source")
       ->type_name("FILE");
   verify->add_option("--record-dir", verify_options.record_dir,
                      "a `rise-hild --record` directory: its captures, and panel_state.lcmlog as the golden")
@@ -127,15 +128,17 @@ int main(int argc, char** argv) {
       // A hid source's URL may come from its definition (`device:`): "-".
       if (source.is_hid() && source_urls[i] == "-") source_urls[i] = source.device;
       const bool hid_url = source_urls[i].rfind("hid://", 0) == 0;
-      if (hid_url != source.is_hid())
+      if (source.is_hid() ? !rise::io::is_input_device_url(source_urls[i]) : hid_url)
         throw std::runtime_error("source '" + source.name + "' speaks " + source.protocol + ": '" + source_urls[i] +
-                                 "' is " + (source.is_hid() ? "not a hid://VID:PID URL (or - for its device:)"
+                                 "' is " + (source.is_hid() ? "not a hid://VID:PID URL (or - for its device:) "
+                                                              "or a replay://FILE.hid"
                                                             : "a HID device URL"));
-      if (hid_url) {
+      if (source.is_hid()) {
         rise::hil::SourceTransport t;
-        t.hid = std::make_unique<rise::io::HidDevice>(source_urls[i]);
+        t.hid = rise::io::open_input_device(source_urls[i]);
         // Without hot-plug the bridge notes it once (Bridge::take_notes).
-        if (t.hid->hotplug_active()) spdlog::info("source '{}': USB hot-plug through libusb", source.name);
+        if (!hid_url) spdlog::info("source '{}': replaying {}", source.name, source_urls[i]);
+        else if (t.hid->hotplug_active()) spdlog::info("source '{}': USB hot-plug through libusb", source.name);
         transports.push_back(std::move(t));
         continue;
       }
@@ -246,8 +249,8 @@ int main(int argc, char** argv) {
                      s.exceptions, s.error_frames, rise::io::to_string(s.bus_state));
       if (recorder) {
         const auto c = recorder->counts();
-        spdlog::info("recorder: {} CAN frames, {} Modbus lines, {} PanelState events, {} failed writes",
-                     c.can_frames, c.modbus_lines, c.lcm_events, c.write_errors);
+        spdlog::info("recorder: {} CAN frames, {} Modbus lines, {} HID reports, {} PanelState events, {} failed writes",
+                     c.can_frames, c.modbus_lines, c.hid_reports, c.lcm_events, c.write_errors);
       }
     }
   }
@@ -255,8 +258,8 @@ int main(int argc, char** argv) {
   spdlog::info("rise-hild stopped after {} messages", seq);
   if (recorder) {
     const auto c = recorder->counts();
-    spdlog::info("recorded {} CAN frames, {} Modbus trace lines, {} PanelState events into {}", c.can_frames,
-                 c.modbus_lines, c.lcm_events, recorder->dir());
+    spdlog::info("recorded {} CAN frames, {} Modbus trace lines, {} HID reports, {} PanelState events into {}",
+                 c.can_frames, c.modbus_lines, c.hid_reports, c.lcm_events, recorder->dir());
     if (c.write_errors > 0) spdlog::error("recorder: {} writes failed (disk full?): the recording is incomplete", c.write_errors);
   }
   return 0;

@@ -3,10 +3,12 @@
 #include <hidapi/hidapi.h>
 
 #include <charconv>
+#include <cstdio>
 #include <fstream>
 #include <iterator>
 #include <mutex>
 #include <stdexcept>
+#include <utility>
 
 namespace rise::io {
 namespace {
@@ -49,6 +51,30 @@ std::vector<uint8_t> read_sysfs_descriptor(const std::string& node) {
   std::ifstream in("/sys/class/hidraw/" + name + "/device/report_descriptor", std::ios::binary);
   if (!in) return {};
   return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// The kernel's uevent of the hidraw node's HID device names it as
+// hid-recorder's ioctls do: "HID_ID=0005:00000428:00004001" (bus, vendor,
+// product in hex), "HID_NAME=...", "HID_PHYS=..." (drivers/hid/hid-core.c,
+// hid_uevent). Fields it lacks keep what `identity` holds.
+void read_sysfs_identity(const std::string& node, HidIdentity& identity) {
+  const auto slash = node.rfind('/');
+  const std::string name = slash == std::string::npos ? node : node.substr(slash + 1);
+  std::ifstream in("/sys/class/hidraw/" + name + "/device/uevent");
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("HID_NAME=", 0) == 0) {
+      identity.name = line.substr(9);
+    } else if (line.rfind("HID_PHYS=", 0) == 0) {
+      identity.phys = line.substr(9);
+    } else if (line.rfind("HID_ID=", 0) == 0) {
+      unsigned bus = 0, vendor = 0, product = 0;
+      if (std::sscanf(line.c_str() + 7, "%x:%x:%x", &bus, &vendor, &product) == 3) {
+        identity.bus = bus;
+        identity.vendor_id = static_cast<uint16_t>(vendor);
+        identity.product_id = static_cast<uint16_t>(product);
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -96,7 +122,7 @@ std::optional<HidUrl> parse_hid_url(std::string_view url, std::string* error) {
   return out;
 }
 
-HidDevice::HidDevice(const std::string& url) {
+HidDevice::HidDevice(const std::string& url) : url_text_(url) {
   std::string error;
   const auto parsed = parse_hid_url(url, &error);
   if (!parsed) throw std::invalid_argument(error);
@@ -114,6 +140,7 @@ void HidDevice::close() {
 IoStatus HidDevice::reopen() {
   close();
   descriptor_.clear();
+  identity_ = {};
   path_.clear();
   if (!hidapi_ready()) {
     error_.set("hid_init failed");
@@ -121,9 +148,13 @@ IoStatus HidDevice::reopen() {
   }
   hid_device_info* list = hid_enumerate(url_.vendor_id, url_.product_id);
   std::string found;
+  HidIdentity identity;
   for (const hid_device_info* it = list; it; it = it->next)
     if (matches(url_, *it) && it->path) {
       found = it->path;
+      identity.name = narrow(it->product_string);
+      identity.vendor_id = it->vendor_id;
+      identity.product_id = it->product_id;
       break;
     }
   hid_free_enumeration(list);
@@ -142,6 +173,8 @@ IoStatus HidDevice::reopen() {
     close();
     return IoStatus::Error;
   }
+  read_sysfs_identity(found, identity);
+  identity_ = std::move(identity);
   path_ = found;
   error_.clear();
   return IoStatus::Ok;

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "hil/io/can_bus.hpp"
+#include "hil/io/input_device.hpp"
 #include "hil/io/posix_io.hpp"
 #include "hil/io/usb_hotplug.hpp"
 
@@ -40,60 +41,64 @@ struct HidUrl {
 /// Parses a hid:// URL; nullopt (and `error` set when given) if malformed.
 std::optional<HidUrl> parse_hid_url(std::string_view url, std::string* error = nullptr);
 
-/// Largest input report read (hidraw caps reports at 4096 bytes).
-constexpr std::size_t max_hid_report_bytes = 4096;
-
-class HidDevice {
+class HidDevice final : public InputDevice {
  public:
   /// Does not open: call reopen(). Throws std::invalid_argument for a bad URL.
   explicit HidDevice(const std::string& url);
-  ~HidDevice();
+  ~HidDevice() override;
   HidDevice(const HidDevice&) = delete;
   HidDevice& operator=(const HidDevice&) = delete;
 
   /// Enumerates the HID devices, opens the first that matches the URL and
   /// reads its report descriptor from sysfs
   /// (/sys/class/hidraw/hidrawN/device/report_descriptor: hidapi 0.13 has no
-  /// hid_get_report_descriptor). Ok, or Disconnected when none matches,
+  /// hid_get_report_descriptor) and its identity from the uevent beside it
+  /// (HID_NAME, HID_PHYS, HID_ID). Ok, or Disconnected when none matches,
   /// Error when it matches but cannot be opened (permissions). Allocates:
   /// call from the source's thread, not at the publish rate.
-  IoStatus reopen();
-  void close();
-  bool is_open() const { return device_ != nullptr; }
+  IoStatus reopen() override;
+  void close() override;
+  bool is_open() const override { return device_ != nullptr; }
 
   /// Reads one input report (with its id byte when the descriptor uses ids)
   /// into `report`, waiting up to timeout_ms. Ok with `length` set, Timeout,
   /// or Disconnected (the device went away; the handle is closed). No
   /// allocation, no throw.
-  IoStatus read(std::span<uint8_t> report, std::size_t& length, int timeout_ms);
+  IoStatus read(std::span<uint8_t> report, std::size_t& length, int timeout_ms) override;
 
   /// Writes an output report (first byte: report id, 0 when ids are unused).
-  IoStatus write(std::span<const uint8_t> report);
+  IoStatus write(std::span<const uint8_t> report) override;
 
   /// Waits up to timeout_ms for the URL's VID:PID to arrive on USB; true
   /// when it did (enumerate now). Without libusb hot-plug it only waits.
   /// No allocation, no throw: cyclic-path safe.
-  bool wait_for_arrival(int timeout_ms) { return hotplug_->wait_for_arrival(timeout_ms); }
+  bool wait_for_arrival(int timeout_ms) override { return hotplug_->wait_for_arrival(timeout_ms); }
   /// Ends a wait_for_arrival() as an arrival does (for callers who learn of
   /// one otherwise, and tests). Thread-safe.
   void notify_arrival() { hotplug_->notify_arrival(); }
   /// Whether libusb's hot-plug callbacks watch for the device; if not,
   /// hotplug_error() says why.
-  bool hotplug_active() const { return hotplug_->available(); }
-  const std::string& hotplug_error() const { return hotplug_->error(); }
+  bool hotplug_active() const override { return hotplug_->available(); }
+  const std::string& hotplug_error() const override { return hotplug_->error(); }
 
   /// The raw report descriptor of the open device (empty when closed).
-  const std::vector<uint8_t>& report_descriptor() const { return descriptor_; }
+  const std::vector<uint8_t>& report_descriptor() const override { return descriptor_; }
+  /// The open device's name, phys, bus and ids (the URL's VID:PID and
+  /// hidapi's product string where sysfs has no uevent).
+  const HidIdentity& identity() const override { return identity_; }
   /// The hidraw node of the open device ("/dev/hidraw0").
   const std::string& path() const { return path_; }
-  const HidUrl& url() const { return url_; }
-  std::string last_error() const { return error_.get(); }
+  const std::string& url() const override { return url_text_; }
+  const HidUrl& address() const { return url_; }
+  std::string last_error() const override { return error_.get(); }
 
  private:
+  std::string url_text_;
   HidUrl url_;
   std::unique_ptr<UsbHotplug> hotplug_;
   hid_device_* device_ = nullptr;
   std::vector<uint8_t> descriptor_;
+  HidIdentity identity_;
   std::string path_;
   detail::ErrorText error_;
 };

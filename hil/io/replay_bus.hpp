@@ -10,6 +10,7 @@
 #include "hil/io/can_bus.hpp"
 #include "hil/io/can_log.hpp"
 #include "hil/io/can_url.hpp"
+#include "hil/io/replay_schedule.hpp"
 
 namespace rise::io {
 
@@ -46,9 +47,9 @@ class ReplayBus final : public CanBus {
   std::string last_error() const override;
 
   /// Largest (receive time - due time) so far, in microseconds (0 with fast=1).
-  int64_t max_lateness_us() const { return max_lateness_us_; }
+  int64_t max_lateness_us() const { return clock_.max_lateness_us(); }
   /// (receive time - due time) of the frame the last receive() handed out.
-  int64_t last_lateness_us() const { return last_lateness_us_; }
+  int64_t last_lateness_us() const { return clock_.last_lateness_us(); }
   /// Frames handed out by receive() since construction.
   uint64_t frames_played() const { return frames_played_; }
   /// Restarts of the log for loop= since the last (re)open.
@@ -70,8 +71,6 @@ class ReplayBus final : public CanBus {
   Progress progress() const;
 
  private:
-  using Clock = std::chrono::steady_clock;
-
   bool fetch_next();  // fills pending_; false at the end of the last pass
   void restart();
 
@@ -79,29 +78,15 @@ class ReplayBus final : public CanBus {
   ReplayAddress address_;
   mutable std::mutex mutex_;
   CanLogReader reader_;
-  int64_t start_us_;  // the window in microseconds from the first record (stop -1: none)
-  int64_t stop_us_;
+  ReplayPasses passes_;  // the window and the loops
+  ReplayClock clock_;    // anchored at the first receive
   std::string last_error_;
 
   CanLogRecord pending_;
   bool have_pending_ = false;
   int64_t pending_ts_us_ = 0;  // recorded time plus the offset of earlier loops
-  // Window and loops: the pass's first record time, its first and last played
-  // frame, how many it played, the time offset of this pass.
-  bool pass_started_ = false;
-  int64_t pass_first_record_us_ = 0;
-  int64_t pass_first_played_us_ = 0;
-  int64_t pass_last_played_us_ = 0;
-  uint64_t pass_played_ = 0;
-  int64_t loop_offset_us_ = 0;
-  // Time anchor: the steady time of the first receive and the recorded time it maps to.
-  bool anchored_ = false;
-  Clock::time_point t0_;
-  int64_t ts_first_us_ = 0;
 
   std::atomic<bool> open_{true};
-  std::atomic<int64_t> max_lateness_us_{0};
-  std::atomic<int64_t> last_lateness_us_{0};
   std::atomic<uint64_t> frames_played_{0};
   std::atomic<int> loops_done_{0};
   std::atomic<uint64_t> sends_dropped_{0};

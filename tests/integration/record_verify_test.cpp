@@ -1,21 +1,26 @@
 // rise-hild --record on live runs in separate processes (console emulator →
-// socketcand or Modbus TCP on loopback → rise-hild → LCM multicast), then
-// `rise-hild verify` on what it recorded; the recordings' third-party
-// readers: python-can's candump log reader and lcm-logplayer.
+// socketcand or Modbus TCP on loopback → rise-hild → LCM multicast, or a
+// HID recording played as the device), then `rise-hild verify` on what it
+// recorded; the recordings' third-party readers: python-can's candump log
+// reader and lcm-logplayer.
 
 #include <catch2/catch.hpp>
 
 #include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
+#include <thread>
 
 #include "app/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "hil/io/can_log.hpp"
+#include "hil/io/hid_recording.hpp"
 #include "hil/io/recording_bus.hpp"
 #include "rise_msgs/PanelState.hpp"
 
@@ -285,4 +290,40 @@ TEST_CASE("python-can's log reader reads every frame kind of a candump log we wr
   }
   REQUIRE(rise::io::read_can_log(path).size() == 7);
   check_python_can_reads(path, dir.path);
+}
+
+TEST_CASE("rise-hild plays a HID recording as its device (replay://), records the same reports, and verify passes",
+          "[integration]") {
+  TempDir dir("rise-hid-rerecord");
+  const std::string panel = kSource + "/tests/data/replay/hid/pad.yaml";
+  const std::string golden = kSource + "/tests/data/replay/hid/pad.hid";
+  const std::string log = dir.path + "/rise-hild.log";
+  ChildProcess hild({kBin + "/rise-hild", "--panel", panel, "--source", "replay://" + golden, "--id", "hidrec", "--lcm",
+                     "memq://", "--status-every", "0.05", "--record", dir.path + "/rec"},
+                    log);
+  // The replay's end fails the pad safe for good after its re-plug: the status line says so.
+  const std::regex gone("source pad: connected=false .* reconnects=1 ");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!std::regex_search(slurp(log), gone) && std::chrono::steady_clock::now() < deadline && hild.running())
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  INFO(slurp(log));
+  REQUIRE(std::regex_search(slurp(log), gone));
+  CHECK(hild.stop() == 0);
+  CHECK(slurp(log).find("source 'pad': replaying replay://" + golden) != std::string::npos);
+  std::string out;
+  CHECK(verify({"--panel", panel, "--record-dir", dir.path + "/rec"}, dir.path + "/verify.log", out) == 0);
+  CHECK(out.rfind("pass: ", 0) == 0);
+  // The daemon read the golden's reports, byte for byte and in order, at the
+  // golden's plugs (times are its own).
+  auto reports = [](const std::string& path) {
+    rise::io::HidRecordingReader reader(path);
+    std::vector<std::vector<uint8_t>> out;
+    rise::io::HidRecordingRecord r;
+    while (reader.next(r))
+      if (r.kind != rise::io::HidRecordingRecord::Kind::Unplug) out.push_back(r.bytes);
+    return out;
+  };
+  const auto expected = reports(golden);
+  CHECK(expected.size() > 200);
+  CHECK(reports(dir.path + "/rec/pad.hid") == expected);
 }

@@ -161,7 +161,7 @@ TEST_CASE("a USB HID device re-plugged is reopened through libusb's arrival call
 
   std::vector<rise::hil::SourceTransport> transports(1);
   transports[0].hid = std::make_unique<io::HidDevice>("hid://1209:0002?name=LED test pad");
-  io::HidDevice& device = *transports[0].hid;
+  io::InputDevice& device = *transports[0].hid;
   INFO("libusb: " << device.hotplug_error());
   REQUIRE(device.hotplug_active());
   rise::hil::BridgeSettings settings;

@@ -2,9 +2,10 @@
 // (/dev/uhid, the kernel's user-space HID transport, driven by
 // io::UhidDevice) is found by hidapi's hidraw enumeration, opened by
 // HidDevice, decoded by the bridge, unplugged (UHID_DESTROY) and plugged in
-// again; the host's feature and output reports reach the device side. Runs
-// only inside the VM of run_in_vcan_vm.sh (modules hid, uhid, hid-generic),
-// as root.
+// again; the host's feature and output reports reach the device side; a
+// session recorded as `rise-hild --record` records it verifies against its
+// PanelState log. Runs only inside the VM of run_in_vcan_vm.sh (modules
+// hid, uhid, hid-generic), as root.
 
 #include <catch2/catch.hpp>
 
@@ -15,6 +16,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iterator>
@@ -27,10 +29,12 @@
 #include "hil/bridge.hpp"
 #include "hil/io/hid_device.hpp"
 #include "hil/io/uhid_device.hpp"
+#include "hil/replay_verify.hpp"
 #include "panels/hid_emulator.hpp"
 #include "panels/panel_definition.hpp"
 #include "panels/timeline.hpp"
 #include "tests/hid_test_devices.hpp"
+#include "tests/hil/hid_session_support.hpp"
 
 namespace io = rise::io;
 using rise::hil::Bridge;
@@ -309,9 +313,10 @@ namespace {
 // program's loop does.
 class EmulatedPad {
  public:
-  EmulatedPad(const rise::panels::PanelDefinition& definition, const std::string& script)
+  EmulatedPad(const rise::panels::PanelDefinition& definition, const std::string& script,
+              rise::panels::HidEmulatorSettings settings = {})
       : timeline_(rise::panels::parse_timeline(script, "script.txt", definition)),
-        emulator_(definition, 0, parsed_led_pad()),
+        emulator_(definition, 0, parsed_led_pad(), settings),
         device_(led_pad_settings()) {
     plug();
     thread_ = std::thread([this] { run(); });
@@ -521,4 +526,87 @@ TEST_CASE("rise-panel emulate --hid is a HID device the bridge reads and lights"
   bridge.stop();
   CHECK(panel.stop() == 0);  // SIGTERM: a clean stop that unplugs the device
   CHECK(log().find("rise-panel stopped: ") != std::string::npos);
+}
+
+TEST_CASE("a live uhid pad recorded as rise-hild --record records it verifies, and a changed byte fails", "[vcan]") {
+  const auto definition = rise::panels::parse_panel_definition(led_pad_panel, "led_pad.yaml");
+  // On one vCPU under TCG a thread waits milliseconds for the CPU between a
+  // report's stamp and the mapper taking it (or between a state and its
+  // publish): verified with 20 ms of time tolerance, not 2. The pad repeats
+  // its report every 50 ms, so that a changed byte outlives the tolerance.
+  rise::panels::HidEmulatorSettings slow;
+  slow.report_period_us = 50'000;
+  EmulatedPad pad(definition,
+                  "0.0 deadman pressed\n0.1 drive_x 0.5\n0.2 drive_y -1\n0.3 horn pressed\n0.4 drive_x -0.25\n", slow);
+  rise::hil::VerifySettings verify_settings;
+  verify_settings.time_tolerance_us = 20'000;
+  const std::string dir = "/tmp/hid-session";
+  std::filesystem::remove_all(dir);
+  const auto control = [&](const char* name) { return *definition.find_control(name); };
+  int64_t reports = 0;
+  {
+    rise::hil::test::RecordedHidSession session(definition, std::make_unique<io::HidDevice>("hid://1209:0001"), dir);
+    auto& published = session.published;
+    REQUIRE(published.wait_for([](const PanelSnapshot& s) { return !s.failsafe; }, 20000));
+    pad.start_script();
+    REQUIRE(published.wait_for(
+        [&](const PanelSnapshot& s) {
+          return s.controls[control("horn")].pressed && s.controls[control("drive_x")].axis < -0.2f;
+        },
+        20000));
+    // Unplugged and plugged in again: the recording gets a second R: block.
+    std::size_t from = published.size();
+    pad.unplug();
+    REQUIRE(published.wait_for([](const PanelSnapshot& s) { return s.failsafe_reason == "pad: disconnected"; }, 20000,
+                               from));
+    from = published.size();
+    pad.plug();
+    REQUIRE(published.wait_for([](const PanelSnapshot& s) { return !s.failsafe && s.sources[0].reconnects == 1; },
+                               20000, from));
+    REQUIRE(published.wait_for([](const PanelSnapshot&) { return true; }, 20000, published.size() + 20));
+    session.stop();
+    const auto c = session.recorder().counts();
+    CHECK(c.write_errors == 0);
+    CHECK(c.lcm_events == session.messages());
+    CHECK(c.hid_reports >= 10);  // the script's five changes and the 50 ms repeats around them
+    reports = c.hid_reports;
+  }
+  // The device as the kernel names it, at both plugs.
+  rise::io::HidRecordingReader reader(dir + "/pad.hid");
+  CHECK(reader.plugs() == 2);
+  CHECK(reader.reports() == reports);
+  rise::io::HidRecordingRecord first;
+  REQUIRE(reader.next(first));
+  CHECK(first.kind == rise::io::HidRecordingRecord::Kind::Plug);
+  CHECK(first.bytes == std::vector<uint8_t>(std::begin(led_pad_descriptor), std::end(led_pad_descriptor)));
+  CHECK(first.identity.name == "rise LED test pad (uhid)");
+  CHECK(first.identity.bus == 5);  // uhid's default, Bluetooth
+  CHECK(first.identity.vendor_id == 0x1209);
+  CHECK(first.identity.product_id == 0x0001);
+
+  const auto golden = rise::hil::read_panel_state_log(dir + "/panel_state.lcmlog");
+  const auto started = std::chrono::steady_clock::now();
+  const auto report =
+      rise::hil::verify_replay(definition, rise::hil::captures_in(definition, dir), golden.messages, verify_settings);
+  WARN("recorded " << reports << " HID reports and " << golden.messages.size() << " PanelState messages; verify: "
+                   << report.messages << " matched (" << report.off_time << " off their utime) in "
+                   << ms_since(started) << " ms");
+  if (report.difference) INFO(rise::hil::describe(*report.difference));
+  CHECK(report.passed());
+  CHECK(report.messages == golden.messages.size());
+
+  // One report byte changed (x of the first report that moved it): the first
+  // difference names drive_x.
+  std::string text = [&] {
+    std::ifstream in(dir + "/pad.hid");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  REQUIRE(rise::hil::test::undo_first_change(text, 1) > 0);  // byte 1 after the report id: x
+  std::ofstream(dir + "/pad.hid") << text;
+  const auto bad =
+      rise::hil::verify_replay(definition, rise::hil::captures_in(definition, dir), golden.messages, verify_settings);
+  REQUIRE_FALSE(bad.passed());
+  WARN("changed byte: " << rise::hil::describe(*bad.difference));
+  CHECK(bad.difference->field == "drive_x");
+  std::filesystem::remove_all(dir);
 }
