@@ -221,7 +221,7 @@ struct Simulation::Impl {
   WorldDescription world_desc;
   dWorldID world = nullptr;
   dSpaceID space = nullptr;         // bodies: robot, doors, objects
-  dSpaceID static_space = nullptr;  // ground, boxes, walls, stairs
+  dSpaceID static_space = nullptr;  // ground, ceiling, boxes, props, walls, stairs
   dJointGroupID contacts = nullptr;
   dBodyID chassis = nullptr;
   std::array<dBodyID, 4> wheels{};
@@ -264,6 +264,10 @@ struct Simulation::Impl {
     dGeomID g = add_geom(dCreateBox(static_space, sx, sy, sz), GeomKind::Obstacle, name);
     dGeomSetPosition(g, cx, cy, cz);
     set_yaw(g, yaw);
+  }
+  void add_static_box(const BoxObstacle& b) {
+    add_static_box(b.name, b.center_m[0], b.center_m[1], b.center_m[2], b.size_m[0], b.size_m[1], b.size_m[2],
+                   b.yaw_rad);
   }
 
   void emit(SimEventKind kind, std::string a, std::string b = {}, std::string detail = {}) {
@@ -359,15 +363,11 @@ struct Simulation::Impl {
 
   void build_world() {
     add_geom(dCreatePlane(static_space, 0, 0, 1, 0), GeomKind::Ground, "ground");
-    for (const auto& b : world_desc.boxes)
-      add_static_box(b.name, b.center_m[0], b.center_m[1], b.center_m[2], b.size_m[0], b.size_m[1], b.size_m[2],
-                     b.yaw_rad);
-    for (const auto& w : world_desc.walls) {
-      const double dx = w.to_m[0] - w.from_m[0], dy = w.to_m[1] - w.from_m[1];
-      // Lengthened by the thickness so that walls meeting at a corner close it.
-      add_static_box(w.name, (w.from_m[0] + w.to_m[0]) / 2, (w.from_m[1] + w.to_m[1]) / 2, w.height_m / 2,
-                     std::hypot(dx, dy) + w.thickness_m, w.thickness_m, w.height_m, std::atan2(dy, dx));
-    }
+    for (const auto& b : world_desc.boxes) add_static_box(b);
+    for (const auto& p : world_desc.props) add_static_box(p.box);
+    for (const auto& w : world_desc.walls)
+      for (const auto& b : wall_boxes(w)) add_static_box(b);
+    if (world_desc.ceiling) add_static_box(ceiling_box(*world_desc.ceiling));
     for (const auto& s : world_desc.stairs) {
       const double c = std::cos(s.yaw_rad), sn = std::sin(s.yaw_rad);
       // Solid blocks from the floor up: step i spans tread i and rises (i+1) risers.

@@ -150,10 +150,10 @@ class Simulation {
   /// (sensors.cameras), nullopt for an unknown name. Safe in the cyclic path.
   std::optional<Eigen::Isometry3d> T_world_camera(const std::string& camera) const;
   /// Distance (m) from `origin_world` along the unit `direction_world` to the
-  /// first surface of the world — ground, static boxes, walls, stairs, doors,
-  /// objects; never the robot's own parts — or +infinity when there is none
-  /// within max_range_m. ODE ray casting (dCreateRay + dCollide), the
-  /// laser scanner's primitive. Safe in the cyclic path: no allocation,
+  /// first surface of the world — ground, ceiling, static boxes, props,
+  /// walls, stairs, doors, objects; never the robot's own parts — or
+  /// +infinity when there is none within max_range_m. ODE ray casting
+  /// (dCreateRay + dCollide), the laser scanner's primitive. Safe in the cyclic path: no allocation,
   /// never throws. It reuses one ray geom: not from two threads at once.
   double cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
                     double max_range_m) const;

@@ -1,7 +1,10 @@
 #include "sim/world_description.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <set>
+#include <sstream>
 
 #include "sim/yaml_reader.hpp"
 
@@ -20,6 +23,7 @@ class Names {
     if (!names_.insert(name).second) r.fail(map["name"], where + ".name", "duplicate name '" + name + "'");
     return name;
   }
+  bool contains(const std::string& name) const { return names_.count(name) > 0; }
 
  private:
   std::set<std::string> names_;
@@ -38,7 +42,117 @@ double degrees(const YamlReader& r, const YAML::Node& map, const char* key, cons
   return r.as<double>(map[key], where + "." + key) * kDegToRad;
 }
 
+std::string metres(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+std::array<double, 3> sizes(const YamlReader& r, const YAML::Node& map, const std::string& where) {
+  const auto size_m = r.vector<3>(map, "size_m", where);
+  for (double s : size_m)
+    if (!(s > 0)) r.fail(map["size_m"], where + ".size_m", "must be > 0");
+  return size_m;
+}
+
+BoxObstacle read_box(const YamlReader& r, const YAML::Node& map, const std::string& where, Names& names) {
+  BoxObstacle box;
+  box.name = names.take(r, map, where);
+  box.center_m = r.vector<3>(map, "center_m", where);
+  box.size_m = sizes(r, map, where);
+  box.yaw_rad = degrees(r, map, "yaw_deg", where, 0.0);
+  return box;
+}
+
+std::vector<WallOpening> read_openings(const YamlReader& r, const YAML::Node& wall_node, const Wall& wall,
+                                       const std::string& where) {
+  std::vector<WallOpening> out;
+  const YAML::Node list = wall_node["openings"];
+  if (!list) return out;
+  if (!list.IsSequence()) r.fail(list, where + ".openings", "expected a list");
+  const double length_m = std::hypot(wall.to_m[0] - wall.from_m[0], wall.to_m[1] - wall.from_m[1]);
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const YAML::Node n = list[i];
+    const std::string at = where + "." + item("openings", i);
+    r.only_keys(n, at, {"at_m", "width_m", "height_m"});
+    WallOpening o;
+    if (!n["at_m"]) r.fail(n, at + ".at_m", "missing");
+    o.at_m = r.positive(n, "at_m", at, o.at_m, true);
+    o.width_m = r.positive(n, "width_m", at, o.width_m);
+    o.height_m = r.positive(n, "height_m", at, o.height_m);
+    if (o.at_m + o.width_m > length_m + 1e-9)
+      r.fail(n, at, "outside the wall (" + metres(o.at_m) + ".." + metres(o.at_m + o.width_m) + " m along a " +
+                        metres(length_m) + " m wall)");
+    if (o.height_m > wall.height_m) r.fail(n["height_m"], at + ".height_m", "must be <= the wall's height");
+    for (std::size_t j = 0; j < out.size(); ++j)
+      if (o.at_m < out[j].at_m + out[j].width_m && out[j].at_m < o.at_m + o.width_m)
+        r.fail(n, at, "overlaps " + item("openings", j));
+    out.push_back(o);
+  }
+  std::sort(out.begin(), out.end(), [](const WallOpening& a, const WallOpening& b) { return a.at_m < b.at_m; });
+  return out;
+}
+
+Ceiling read_ceiling(const YamlReader& r, const YAML::Node& n, const WorldDescription& w, const Names& names) {
+  r.only_keys(n, "ceiling", {"height_m", "thickness_m", "min", "max"});
+  Ceiling c;
+  if (!n["height_m"]) r.fail(n, "ceiling.height_m", "missing");
+  c.height_m = r.positive(n, "height_m", "ceiling", c.height_m);
+  c.thickness_m = r.positive(n, "thickness_m", "ceiling", c.thickness_m);
+  if (names.contains("ceiling")) r.fail(n, "ceiling", "another entity is named 'ceiling'");
+  if (n["min"] || n["max"]) {
+    if (!n["min"] || !n["max"]) r.fail(n, "ceiling", "give both min and max, or neither");
+    c.min_m = r.vector<2>(n, "min", "ceiling");
+    c.max_m = r.vector<2>(n, "max", "ceiling");
+    for (std::size_t k = 0; k < 2; ++k)
+      if (!(c.max_m[k] > c.min_m[k])) r.fail(n["max"], "ceiling.max", "must exceed min on x and y");
+    return c;
+  }
+  if (w.walls.empty()) r.fail(n, "ceiling", "needs min and max in a world without walls");
+  // Over the walls' end points, widened by half their thickness: for walls
+  // along x or y exactly the outline of their (lengthened) boxes.
+  c.min_m = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+  c.max_m = {-c.min_m[0], -c.min_m[1]};
+  for (const auto& wall : w.walls)
+    for (const auto& p : {wall.from_m, wall.to_m})
+      for (std::size_t k = 0; k < 2; ++k) {
+        c.min_m[k] = std::min(c.min_m[k], p[k] - wall.thickness_m / 2);
+        c.max_m[k] = std::max(c.max_m[k], p[k] + wall.thickness_m / 2);
+      }
+  return c;
+}
+
 }  // namespace
+
+std::vector<BoxObstacle> wall_boxes(const Wall& wall) {
+  const double dx = wall.to_m[0] - wall.from_m[0], dy = wall.to_m[1] - wall.from_m[1];
+  const double length_m = std::hypot(dx, dy), yaw_rad = std::atan2(dy, dx);
+  std::vector<BoxObstacle> out;
+  // The box spanning [along0, along1] metres along the wall from `from` and z0..z1.
+  const auto piece = [&](double along0, double along1, double z0, double z1) {
+    if (!(along1 - along0 > 1e-9) || !(z1 - z0 > 1e-9)) return;
+    const double along = (along0 + along1) / 2;
+    out.push_back({wall.name,
+                   {wall.from_m[0] + dx / length_m * along, wall.from_m[1] + dy / length_m * along, (z0 + z1) / 2},
+                   {along1 - along0, wall.thickness_m, z1 - z0},
+                   yaw_rad});
+  };
+  double start = -wall.thickness_m / 2;
+  for (const auto& o : wall.openings) {
+    piece(start, o.at_m, 0.0, wall.height_m);
+    piece(o.at_m, o.at_m + o.width_m, o.height_m, wall.height_m);  // the lintel
+    start = o.at_m + o.width_m;
+  }
+  piece(start, length_m + wall.thickness_m / 2, 0.0, wall.height_m);
+  return out;
+}
+
+BoxObstacle ceiling_box(const Ceiling& c) {
+  return {"ceiling",
+          {(c.min_m[0] + c.max_m[0]) / 2, (c.min_m[1] + c.max_m[1]) / 2, c.height_m + c.thickness_m / 2},
+          {c.max_m[0] - c.min_m[0], c.max_m[1] - c.min_m[1], c.thickness_m},
+          0.0};
+}
 
 WorldDescription default_world() {
   WorldDescription w;
@@ -56,7 +170,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with world, ground, boxes, ...");
-  r.only_keys(root, "", {"world", "ground", "robot_start", "boxes", "walls", "doors", "stairs", "objects", "regions"});
+  r.only_keys(root, "", {"world", "ground", "robot_start", "ceiling", "boxes", "props", "walls", "doors", "stairs", "objects", "regions"});
   WorldDescription w;
   w.file = file;
   Names names;
@@ -75,21 +189,27 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       const YAML::Node b = boxes[i];
       const std::string where = item("boxes", i);
       r.only_keys(b, where, {"name", "center_m", "size_m", "yaw_deg"});
-      BoxObstacle box;
-      box.name = names.take(r, b, where);
-      box.center_m = r.vector<3>(b, "center_m", where);
-      box.size_m = r.vector<3>(b, "size_m", where);
-      for (double s : box.size_m)
-        if (!(s > 0)) r.fail(b["size_m"], where + ".size_m", "must be > 0");
-      box.yaw_rad = degrees(r, b, "yaw_deg", where, 0.0);
-      w.boxes.push_back(box);
+      w.boxes.push_back(read_box(r, b, where, names));
+    }
+  }
+  if (const YAML::Node props = list(r, root, "props")) {
+    for (std::size_t i = 0; i < props.size(); ++i) {
+      const YAML::Node n = props[i];
+      const std::string where = item("props", i);
+      r.only_keys(n, where, {"name", "kind", "center_m", "size_m", "yaw_deg"});
+      Prop p;
+      p.box = read_box(r, n, where, names);
+      if (!n["kind"]) r.fail(n, where + ".kind", "missing");
+      p.kind = r.as<std::string>(n["kind"], where + ".kind");
+      if (p.kind.empty()) r.fail(n["kind"], where + ".kind", "must not be empty");
+      w.props.push_back(p);
     }
   }
   if (const YAML::Node walls = list(r, root, "walls")) {
     for (std::size_t i = 0; i < walls.size(); ++i) {
       const YAML::Node n = walls[i];
       const std::string where = item("walls", i);
-      r.only_keys(n, where, {"name", "from", "to", "height", "thickness"});
+      r.only_keys(n, where, {"name", "from", "to", "height", "thickness", "openings"});
       Wall wall;
       wall.name = names.take(r, n, where);
       wall.from_m = r.vector<2>(n, "from", where);
@@ -98,6 +218,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       wall.thickness_m = r.positive(n, "thickness", where, wall.thickness_m);
       if (std::hypot(wall.to_m[0] - wall.from_m[0], wall.to_m[1] - wall.from_m[1]) < 1e-3)
         r.fail(n["to"], where + ".to", "must differ from 'from'");
+      wall.openings = read_openings(r, n, wall, where);
       w.walls.push_back(wall);
     }
   }
@@ -151,9 +272,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       r.only_keys(n, where, {"name", "size_m", "mass_kg", "center_m"});
       MovableObject o;
       o.name = names.take(r, n, where);
-      o.size_m = r.vector<3>(n, "size_m", where);
-      for (double s : o.size_m)
-        if (!(s > 0)) r.fail(n["size_m"], where + ".size_m", "must be > 0");
+      o.size_m = sizes(r, n, where);
       if (!n["mass_kg"]) r.fail(n, where + ".mass_kg", "missing");
       o.mass_kg = r.positive(n, "mass_kg", where, o.mass_kg);
       o.center_m = r.vector<3>(n, "center_m", where);
@@ -174,6 +293,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
       w.regions.push_back(g);
     }
   }
+  if (const YAML::Node c = root["ceiling"]) w.ceiling = read_ceiling(r, c, w, names);
   return w;
 }
 

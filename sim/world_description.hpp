@@ -1,10 +1,12 @@
 #pragma once
 
-// The environment: a ground plane, static boxes and walls, hinged doors,
-// staircases, movable objects and named regions (the world file format is
+// The environment: a ground plane, an optional ceiling, static boxes, props
+// and walls (with door openings), hinged doors, staircases, movable objects
+// and named regions (the world file format is
 // documented in sim/README.md).
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,21 @@ struct BoxObstacle {
   double yaw_rad = 0.0;
 };
 
+/// A static prop (a shelf, a cabinet): a box labelled with its `kind`;
+/// events and contacts name it by `box.name`.
+struct Prop {
+  BoxObstacle box;
+  std::string kind;
+};
+
+/// A door opening through a wall, from the floor up to `height_m`; its first
+/// side is `at_m` along the wall from the wall's `from_m`.
+struct WallOpening {
+  double at_m = 0.0;
+  double width_m = 0.9;
+  double height_m = 2.0;
+};
+
 /// A straight static wall standing on the ground from `from_m` to `to_m`.
 struct Wall {
   std::string name;
@@ -24,7 +41,27 @@ struct Wall {
   std::array<double, 2> to_m{};
   double height_m = 2.5;
   double thickness_m = 0.15;
+  std::vector<WallOpening> openings;  ///< sorted by at_m, disjoint, within the wall, at most height_m high
 };
+
+/// The static boxes a wall is built of, each named after the wall (world
+/// frame, z up). The wall is lengthened by its thickness, thickness/2 past
+/// each end, so that walls meeting at a corner close it; each opening
+/// leaves a gap from the floor to its height, with a lintel above it when
+/// it is lower than the wall.
+std::vector<BoxObstacle> wall_boxes(const Wall& wall);
+
+/// A static slab whose underside is at `height_m`, over `min_m`..`max_m`
+/// (world xy).
+struct Ceiling {
+  double height_m = 2.6;
+  double thickness_m = 0.1;
+  std::array<double, 2> min_m{};
+  std::array<double, 2> max_m{};
+};
+
+/// The ceiling slab as a box named "ceiling" (events and contacts name it so).
+BoxObstacle ceiling_box(const Ceiling& ceiling);
 
 /// A door panel on a vertical hinge. Closed, the panel runs from the hinge
 /// along `yaw_rad`; it swings ±open_max_rad. The hinge breaks when its load
@@ -79,7 +116,9 @@ struct WorldDescription {
   std::string name = "yard";
   std::string file;
   double ground_friction = 1.0;
+  std::optional<Ceiling> ceiling;
   std::vector<BoxObstacle> boxes;
+  std::vector<Prop> props;
   std::vector<Wall> walls;
   std::vector<Door> doors;
   std::vector<Stairs> stairs;

@@ -201,9 +201,10 @@ TEST_CASE("the 3D scan of the building has its walls where the world file puts t
     CHECK(d < 0.001);
   }
   // Everything the start in room A sees: its six walls, the closed door,
-  // the corridor's north wall through the open doorway, and the floor.
+  // the corridor's north wall through the open doorway, the floor and the
+  // ceiling (its points on the slab's underside, z = 2.6 m).
   for (const char* name : {"wall_south", "wall_west", "wall_a_corridor_w", "wall_a_corridor_e", "wall_ab_south",
-                           "wall_ab_north", "door_ab", "wall_north", "ground"}) {
+                           "wall_ab_north", "door_ab", "wall_north", "ground", "ceiling"}) {
     INFO(name);
     CHECK(hits[name] >= 100);
   }

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "sim/simulation.hpp"
 #include "tests/sim/sim_panel.hpp"
@@ -198,4 +199,77 @@ TEST_CASE("the control mapping scales by the speed switch and refuses an unknown
   in = drive(0.0f, 1.0f);  // stick right
   c = map_controls(mapping, in);
   CHECK(c.angular_radps == Approx(-1.5));  // clockwise
+}
+
+namespace {
+// A wall across the x axis at x = 2 (0.2 m thick, faces at x = 1.9 and 2.1),
+// y -2..2, with a 1.2 m wide, 2 m high opening at y -0.6..0.6 under a lintel
+// up to 2.5 m.
+WorldDescription wall_with_opening() {
+  WorldDescription world;
+  Wall wall;
+  wall.name = "w";
+  wall.from_m = {2.0, -2.0};
+  wall.to_m = {2.0, 2.0};
+  wall.height_m = 2.5;
+  wall.thickness_m = 0.2;
+  wall.openings.push_back({1.4, 1.2, 2.0});
+  world.walls.push_back(wall);
+  return world;
+}
+}  // namespace
+
+TEST_CASE("a ray passes through a wall's opening and hits the pieces beside it and the lintel above", "[sim]") {
+  Simulation sim(robot(), wall_with_opening());
+  const Eigen::Vector3d east(1, 0, 0);
+  const double inf = std::numeric_limits<double>::infinity();
+  CHECK(sim.cast_ray_m({0.0, 0.0, 1.0}, east, 10.0) == inf);   // through the opening
+  CHECK(sim.cast_ray_m({0.0, 0.55, 1.9}, east, 10.0) == inf);  // just inside its corner
+  CHECK(sim.cast_ray_m({0.0, 0.0, 2.2}, east, 10.0) == Approx(1.9).margin(1e-6));   // the lintel
+  CHECK(sim.cast_ray_m({0.0, -0.7, 1.0}, east, 10.0) == Approx(1.9).margin(1e-6));  // the piece on the right
+  CHECK(sim.cast_ray_m({0.0, 0.7, 1.0}, east, 10.0) == Approx(1.9).margin(1e-6));   // the piece on the left
+  CHECK(sim.cast_ray_m({0.0, 1.9, 2.4}, east, 10.0) == Approx(1.9).margin(1e-6));   // full height to the end
+  // Up from the opening's floor: the lintel's underside at 2 m.
+  CHECK(sim.cast_ray_m({2.0, 0.0, 0.5}, {0, 0, 1}, 10.0) == Approx(1.5).margin(1e-6));
+}
+
+TEST_CASE("the robot drives through a wall's opening without touching the wall", "[sim]") {
+  Simulation sim(robot(), wall_with_opening());
+  sim.set_input(drive(0.5f, 0.0f));
+  bool touched = false;
+  for (int i = 0; i < 15000 && sim.snapshot().position_m[0] < 3.5; ++i) {
+    sim.step();
+    for (const auto& c : sim.snapshot().contacts) touched = touched || c == "w";
+  }
+  CHECK(sim.snapshot().position_m[0] > 3.5);
+  CHECK_FALSE(touched);
+  for (const auto& e : sim.take_events()) CHECK(e.b != "w");
+}
+
+TEST_CASE("an upward ray hits the ceiling's underside at its height, only over its bounds", "[sim]") {
+  WorldDescription world;
+  world.ceiling = Ceiling{2.6, 0.1, {-5.0, -5.0}, {5.0, 5.0}};
+  Simulation sim(robot(), world);
+  const Eigen::Vector3d up(0, 0, 1);
+  CHECK(sim.cast_ray_m({1.0, -2.0, 0.5}, up, 10.0) == Approx(2.1).margin(1e-6));
+  CHECK(sim.cast_ray_m({4.9, 4.9, 0.1}, up, 10.0) == Approx(2.5).margin(1e-6));  // near its corner
+  CHECK(sim.cast_ray_m({5.1, 0.0, 0.5}, up, 10.0) == std::numeric_limits<double>::infinity());
+  CHECK(sim.cast_ray_m({1.0, 1.0, 3.0}, {0, 0, -1}, 10.0) == Approx(0.3).margin(1e-6));  // its top at 2.7 m
+}
+
+TEST_CASE("driving into a prop reports it by name in the contacts and the collision event", "[sim]") {
+  WorldDescription world;
+  world.props.push_back({{"shelf", {2.0, 0.0, 0.9}, {0.4, 1.2, 1.8}, 0.0}, "shelf"});
+  Simulation sim(robot(), world);
+  sim.set_input(drive(0.5f, 0.0f));
+  bool touched = false, started = false;
+  for (int i = 0; i < 8000 && !(touched && started); ++i) {
+    sim.step();
+    for (const auto& c : sim.snapshot().contacts) touched = touched || c == "shelf";
+    for (const auto& e : sim.take_events())
+      started = started || (e.kind == SimEventKind::CollisionStarted && e.b == "shelf");
+  }
+  CHECK(touched);
+  CHECK(started);
+  CHECK(sim.snapshot().position_m[0] < 2.0);  // it did not drive through
 }

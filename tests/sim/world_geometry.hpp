@@ -2,9 +2,10 @@
 
 // The world file's solids as boxes, computed straight from the file's
 // numbers (independently of the simulator's ODE geoms), to check ray-cast
-// points against: walls (lengthened by their thickness, sim/README.md),
-// stair blocks, closed doors, static boxes and movable objects at their
-// start. Shared by the scanner test and bench/scanner_throughput.cpp.
+// points against: walls (the pieces of sim::wall_boxes: lengthened by their
+// thickness, split around door openings, sim/README.md), stair blocks,
+// closed doors, static boxes, props, the ceiling slab and movable objects at
+// their start. Shared by the scanner test and bench/scanner_throughput.cpp.
 
 #include <Eigen/Core>
 
@@ -35,16 +36,19 @@ struct Solid {
   }
 };
 
+inline Solid box_solid(const BoxObstacle& b, bool wall) {
+  return {b.name, wall, {b.center_m[0], b.center_m[1], b.center_m[2]},
+          {b.size_m[0] / 2, b.size_m[1] / 2, b.size_m[2] / 2}, b.yaw_rad};
+}
+
 inline std::vector<Solid> world_solids(const WorldDescription& w) {
   std::vector<Solid> out;
-  for (const auto& b : w.boxes)
-    out.push_back({b.name, false, {b.center_m[0], b.center_m[1], b.center_m[2]},
-                   {b.size_m[0] / 2, b.size_m[1] / 2, b.size_m[2] / 2}, b.yaw_rad});
-  for (const auto& x : w.walls) {
-    const double dx = x.to_m[0] - x.from_m[0], dy = x.to_m[1] - x.from_m[1];
-    out.push_back({x.name, true, {(x.from_m[0] + x.to_m[0]) / 2, (x.from_m[1] + x.to_m[1]) / 2, x.height_m / 2},
-                   {(std::hypot(dx, dy) + x.thickness_m) / 2, x.thickness_m / 2, x.height_m / 2}, std::atan2(dy, dx)});
-  }
+  for (const auto& b : w.boxes) out.push_back(box_solid(b, false));
+  for (const auto& p : w.props) out.push_back(box_solid(p.box, false));
+  for (const auto& x : w.walls)
+    for (const auto& b : wall_boxes(x)) out.push_back(box_solid(b, true));
+  // The ceiling's points lie on the slab's underside, z = height_m.
+  if (w.ceiling) out.push_back(box_solid(ceiling_box(*w.ceiling), false));
   for (const auto& s : w.stairs) {
     const double c = std::cos(s.yaw_rad), sn = std::sin(s.yaw_rad);
     for (int i = 0; i <= s.steps; ++i) {
