@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdarg>
+#include <cstdio>
 #include <limits>
 #include <mutex>
 #include <set>
@@ -29,6 +30,7 @@ constexpr double kObjectMovedM = 0.05;
 constexpr double kTipCos = 0.5;      // cos 60°
 constexpr double kUprightCos = 0.7;  // cos ~45°: re-arms the tip-over event
 constexpr int kCollisionReleaseSteps = 50;  // contact gone this long → collision stopped
+constexpr int kCollisionContinueSteps = 1000;  // a lasting collision is reported again every second
 constexpr int kArmBreakSteps = 20;          // overload sustained this long breaks an arm joint
 constexpr double kArmJointDamage = 0.25;
 constexpr double kDoorGapM = 0.01;  // door bottom above the floor
@@ -129,6 +131,7 @@ const char* to_string(SimEventKind kind) {
   switch (kind) {
     case SimEventKind::CollisionStarted: return "collision_started";
     case SimEventKind::CollisionStopped: return "collision_stopped";
+    case SimEventKind::CollisionContinues: return "collision_continues";
     case SimEventKind::DoorOpened: return "door_opened";
     case SimEventKind::DoorClosed: return "door_closed";
     case SimEventKind::JointBroken: return "joint_broken";
@@ -239,7 +242,11 @@ struct Simulation::Impl {
   std::vector<std::unique_ptr<GeomInfo>> infos;
   std::set<std::string> touching;
   std::set<std::pair<std::string, std::string>> seen;          // robot part, entity: this step
-  std::map<std::pair<std::string, std::string>, int64_t> active;  // → last step seen
+  struct ActiveCollision {
+    int64_t started = 0;    // step of the first contact
+    int64_t last_seen = 0;  // step of the latest contact
+  };
+  std::map<std::pair<std::string, std::string>, ActiveCollision> active;
   std::set<std::string> inside_regions;
   std::set<std::string> climbed;
   bool tipped = false;
@@ -779,22 +786,31 @@ struct Simulation::Impl {
   void update_events() {
     // Collisions: started on first contact, stopped after a quiet spell so
     // that a track rolling over step noses does not chatter.
+    // A collision that lasts is reported again each second it goes on
+    // (the seed's "touch continues"), detail = seconds since it started.
     for (const auto& key : seen) {
       const auto it = active.find(key);
       if (it == active.end()) {
-        active.emplace(key, steps);
+        active.emplace(key, ActiveCollision{steps, steps});
         emit(SimEventKind::CollisionStarted, key.first, key.second);
       } else {
-        it->second = steps;
+        it->second.last_seen = steps;
       }
     }
     for (auto it = active.begin(); it != active.end();) {
-      if (steps - it->second >= kCollisionReleaseSteps) {
+      const ActiveCollision& c = it->second;
+      if (steps - c.last_seen >= kCollisionReleaseSteps) {
         emit(SimEventKind::CollisionStopped, it->first.first, it->first.second);
         it = active.erase(it);
-      } else {
-        ++it;
+        continue;
       }
+      const int64_t lasted = steps - c.started;
+      if (lasted > 0 && lasted % kCollisionContinueSteps == 0) {
+        char seconds[32];
+        std::snprintf(seconds, sizeof seconds, "%.0f s", static_cast<double>(lasted) * kStepS);
+        emit(SimEventKind::CollisionContinues, it->first.first, it->first.second, seconds);
+      }
+      ++it;
     }
     for (auto& d : doors) {
       const Breakable& h = breakables[d.hinge];

@@ -62,6 +62,7 @@ enum class SimEventKind {
   ObjectMoved,       ///< a = object; > 5 cm from its start (once)
   StairsClimbed,     ///< a = robot, b = stairs; base above the landing, on it
   TippedOver,        ///< a = robot; base z axis > 60° from vertical
+  CollisionContinues,  ///< a = robot part, b = entity; each full second a collision lasts, detail "N s"
 };
 /// Stable snake_case name, e.g. "door_opened" (also the LCM `kind`).
 const char* to_string(SimEventKind kind);

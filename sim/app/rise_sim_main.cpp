@@ -130,7 +130,8 @@ rise_msgs::SimEvent to_message(const rise::sim::SimEvent& e, const std::string& 
 // what a trainer wants to see in the log.
 void log_event(const rise::sim::SimEvent& e) {
   const bool contact =
-      e.kind == rise::sim::SimEventKind::CollisionStarted || e.kind == rise::sim::SimEventKind::CollisionStopped;
+      e.kind == rise::sim::SimEventKind::CollisionStarted || e.kind == rise::sim::SimEventKind::CollisionStopped ||
+      e.kind == rise::sim::SimEventKind::CollisionContinues;
   spdlog::log(contact ? spdlog::level::debug : spdlog::level::info, "event {:.3f} s: {} {} {} {}", e.time_s,
               rise::sim::to_string(e.kind), e.a, e.b, e.detail);
 }

@@ -185,6 +185,49 @@ TEST_CASE("driving into a box reports the box among the contacts", "[sim]") {
   CHECK(sim.snapshot().position_m[0] < 2.0);  // it did not drive through
 }
 
+TEST_CASE("pushing against a box reports the collision started, continuing each second, and stopped", "[sim]") {
+  WorldDescription world;
+  world.boxes.push_back({"crate", {2.0, 0.0, 0.3}, {0.6, 1.0, 0.6}, 0.0});
+  Simulation sim(robot(), world);
+  sim.set_input(drive(0.5f, 0.0f));
+  std::vector<SimEvent> log;
+  const auto about_crate = [&](SimEventKind kind) {
+    std::vector<SimEvent> found;
+    for (const auto& e : log)
+      if (e.kind == kind && e.b == "crate") found.push_back(e);
+    return found;
+  };
+  // Drive into it, keep pushing for 3.5 s after the first contact, back off.
+  double started_s = -1;
+  for (int i = 0; i < 20000 && (started_s < 0 || sim.time_s() < started_s + 3.5); ++i) {
+    sim.step();
+    for (auto& e : sim.take_events()) log.push_back(std::move(e));
+    const auto s = about_crate(SimEventKind::CollisionStarted);
+    if (started_s < 0 && !s.empty()) started_s = s.front().time_s;
+  }
+  REQUIRE(started_s >= 0);
+  sim.set_input(drive(-0.5f, 0.0f));
+  for (int i = 0; i < 2000; ++i) {
+    sim.step();
+    for (auto& e : sim.take_events()) log.push_back(std::move(e));
+  }
+  // One part of the robot (the first that touched) kept touching throughout.
+  const auto first = about_crate(SimEventKind::CollisionStarted).front();
+  std::vector<SimEvent> continues;
+  for (const auto& e : about_crate(SimEventKind::CollisionContinues))
+    if (e.a == first.a) continues.push_back(e);
+  REQUIRE(continues.size() >= 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    INFO("continues " << k);
+    CHECK(continues[k].time_s == Approx(first.time_s + static_cast<double>(k + 1)).margin(1e-9));
+    CHECK(continues[k].detail == std::to_string(k + 1) + " s");
+  }
+  bool stopped = false;
+  for (const auto& e : about_crate(SimEventKind::CollisionStopped)) stopped = stopped || e.a == first.a;
+  CHECK(stopped);
+  CHECK(std::string(to_string(SimEventKind::CollisionContinues)) == "collision_continues");
+}
+
 TEST_CASE("the control mapping scales by the speed switch and refuses an unknown position", "[sim]") {
   const auto mapping = robot().control;
   auto in = drive(1.0f, 0.0f);
