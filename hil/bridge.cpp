@@ -302,8 +302,9 @@ void Bridge::modbus_source_loop(std::size_t source) {
 void Bridge::hid_source_loop(std::size_t source) {
   io::InputDevice& device = *hid_devices_[source];
   const panels::PanelDefinition& definition = mapper_.definition();
-  bool has_leds = false;
-  for (const auto& led : definition.leds) has_leds = has_leds || led.source == source;
+  bool has_outputs = false;
+  for (const auto& led : definition.leds) has_outputs = has_outputs || led.source == source;
+  for (const auto& rumble : definition.rumbles) has_outputs = has_outputs || rumble.source == source;
   std::array<uint8_t, io::max_hid_report_bytes> report{};
   int64_t next_enumerate_us = 0;
   int64_t fast_until_us = 0;
@@ -343,7 +344,7 @@ void Bridge::hid_source_loop(std::size_t source) {
           encoder.reset();
           have_written = false;
           const fp::HidParseResult parsed = fp::parse_hid_descriptor(device.report_descriptor());
-          if (has_leds && parsed) {
+          if (has_outputs && parsed) {
             encoder.emplace(parsed.descriptor);
             for (std::string& problem : hid_feedback_problems(definition, source, *encoder))
               note(std::move(problem) + ": not shown");

@@ -87,10 +87,10 @@ std::vector<std::vector<uint8_t>> build_hid_feedback(const panels::PanelDefiniti
   const bool ids = encoder.descriptor().uses_report_ids;
   std::vector<std::vector<uint8_t>> reports;
   std::vector<uint8_t> report_ids;  // of reports[i]
-  for (const auto& led : definition.leds) {
-    if (led.source != source || led.hid_signal.empty()) continue;
-    const std::size_t signal = encoder.find(led.hid_signal);
-    if (signal >= encoder.signals().size()) continue;
+  // Writes `value` (normalised) into the named output signal's report.
+  const auto put = [&](const std::string& name, double value) {
+    const std::size_t signal = encoder.find(name);
+    if (signal >= encoder.signals().size()) return;
     const firmware_protocol::HidSignal& s = encoder.signals()[signal];
     std::size_t r = 0;
     while (r < report_ids.size() && report_ids[r] != s.report_id) ++r;
@@ -100,24 +100,31 @@ std::vector<std::vector<uint8_t>> build_hid_feedback(const panels::PanelDefiniti
       report_ids.push_back(s.report_id);
     }
     const std::span<uint8_t> data = ids ? std::span<uint8_t>(reports[r]) : std::span<uint8_t>(reports[r]).subspan(1);
-    const double on = lit(led, request, snapshot, estop) ? 1.0 : 0.0;
-    encoder.encode(signal, firmware_protocol::hid_raw_from_value(s, on), data);
-  }
+    encoder.encode(signal, firmware_protocol::hid_raw_from_value(s, value), data);
+  };
+  for (const auto& led : definition.leds)
+    if (led.source == source && !led.hid_signal.empty())
+      put(led.hid_signal, lit(led, request, snapshot, estop) ? 1.0 : 0.0);
+  for (const auto& rumble : definition.rumbles)
+    if (rumble.source == source) put(rumble.hid_signal, static_cast<double>(request.rumble));
   return reports;
 }
 
 std::vector<std::string> hid_feedback_problems(const panels::PanelDefinition& definition, std::size_t source,
                                                const firmware_protocol::HidOutputEncoder& encoder) {
   std::vector<std::string> problems;
-  for (const auto& led : definition.leds) {
-    if (led.source != source || led.hid_signal.empty()) continue;
-    if (encoder.find(led.hid_signal) < encoder.signals().size()) continue;
+  const auto check = [&](const char* kind, const std::string& name, const std::string& signal, int line) {
+    if (encoder.find(signal) < encoder.signals().size()) return;
     const std::string known = firmware_protocol::hid_signal_names(encoder.signals());
-    problems.push_back(definition.file + ":" + std::to_string(led.line) + ": feedback.leds." + led.name +
-                       ".signal: the device has no output signal '" + led.hid_signal + "' (" +
+    problems.push_back(definition.file + ":" + std::to_string(line) + ": feedback." + kind + "." + name +
+                       ".signal: the device has no output signal '" + signal + "' (" +
                        (known.empty() ? std::string("it has no output report") : "its output signals: " + known) +
                        ")");
-  }
+  };
+  for (const auto& led : definition.leds)
+    if (led.source == source && !led.hid_signal.empty()) check("leds", led.name, led.hid_signal, led.line);
+  for (const auto& rumble : definition.rumbles)
+    if (rumble.source == source) check("rumble", rumble.name, rumble.hid_signal, rumble.line);
   return problems;
 }
 

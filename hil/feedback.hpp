@@ -19,6 +19,7 @@ struct FeedbackRequest {
   std::vector<std::pair<std::string, bool>> leds;
   std::vector<std::pair<std::string, float>> displays;
   firmware_protocol::BuzzerMode buzzer = firmware_protocol::BuzzerMode::Off;
+  float rumble = 0.0f;  ///< 0..1: written to the definition's rumble signals (hid sources)
 };
 
 struct FeedbackFrames {

@@ -1,6 +1,7 @@
 #include "hil/panel_state_message.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace rise::hil {
 namespace fp = rise::firmware_protocol;
@@ -95,6 +96,7 @@ FeedbackRequest from_message(const rise_msgs::PanelFeedback& message) {
                              message.display_names.size(), message.display_values.size()});
   for (std::size_t i = 0; i < displays; ++i)
     r.displays.emplace_back(message.display_names[i], message.display_values[i]);
+  r.rumble = std::isfinite(message.rumble) ? std::clamp(message.rumble, 0.0f, 1.0f) : 0.0f;
   r.buzzer = message.buzzer == 1   ? fp::BuzzerMode::On
              : message.buzzer == 2 ? fp::BuzzerMode::Beep
                                    : fp::BuzzerMode::Off;

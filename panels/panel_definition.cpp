@@ -432,7 +432,7 @@ ModbusPoint read_written_point(const Context& ctx, const YAML::Node& n, const st
 }
 
 void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& node) {
-  ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer"});
+  ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer", "rumble"});
   std::set<std::string> names;
   std::set<std::pair<std::size_t, ModbusPoint>> written;  // modbus sources' points
   if (const YAML::Node leds = node["leds"]) {
@@ -477,6 +477,29 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
         ctx.fail(n["bit"], where + ".bit", "LED bit already used");
       led.bit = static_cast<uint8_t>(bit);
       def.leds.push_back(led);
+    }
+  }
+  if (const YAML::Node rumble = node["rumble"]) {
+    if (!rumble.IsSequence()) ctx.fail(rumble, "feedback.rumble", "expected a list");
+    std::set<std::pair<std::size_t, std::string>> bound;
+    for (std::size_t i = 0; i < rumble.size(); ++i) {
+      const YAML::Node n = rumble[i];
+      std::string where = "feedback.rumble[" + std::to_string(i) + "]";
+      ctx.only_keys(n, where, {"name", "source", "signal"});
+      RumbleDefinition r;
+      r.name = ctx.require<std::string>(n, "name", where);
+      r.line = n.Mark().line + 1;
+      where = "feedback.rumble." + r.name;
+      if (!names.insert(r.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
+      r.source = resolve_source(ctx, def, n, where);
+      if (!def.sources[r.source].is_hid())
+        ctx.fail(n["source"] ? n["source"] : n, where + ".source",
+                 "rumble is an output signal of a hid source's device");
+      r.hid_signal = ctx.require<std::string>(n, "signal", where);
+      if (r.hid_signal.empty()) ctx.fail(n["signal"], where + ".signal", "must not be empty");
+      if (!bound.insert({r.source, r.hid_signal}).second)
+        ctx.fail(n["signal"], where + ".signal", "output signal already bound to another rumble");
+      def.rumbles.push_back(r);
     }
   }
   if (const YAML::Node displays = node["displays"]) {

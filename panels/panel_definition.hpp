@@ -135,6 +135,15 @@ struct LedDefinition {
   std::optional<ModbusPoint> modbus_point;
   int line = 0;  ///< line in the definition file (for messages)
 };
+/// Rumble / force feedback of a hid source: PanelFeedback.rumble (0..1) is
+/// written into this output signal of the device's report descriptor (e.g.
+/// a vendor motor byte, vendor_ff00_0002), scaled to its logical range.
+struct RumbleDefinition {
+  std::string name;
+  std::size_t source = 0;
+  std::string hid_signal;
+  int line = 0;  ///< line in the definition file (for messages)
+};
 struct DisplayDefinition {
   std::string name;
   std::size_t source = 0;
@@ -154,6 +163,7 @@ struct PanelDefinition {
   std::vector<ControlDefinition> controls;
   std::vector<LedDefinition> leds;
   std::vector<DisplayDefinition> displays;
+  std::vector<RumbleDefinition> rumbles;
   std::optional<std::size_t> buzzer_source;
 
   /// Index of a control by name, or nullopt.

@@ -55,4 +55,38 @@ inline constexpr uint8_t led_pad_descriptor[] = {
     0xC0,              // End Collection
 };
 
+// A pad with LEDs and a rumble motor in one output report, no report ids,
+// written for these tests: input x, y (8 bits each); output 4 LED bits,
+// 4 bits padding, then the motor's strength, a vendor byte 0..255
+// (vendor_ff00_0002).
+inline constexpr uint8_t rumble_pad_descriptor[] = {
+    0x05, 0x01,        // Usage Page (Generic Desktop)
+    0x09, 0x05,        // Usage (Game Pad)
+    0xA1, 0x01,        // Collection (Application)
+    0x09, 0x30,        //   Usage (X)
+    0x09, 0x31,        //   Usage (Y)
+    0x15, 0x00,        //   Logical Minimum (0)
+    0x26, 0xFF, 0x00,  //   Logical Maximum (255)
+    0x75, 0x08,        //   Report Size (8)
+    0x95, 0x02,        //   Report Count (2)
+    0x81, 0x02,        //   Input (Data, Variable, Absolute): x, y
+    0x05, 0x08,        //   Usage Page (LEDs)
+    0x19, 0x01,        //   Usage Minimum (1)
+    0x29, 0x04,        //   Usage Maximum (4)
+    0x25, 0x01,        //   Logical Maximum (1)
+    0x75, 0x01,        //   Report Size (1)
+    0x95, 0x04,        //   Report Count (4)
+    0x91, 0x02,        //   Output (Data, Variable, Absolute): usage_0008_0001..4, bits 0..3
+    0x75, 0x04,        //   Report Size (4)
+    0x95, 0x01,        //   Report Count (1)
+    0x91, 0x01,        //   Output (Constant): padding, bits 4..7
+    0x06, 0x00, 0xFF,  //   Usage Page (Vendor 0xFF00)
+    0x09, 0x02,        //   Usage (2)
+    0x26, 0xFF, 0x00,  //   Logical Maximum (255)
+    0x75, 0x08,        //   Report Size (8)
+    0x95, 0x01,        //   Report Count (1)
+    0x91, 0x02,        //   Output (Data, Variable, Absolute): vendor_ff00_0002, byte 1
+    0xC0,              // End Collection
+};
+
 }  // namespace rise::test

@@ -16,6 +16,7 @@
 #include "hil/io/hid_device.hpp"
 #include "hil/feedback.hpp"
 #include "hil/panel_mapper.hpp"
+#include "hil/panel_state_message.hpp"
 #include "panels/hid_emulator.hpp"
 #include "panels/timeline.hpp"
 #include "panels/panel_definition.hpp"
@@ -407,5 +408,65 @@ TEST_CASE("hid feedback sets the LEDs' bits of the device's output report", "[hi
     snap.failsafe = true;
     CHECK(build_hid_feedback(definition, 0, request, snap, fp::HidOutputEncoder(k.descriptor)) ==
           std::vector<std::vector<uint8_t>>{{0x00, 0x03}});
+  }
+}
+
+TEST_CASE("hid feedback writes the rumble strength into the device's motor output", "[hil]") {
+  using rise::hil::build_hid_feedback;
+  namespace fp = rise::firmware_protocol;
+  const auto definition = rise::panels::parse_panel_definition(
+      "panel: p\nsources:\n  - {name: pad, protocol: hid}\n"
+      "controls:\n  - {name: x, kind: axis, signal: x, safe: 0}\n"
+      "feedback:\n  leds: [{name: power, signal: usage_0008_0001}]\n"
+      "  rumble: [{name: motor, signal: vendor_ff00_0002}]\n",
+      "p.yaml");
+  REQUIRE(definition.rumbles.size() == 1);
+  CHECK(definition.rumbles[0].line == 8);
+  const auto parsed = fp::parse_hid_descriptor(rise::test::rumble_pad_descriptor);
+  REQUIRE(parsed);
+  const fp::HidOutputEncoder encoder(parsed.descriptor);
+  CHECK(rise::hil::hid_feedback_problems(definition, 0, encoder).empty());
+  PanelSnapshot snap;
+  snap.controls.resize(1);
+  snap.failsafe = false;
+  rise::hil::FeedbackRequest request;
+  // hidraw's 0 (no report ids), the LED bits, the motor byte.
+  CHECK(build_hid_feedback(definition, 0, request, snap, encoder) == std::vector<std::vector<uint8_t>>{{0x00, 0x01, 0x00}});
+  request.rumble = 1.0f;
+  CHECK(build_hid_feedback(definition, 0, request, snap, encoder) == std::vector<std::vector<uint8_t>>{{0x00, 0x01, 0xFF}});
+  request.rumble = 0.5f;
+  CHECK(build_hid_feedback(definition, 0, request, snap, encoder) == std::vector<std::vector<uint8_t>>{{0x00, 0x01, 0x80}});
+
+  SECTION("PanelFeedback's rumble is clamped to 0..1") {
+    rise_msgs::PanelFeedback m{};
+    m.rumble = 3.0f;
+    CHECK(rise::hil::from_message(m).rumble == 1.0f);
+    m.rumble = -1.0f;
+    CHECK(rise::hil::from_message(m).rumble == 0.0f);
+  }
+  SECTION("a device without the motor output gets a line that says why") {
+    const auto gravis = fp::parse_hid_descriptor(gravis_descriptor);
+    REQUIRE(gravis);
+    const fp::HidOutputEncoder none(gravis.descriptor);
+    const auto problems = rise::hil::hid_feedback_problems(definition, 0, none);
+    REQUIRE(problems.size() == 2);
+    CHECK(problems[1] ==
+          "p.yaml:8: feedback.rumble.motor.signal: the device has no output signal 'vendor_ff00_0002' "
+          "(it has no output report)");
+  }
+  SECTION("rumble is refused where it cannot be written") {
+    const std::string head =
+        "panel: p\nsources:\n  - {name: pad, protocol: hid}\n  - {name: console, protocol: rise-can-v1}\n"
+        "controls:\n  - {name: x, kind: axis, source: pad, signal: x, safe: 0}\nfeedback:\n";
+    const auto [feedback, message] = GENERATE(table<std::string, std::string>({
+        {"  rumble: [{name: m, source: console, signal: vendor_ff00_0002}]\n",
+         "p.yaml:8: feedback.rumble.m.source: rumble is an output signal of a hid source's device"},
+        {"  rumble: [{name: m, source: pad}]\n", "p.yaml:8: feedback.rumble.m.signal: missing"},
+        {"  rumble: [{name: m, source: pad, signal: a}, {name: n, source: pad, signal: a}]\n",
+         "p.yaml:8: feedback.rumble.n.signal: output signal already bound to another rumble"},
+        {"  rumble: {name: m}\n", "p.yaml:8: feedback.rumble: expected a list"},
+    }));
+    INFO(feedback);
+    CHECK_THROWS_WITH(rise::panels::parse_panel_definition(head + feedback, "p.yaml"), Catch::StartsWith(message));
   }
 }
