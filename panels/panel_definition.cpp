@@ -431,6 +431,17 @@ ModbusPoint read_written_point(const Context& ctx, const YAML::Node& n, const st
   return point;
 }
 
+// A feedback output of a hid source: `signal:` names an output signal of the
+// device's descriptor, bound once per source.
+std::string hid_output_signal(const Context& ctx, const YAML::Node& n, const std::string& where, std::size_t source,
+                              std::set<std::pair<std::size_t, std::string>>& bound, const char* what) {
+  std::string signal = ctx.require<std::string>(n, "signal", where);
+  if (signal.empty()) ctx.fail(n["signal"], where + ".signal", "must not be empty");
+  if (!bound.insert({source, signal}).second)
+    ctx.fail(n["signal"], where + ".signal", std::string("output signal already bound to another ") + what);
+  return signal;
+}
+
 void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& node) {
   ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer", "rumble"});
   std::set<std::string> names;
@@ -454,10 +465,7 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
         if (n["bit"])
           ctx.fail(n["bit"], where + ".bit",
                    "a hid source's LED is an output signal of the device: signal: NAME (e.g. usage_0008_0001)");
-        led.hid_signal = ctx.require<std::string>(n, "signal", where);
-        if (led.hid_signal.empty()) ctx.fail(n["signal"], where + ".signal", "must not be empty");
-        if (!hid_signals.insert({led.source, led.hid_signal}).second)
-          ctx.fail(n["signal"], where + ".signal", "output signal already bound to another LED");
+        led.hid_signal = hid_output_signal(ctx, n, where, led.source, hid_signals, "LED");
         def.leds.push_back(led);
         continue;
       }
@@ -495,10 +503,7 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
       if (!def.sources[r.source].is_hid())
         ctx.fail(n["source"] ? n["source"] : n, where + ".source",
                  "rumble is an output signal of a hid source's device");
-      r.hid_signal = ctx.require<std::string>(n, "signal", where);
-      if (r.hid_signal.empty()) ctx.fail(n["signal"], where + ".signal", "must not be empty");
-      if (!bound.insert({r.source, r.hid_signal}).second)
-        ctx.fail(n["signal"], where + ".signal", "output signal already bound to another rumble");
+      r.hid_signal = hid_output_signal(ctx, n, where, r.source, bound, "rumble");
       def.rumbles.push_back(r);
     }
   }

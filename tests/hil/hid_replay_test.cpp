@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -95,24 +96,30 @@ TEST_CASE("bridge over a HID replay shows the recorded values at their times, th
     PanelSnapshot snap;
   };
   std::mutex mutex;
+  std::condition_variable published;
   std::vector<Stamped> seen;
   const auto started = Clock::now();
   Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& s) {
-    std::lock_guard lock(mutex);
-    seen.push_back({std::chrono::duration<double, std::milli>(Clock::now() - started).count(), s});
+    {
+      std::lock_guard lock(mutex);
+      seen.push_back({std::chrono::duration<double, std::milli>(Clock::now() - started).count(), s});
+    }
+    published.notify_all();
   });
   bridge.start();
-  const auto deadline = Clock::now() + std::chrono::seconds(10);
-  while (!replay->ended() && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  REQUIRE(replay->ended());
-  // The end is published at once (the bridge publishes a loss on change).
+  // The end is published at once (the bridge publishes a loss on change):
+  // wait on the published messages for it.
   const auto failsafe_again = [&] {
-    std::lock_guard lock(mutex);
     return !seen.empty() && seen.back().snap.failsafe && seen.back().snap.failsafe_reason == "pad: disconnected";
   };
-  while (!failsafe_again() && Clock::now() < deadline) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  bool ended = false;
+  {
+    std::unique_lock lock(mutex);
+    ended = published.wait_for(lock, std::chrono::seconds(10), [&] { return replay->ended() && failsafe_again(); });
+  }
   bridge.stop();
-  REQUIRE(failsafe_again());
+  REQUIRE(replay->ended());
+  REQUIRE(ended);
   // When each state first appeared, from the first healthy message (the report at 10 ms).
   auto first = [&](auto pred) {
     for (const auto& s : seen)
