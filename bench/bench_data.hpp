@@ -22,4 +22,16 @@ inline std::optional<std::string> data_file(const char* given, const std::string
   return std::nullopt;
 }
 
+/// Starts the peer's Python `script` (written to /tmp/NAME.py) under Debian's
+/// /usr/bin/python3 with `args` (shell words, already quoted), its stdout
+/// readable from the returned pipe (pclose it); nullptr if it cannot start.
+inline FILE* start_python(const std::string& name, const std::string& script, const std::string& args) {
+  const std::string py = "/tmp/" + name + ".py";
+  FILE* s = std::fopen(py.c_str(), "w");
+  if (!s) return nullptr;
+  std::fputs(script.c_str(), s);
+  std::fclose(s);
+  return ::popen(("/usr/bin/python3 " + py + " " + args).c_str(), "r");
+}
+
 }  // namespace rise::bench

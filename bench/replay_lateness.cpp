@@ -84,17 +84,12 @@ int main(int argc, char** argv) {
       "    if t0 is None: t0 = now\n"
       "    late.append((now - t0 - (m.timestamp - first)) * 1e6)\n"
       "open(out, 'w').write('\\n'.join('%.1f' % v for v in late))\n";
-  const std::string py = "/tmp/rise_bench_pycan_sync.py";
-  if (FILE* s = std::fopen(py.c_str(), "w")) {
-    std::fputs(script.c_str(), s);
-    std::fclose(s);
-  }
   // Its figures go to a file, not a pipe: a full pipe would stall it.
   const std::string out = "/tmp/rise_bench_pycan_sync.txt";
   std::remove(out.c_str());
-  const std::string cmd =
-      "/usr/bin/python3 " + py + " '" + log + "' " + std::to_string(seconds) + " " + out + " 2>/dev/null";
-  FILE* p = ::popen(cmd.c_str(), "r");  // runs beside ours from now on
+  // It runs beside ours from now on.
+  FILE* p = rise::bench::start_python("rise_bench_pycan_sync", script,
+                                      "'" + log + "' " + std::to_string(seconds) + " " + out + " 2>/dev/null");
 
   const std::string url = "replay://" + log + "?loop=-1";
   rise::io::ReplayBus bus(url, std::get<rise::io::ReplayAddress>(rise::io::parse_can_url(url)));

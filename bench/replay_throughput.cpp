@@ -48,13 +48,7 @@ int main(int argc, char** argv) {
       "        n += 1\n"
       "dt = time.perf_counter() - t0\n"
       "print(n, dt)\n";
-  const std::string py = "/tmp/rise_bench_pycan.py";
-  if (FILE* s = std::fopen(py.c_str(), "w")) {
-    std::fputs(script.c_str(), s);
-    std::fclose(s);
-  }
-  const std::string cmd = "/usr/bin/python3 " + py + " '" + log + "' " + std::to_string(passes);
-  FILE* p = ::popen(cmd.c_str(), "r");
+  FILE* p = rise::bench::start_python("rise_bench_pycan", script, "'" + log + "' " + std::to_string(passes));
   long long py_frames = 0;
   double py_s = 0;
   if (!p || std::fscanf(p, "%lld %lf", &py_frames, &py_s) != 2 || py_s <= 0) {
