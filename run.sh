@@ -15,7 +15,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # libFuzzer runtime for the fuzz targets, Debian's own kernel + qemu +
 # can-utils for the SocketCAN tests under a real CAN stack, mbpoll and
 # pymodbus as Modbus peers, hidapi + libusb for HID devices, udev's
-# systemd-udevd for the USB hot-plug test inside the VM). Installing
+# systemd-udevd for the USB hot-plug test inside the VM, PCL + OpenCV +
+# Ceres for the semantic engine and Open3D as its benchmark peer). Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -26,6 +27,7 @@ packages=(
   qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
   libhidapi-dev libusb-1.0-0-dev udev
+  libpcl-dev libopencv-dev libceres-dev libopen3d-dev
 )
 
 setup() {
