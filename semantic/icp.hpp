@@ -1,0 +1,46 @@
+#pragma once
+
+// Iterative closest point, as in the seed paper's data registration (section
+// 3): nearest neighbours from a regular voxel grid (the paper's bucket
+// structure), a maximum correspondence distance that shrinks over the
+// iterations, parallel over points with a parallel reduction.
+
+#include "semantic/cloud.hpp"
+
+namespace rise::semantic {
+
+enum class IcpMetric { PointToPoint, PointToPlane };
+
+struct IcpSettings {
+  IcpMetric metric = IcpMetric::PointToPoint;
+  int max_iterations = 30;
+  double max_correspondence_m = 0.5;   ///< first iteration's pairing distance
+  double min_correspondence_m = 0.05;  ///< it shrinks towards this one
+  double huber_m = 0.0;                ///< robust kernel width; 0: none
+  double translation_epsilon_m = 1e-5; ///< converged when an update moves less ...
+  double rotation_epsilon_rad = 1e-5;  ///< ... and turns less than these
+  int threads = 0;                     ///< 0: OpenMP's default
+};
+
+struct IcpResult {
+  Eigen::Isometry3d T_target_source = Eigen::Isometry3d::Identity();  ///< maps source points onto the target
+  int iterations = 0;
+  double rmse_m = 0.0;         ///< over the inlier pairs of the last iteration
+  double inlier_ratio = 0.0;   ///< paired source points / all source points
+  bool converged = false;
+};
+
+/// Registers `source` onto `target` from `T_initial` (target ← source).
+/// PointToPlane needs target normals (estimate_normals below). Throws
+/// std::invalid_argument on empty clouds or bad settings.
+IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
+              const IcpSettings& settings = {});
+
+/// Unit normals from the k nearest neighbours' covariance (PCA), oriented
+/// towards `viewpoint`; fills cloud.normals.
+void estimate_normals(Cloud& cloud, int k = 10, const Eigen::Vector3f& viewpoint = Eigen::Vector3f::Zero());
+
+/// One point per occupied cube of `leaf_m` (the centroid of its points).
+Cloud voxel_filter(const Cloud& cloud, double leaf_m);
+
+}  // namespace rise::semantic
