@@ -110,12 +110,14 @@ int main(int argc, char** argv) {
   const std::pair<const char*, std::vector<std::string>> runs[] = {
       {"tracked_eod", {tracked}}, {"skid4", {skid4}}, {"tracked+skid4", {tracked, skid4}}};
   for (const auto& [label, files] : runs) {
+    const int64_t ode_before = rise::sim::ode_messages();
     const Result r = run(files, world, sim_seconds);
     std::printf("%-14s %10.1f %10.3f %9.1fx %12.0f %8zu %14.2f\n", label, r.sim_s, r.wall_s, r.sim_s / r.wall_s,
                 r.sim_s / rise::sim::Simulation::kStepS / r.wall_s, r.events, r.travelled_m);
     std::printf("%-14s", "");
     for (const auto& [kind, n] : r.kinds) std::printf(" %s×%d", kind.c_str(), n);
-    std::printf(" sound one-shots×%zu\n", r.sounds);
+    std::printf(" sound one-shots×%zu; ODE diagnostics %lld\n", r.sounds,
+                static_cast<long long>(rise::sim::ode_messages() - ode_before));
   }
   std::printf("goal: RTF >= 20x; ODE diagnostics during the runs: %lld\n",
               static_cast<long long>(rise::sim::ode_messages()));
