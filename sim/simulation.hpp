@@ -54,15 +54,15 @@ struct JointState {
 
 enum class SimEventKind {
   CollisionStarted,  ///< a = robot part, b = entity (or the other robot's part); detail = impact speed
-  CollisionStopped,  ///< a = robot part, b = entity (no contact for 50 ms)
+  CollisionStopped,  ///< a = robot part, b = entity or the other robot's part (no contact for 50 ms)
   DoorOpened,        ///< a = door; |angle| > 10°
   DoorClosed,        ///< a = door; |angle| < 5° again
-  JointBroken,       ///< a = robot or door, b = joint; detail = load
-  RegionEntered,     ///< a = robot, b = region; base inside the box
-  RegionLeft,        ///< a = robot, b = region
+  JointBroken,       ///< a = robot id or door, b = joint; detail = load
+  RegionEntered,     ///< a = robot id, b = region; base inside the box
+  RegionLeft,        ///< a = robot id, b = region
   ObjectMoved,       ///< a = object; > 5 cm from its start (once)
-  StairsClimbed,     ///< a = robot, b = stairs; base above the landing, on it
-  TippedOver,        ///< a = robot; base z axis > 60° from vertical
+  StairsClimbed,     ///< a = robot id, b = stairs; base above the landing, on it
+  TippedOver,        ///< a = robot id; base z axis > 60° from vertical
   CollisionContinues,  ///< a = robot part, b = entity; each full second a collision lasts, detail "N s"
 };
 /// Stable snake_case name, e.g. "door_opened" (also the LCM `kind`).
@@ -192,7 +192,8 @@ class Simulation {
   std::array<double, 3> object_position_m(const std::string& object) const;
 
   /// The true pose of robot `robot`'s base frame (the chassis centre; x
-  /// forward, y left, z up) in the world. Safe in the cyclic path.
+  /// forward, y left, z up) in the world (an index past the end reads the
+  /// last robot). Safe in the cyclic path.
   Eigen::Isometry3d T_world_base(std::size_t robot = 0) const;
   /// The true world pose of the robot file's camera `camera`
   /// (sensors.cameras), nullopt for an unknown name. Safe in the cyclic path.
