@@ -7,8 +7,11 @@
 // opens/closes the gripper, the robot drives through the door (pushing it
 // open) into room B, turns, works the arm again, and so on. The skid4 robot
 // runs the same script in the same world, side by side (its arm phases are
-// standstill: skid4 has no arm). Prints sim time, wall time, the factor,
-// the events the run produced and ODE's diagnostic count.
+// standstill: skid4 has no arm). Then both robots at once in the same world:
+// tracked_eod from the world's start, skid4 beside it 1.2 m to the south,
+// each on the script (they meet at the door), the factor counted in world
+// sim time. Prints sim time, wall time, the factor, the events the run
+// produced and ODE's diagnostic count.
 //
 // Usage: bench_sim_realtime_factor [sim_seconds=60]
 
@@ -18,6 +21,8 @@
 #include <cstdlib>
 #include <map>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "sim/simulation.hpp"
 
@@ -29,6 +34,7 @@ struct Result {
   std::size_t events = 0;
   std::map<std::string, int> kinds;
   double travelled_m = 0.0;
+  std::size_t sounds = 0;  // one-shot sound cues
 };
 
 // The scripted panel at sim time t (a 20 s cycle).
@@ -57,15 +63,24 @@ rise::sim::ControlInput script(double t) {
   return in;
 }
 
-Result run(const std::string& robot_file, const rise::sim::WorldDescription& world, double sim_seconds) {
-  rise::sim::Simulation sim(rise::sim::load_robot_description(robot_file), world);
+Result run(const std::vector<std::string>& robot_files, const rise::sim::WorldDescription& world,
+           double sim_seconds) {
+  std::vector<rise::sim::RobotSpec> specs;
+  for (std::size_t i = 0; i < robot_files.size(); ++i) {
+    const auto& start = world.robot_start_m;
+    specs.push_back(rise::sim::RobotSpec{"r" + std::to_string(i), rise::sim::load_robot_description(robot_files[i]),
+                                         rise::sim::RobotStart{{start[0], start[1] - 1.2 * static_cast<double>(i)},
+                                                               world.robot_start_yaw_rad}});
+  }
+  rise::sim::Simulation sim(specs, world);
   Result r;
   const auto steps = static_cast<long>(std::lround(sim_seconds / rise::sim::Simulation::kStepS));
   const auto start = std::chrono::steady_clock::now();
   for (long i = 0; i < steps; ++i) {
-    // The LCM adapter sets the input every step too.
-    sim.set_input(script(sim.time_s()));
+    // The LCM adapter sets the inputs every step too.
+    for (std::size_t k = 0; k < sim.robot_count(); ++k) sim.set_input(k, script(sim.time_s()));
     sim.step();
+    r.sounds += sim.take_sound_cues().size();
     for (const auto& e : sim.take_events()) {
       ++r.events;
       ++r.kinds[rise::sim::to_string(e.kind)];
@@ -91,13 +106,18 @@ int main(int argc, char** argv) {
   std::printf("sim real-time factor, building world, 1 ms step, one core, %.0f s simulated per robot\n", sim_seconds);
   std::printf("%-14s %10s %10s %10s %12s %8s %14s\n", "robot", "sim_s", "wall_s", "RTF", "steps/s", "events",
               "end_from_start_m");
-  for (const char* robot : {"tracked_eod", "skid4"}) {
-    const Result r = run(root + "/sim/robots/" + robot + ".yaml", world, sim_seconds);
-    std::printf("%-14s %10.1f %10.3f %9.1fx %12.0f %8zu %14.2f\n", robot, r.sim_s, r.wall_s, r.sim_s / r.wall_s,
+  const std::string tracked = root + "/sim/robots/tracked_eod.yaml", skid4 = root + "/sim/robots/skid4.yaml";
+  const std::pair<const char*, std::vector<std::string>> runs[] = {
+      {"tracked_eod", {tracked}}, {"skid4", {skid4}}, {"tracked+skid4", {tracked, skid4}}};
+  for (const auto& [label, files] : runs) {
+    const int64_t ode_before = rise::sim::ode_messages();
+    const Result r = run(files, world, sim_seconds);
+    std::printf("%-14s %10.1f %10.3f %9.1fx %12.0f %8zu %14.2f\n", label, r.sim_s, r.wall_s, r.sim_s / r.wall_s,
                 r.sim_s / rise::sim::Simulation::kStepS / r.wall_s, r.events, r.travelled_m);
     std::printf("%-14s", "");
     for (const auto& [kind, n] : r.kinds) std::printf(" %s×%d", kind.c_str(), n);
-    std::printf("\n");
+    std::printf(" sound one-shots×%zu; ODE diagnostics %lld\n", r.sounds,
+                static_cast<long long>(rise::sim::ode_messages() - ode_before));
   }
   std::printf("goal: RTF >= 20x; ODE diagnostics during the runs: %lld\n",
               static_cast<long long>(rise::sim::ode_messages()));

@@ -21,10 +21,10 @@ LaserScanner::LaserScanner(const LaserDescription& description, uint64_t seed) :
   }
 }
 
-LaserScan LaserScanner::scan(const Simulation& sim) {
+LaserScan LaserScanner::scan(const Simulation& sim, std::size_t robot) {
   LaserScan s;
   s.time_s = sim.time_s();
-  s.T_world_sensor = sim.T_world_base() * d_.mount.T_base_mount();
+  s.T_world_sensor = sim.T_world_base(robot) * d_.mount.T_base_mount();
   s.beams = d_.beams();
   s.lines = d_.lines();
   s.ranges_m.assign(directions_sensor_.size(), std::numeric_limits<float>::quiet_NaN());
@@ -34,7 +34,7 @@ LaserScan LaserScanner::scan(const Simulation& sim) {
   const Eigen::Matrix3d R = s.T_world_sensor.linear();
   for (std::size_t i = 0; i < directions_sensor_.size(); ++i) {
     const Eigen::Vector3d& dir = directions_sensor_[i];
-    double r = sim.cast_ray_m(origin, R * dir, d_.max_range_m);
+    double r = sim.cast_ray_m(origin, R * dir, d_.max_range_m, robot);
     if (!std::isfinite(r)) continue;
     if (d_.noise_m > 0.0) r += d_.noise_m * normal_(rng_);
     if (r < d_.min_range_m || r > d_.max_range_m) continue;

@@ -38,9 +38,10 @@ class LaserScanner {
  public:
   LaserScanner(const LaserDescription& description, uint64_t seed);
 
-  /// Scans from the robot's current true pose. Allocates (not for the
+  /// Scans from robot `robot`'s current true pose (the other robots are in
+  /// the scan, its own parts are not). Allocates (not for the
   /// cyclic path); never throws.
-  LaserScan scan(const Simulation& sim);
+  LaserScan scan(const Simulation& sim, std::size_t robot = 0);
   /// Unit ray directions in the sensor frame, lines × beams, line-major.
   const std::vector<Eigen::Vector3d>& directions_sensor() const { return directions_sensor_; }
   const LaserDescription& description() const { return d_; }

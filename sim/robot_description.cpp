@@ -134,6 +134,77 @@ SensorsDescription parse_sensors(const YamlReader& r, const YAML::Node& n) {
 }
 
 /// The URDF joint names listed at map[key].joints (four names).
+// sounds: {name: {source: ..., ...} | {on: ..., ...}, ...}, in file order.
+std::vector<SoundCueDescription> parse_sounds(const YamlReader& r, const YAML::Node& n, bool has_arm) {
+  if (!n.IsMap()) r.fail(n, "sounds", "expected a mapping of cue names to cues");
+  std::vector<SoundCueDescription> cues;
+  for (const auto& kv : n) {
+    SoundCueDescription c;
+    c.name = r.as<std::string>(kv.first, "sounds");
+    const std::string where = "sounds." + c.name;
+    const YAML::Node q = kv.second;
+    if (!q.IsMap()) r.fail(q, where, "expected a mapping with source (continuous) or on (one-shot)");
+    if (q["source"] && q["on"]) r.fail(q, where, "source (continuous) or on (one-shot), not both");
+    if (!q["source"] && !q["on"]) r.fail(q, where, "needs source (continuous) or on (one-shot)");
+    c.sample = q["sample"] ? r.as<std::string>(q["sample"], where + ".sample") : c.name;
+    if (c.sample.empty()) r.fail(q["sample"], where + ".sample", "must not be empty");
+    const auto unit_range = [&](const char* key, std::array<double, 2>& out, double hi) {
+      const YAML::Node v = q[key];
+      if (!v) return;
+      if (!v.IsSequence() || v.size() != 2) r.fail(v, where + "." + key, "expected [at rest, at full_at]");
+      for (std::size_t i = 0; i < 2; ++i) {
+        out[i] = r.as<double>(v[i], where + "." + key);
+        if (!(out[i] >= 0.0 && out[i] <= hi)) r.fail(v[i], where + "." + key, hi == 1.0 ? "must be in 0..1" : "must be in 0..4");
+      }
+    };
+    if (const YAML::Node src = q["source"]) {
+      r.only_keys(q, where, {"source", "full_at", "silent_below", "gain", "pitch", "sample"});
+      const auto name = r.as<std::string>(src, where + ".source");
+      if (name == "drive_speed") c.source = SoundSource::DriveSpeed;
+      else if (name == "arm_rate") c.source = SoundSource::ArmRate;
+      else if (name == "gripper_speed") c.source = SoundSource::GripperSpeed;
+      else r.fail(src, where + ".source", "expected drive_speed, arm_rate or gripper_speed");
+      if (c.source != SoundSource::DriveSpeed && !has_arm) r.fail(src, where + ".source", "the robot has no arm");
+      c.full_at = r.positive(q, "full_at", where, c.full_at);
+      c.silent_below = r.positive(q, "silent_below", where, c.silent_below, true);
+      if (c.silent_below >= c.full_at) r.fail(q["silent_below"], where + ".silent_below", "must be below full_at");
+      unit_range("gain", c.gain_range, 1.0);
+      unit_range("pitch", c.pitch_range, 4.0);
+      if (c.pitch_range[0] <= 0.0 || c.pitch_range[1] <= 0.0) r.fail(q["pitch"], where + ".pitch", "must be > 0");
+    } else {
+      r.only_keys(q, where, {"on", "button", "gain", "pitch", "gain_per_mps", "min_impact_mps", "sample"});
+      const YAML::Node on = q["on"];
+      const auto name = r.as<std::string>(on, where + ".on");
+      static const std::pair<const char*, SoundTrigger> kTriggers[] = {
+          {"collision_started", SoundTrigger::CollisionStarted}, {"joint_broken", SoundTrigger::JointBroken},
+          {"door_opened", SoundTrigger::DoorOpened},             {"door_closed", SoundTrigger::DoorClosed},
+          {"tipped_over", SoundTrigger::TippedOver},             {"stairs_climbed", SoundTrigger::StairsClimbed},
+          {"region_entered", SoundTrigger::RegionEntered},       {"button", SoundTrigger::Button}};
+      for (const auto& [key, trigger] : kTriggers)
+        if (name == key) c.trigger = trigger;
+      if (!c.trigger)
+        r.fail(on, where + ".on",
+               "expected collision_started, joint_broken, door_opened, door_closed, tipped_over, stairs_climbed, "
+               "region_entered or button");
+      if ((c.trigger == SoundTrigger::Button) != static_cast<bool>(q["button"]))
+        r.fail(q["button"] ? q["button"] : q, where + ".button",
+               c.trigger == SoundTrigger::Button ? "missing: which panel button" : "only with on: button");
+      if (q["button"]) c.button = r.as<std::string>(q["button"], where + ".button");
+      c.gain = r.positive(q, "gain", where, c.gain, true);
+      if (c.gain > 1.0) r.fail(q["gain"], where + ".gain", "must be in 0..1");
+      c.pitch = r.positive(q, "pitch", where, c.pitch);
+      if (c.pitch > 4.0) r.fail(q["pitch"], where + ".pitch", "must be in 0..4");
+      for (const char* key : {"gain_per_mps", "min_impact_mps"})
+        if (q[key] && c.trigger != SoundTrigger::CollisionStarted)
+          r.fail(q[key], where + "." + key, "only with on: collision_started");
+      c.gain_per_mps = r.positive(q, "gain_per_mps", where, c.gain_per_mps, true);
+      c.min_impact_mps = r.positive(q, "min_impact_mps", where, c.min_impact_mps, true);
+    }
+    cues.push_back(c);
+  }
+  return cues;
+}
+
 std::array<std::string, 4> joint_names(const YamlReader& r, const YAML::Node& map, const std::string& key) {
   const YAML::Node j = map["joints"];
   const std::string k = key + ".joints";
@@ -200,7 +271,8 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with robot, chassis, wheels, control");
-  r.only_keys(root, "", {"robot", "kind", "urdf", "chassis", "wheels", "tracks", "arm", "control", "sensors"});
+  r.only_keys(root, "", {"robot", "kind", "urdf", "chassis", "wheels", "tracks", "arm", "control", "sensors",
+                         "sounds"});
   RobotDescription d;
   d.file = file;
   if (!root["robot"]) r.fail(root, "robot", "missing");
@@ -340,7 +412,31 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
     d.control.arm = a;
   }
   if (const YAML::Node sensors = root["sensors"]) d.sensors = parse_sensors(r, sensors);
+  if (const YAML::Node sounds = root["sounds"]) d.sounds = parse_sounds(r, sounds, d.arm.has_value());
   return d;
+}
+
+const char* to_string(SoundSource source) {
+  switch (source) {
+    case SoundSource::DriveSpeed: return "drive_speed";
+    case SoundSource::ArmRate: return "arm_rate";
+    case SoundSource::GripperSpeed: return "gripper_speed";
+  }
+  return "unknown";
+}
+
+const char* to_string(SoundTrigger trigger) {
+  switch (trigger) {
+    case SoundTrigger::CollisionStarted: return "collision_started";
+    case SoundTrigger::JointBroken: return "joint_broken";
+    case SoundTrigger::DoorOpened: return "door_opened";
+    case SoundTrigger::DoorClosed: return "door_closed";
+    case SoundTrigger::TippedOver: return "tipped_over";
+    case SoundTrigger::StairsClimbed: return "stairs_climbed";
+    case SoundTrigger::RegionEntered: return "region_entered";
+    case SoundTrigger::Button: return "button";
+  }
+  return "unknown";
 }
 
 RobotDescription load_robot_description(const std::string& path) {

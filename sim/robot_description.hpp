@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "sim/sensor_description.hpp"
+#include "sim/sound_description.hpp"
 
 namespace rise::sim {
 
@@ -126,6 +127,7 @@ struct RobotDescription {
   std::optional<ArmDescription> arm;
   ControlMapping control;
   SensorsDescription sensors;  ///< optional `sensors` section
+  std::vector<SoundCueDescription> sounds;  ///< optional `sounds` section, in file order
 
   bool operator==(const RobotDescription&) const = default;
 };

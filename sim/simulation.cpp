@@ -10,6 +10,7 @@
 #include <limits>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 
 namespace rise::sim {
 namespace {
@@ -35,6 +36,7 @@ constexpr int kArmBreakSteps = 20;          // overload sustained this long brea
 constexpr double kArmJointDamage = 0.25;
 constexpr double kDoorGapM = 0.01;  // door bottom above the floor
 constexpr std::size_t kMaxPendingEvents = 4096;
+constexpr std::size_t kMaxPendingSounds = 1024;
 
 std::atomic<int64_t> g_ode_messages{0};
 
@@ -52,13 +54,14 @@ void init_ode_once() {
 }
 
 // Static: ground and everything that never moves; Door and Object are world
-// bodies; the rest belong to the robot.
+// bodies; the rest belong to a robot.
 enum class GeomKind { Ground, Obstacle, Door, Object, Chassis, Wheel, Track, Arm };
 struct GeomInfo {
   GeomKind kind;
-  std::string name;  ///< entity (world) or part (robot)
+  std::string name;  ///< entity (world) or part (robot; "<id>/<part>" with several robots)
   int side = 0;      ///< tracks: 0 left, 1 right
   bool loose = false;  ///< a door off its broken hinge: it meets the floor too
+  int robot = -1;    ///< robot parts: the robot's index
 };
 
 bool is_static(GeomKind k) { return k == GeomKind::Ground || k == GeomKind::Obstacle; }
@@ -190,7 +193,7 @@ ArmCommand map_arm_controls(const ControlMapping& mapping, const ControlInput& i
 struct Simulation::Impl {
   // A breakable joint: its load is watched every step.
   struct Breakable {
-    std::string owner;  // robot name or door name
+    std::string owner;  // robot id or door name
     std::string name;
     dJointID joint = nullptr;
     dBodyID child = nullptr;
@@ -200,6 +203,7 @@ struct Simulation::Impl {
     int break_steps = 1;
     int over_steps = 0;
     double damage = 0.0;  // added to the robot's damage when it breaks
+    int robot = -1;       // the robot whose joint it is; -1: a door's hinge
     bool broken() const { return joint == nullptr; }
   };
   struct DoorBody {
@@ -219,51 +223,73 @@ struct Simulation::Impl {
     std::size_t breakable = 0;
     bool slider = false;
   };
-
-  RobotDescription robot;
-  WorldDescription world_desc;
-  dWorldID world = nullptr;
-  dSpaceID space = nullptr;         // bodies: robot, doors, objects
-  dSpaceID static_space = nullptr;  // ground, ceiling, boxes, props, walls, stairs
-  dJointGroupID contacts = nullptr;
-  dBodyID chassis = nullptr;
-  std::array<dBodyID, 4> wheels{};
-  std::array<dJointID, 4> hinges{};
-  std::array<dJointFeedback, 4> feedback{};
-  std::array<double, 2> track_speed_mps{};
-  std::array<double, 2> track_travel_m{};
-  std::vector<dBodyID> robot_bodies;
-  std::vector<Breakable> breakables;  // addresses stay fixed after build (feedback pointers)
-  std::vector<DoorBody> doors;
-  std::vector<ObjectBody> objects;
-  std::vector<ArmJoint> arm_joints;  // yaw, pitch, elbow, gripper
-  dBodyID finger = nullptr;
-  std::vector<double> arm_efforts;
-  std::vector<std::unique_ptr<GeomInfo>> infos;
-  std::set<std::string> touching;
-  std::set<std::pair<std::string, std::string>> seen;          // robot part, entity: this step
+  // One robot: its bodies, its panel, its sensors and its own event state.
+  struct Robot {
+    std::string id;
+    RobotDescription desc;
+    RobotStart start;
+    dBodyID chassis = nullptr;
+    std::array<dBodyID, 4> wheels{};
+    std::array<dJointID, 4> hinges{};
+    std::array<dJointFeedback, 4> feedback{};  // ODE holds pointers: a Robot never moves
+    std::array<double, 2> track_speed_mps{};
+    std::array<double, 2> track_travel_m{};
+    std::vector<dBodyID> bodies;
+    std::vector<ArmJoint> arm_joints;  // yaw, pitch, elbow, gripper
+    dBodyID finger = nullptr;
+    std::vector<double> arm_efforts;
+    std::set<std::string> touching;
+    std::set<std::string> inside_regions;
+    std::set<std::string> climbed;
+    bool tipped = false;
+    double damage = 0.0;
+    ControlInput input;
+    DriveCommand command;
+    ArmCommand arm_command;
+    std::optional<Odometry> odometry;
+    std::optional<Imu> imu;
+    bool button_cues = false;              // the robot file has `on: button` cues
+    std::set<std::string> buttons_down;    // their buttons held in the last step
+  };
+  // Robot part (a) against a world entity or another robot's part (b).
+  struct Touch {
+    int robot_a = -1;
+    int robot_b = -1;  // -1: a world entity
+    double impact_mps = 0.0;  // the largest normal approach speed among its contacts this step
+  };
   struct ActiveCollision {
     int64_t started = 0;    // step of the first contact
     int64_t last_seen = 0;  // step of the latest contact
+    int robot_a = -1;
+    int robot_b = -1;
   };
-  std::map<std::pair<std::string, std::string>, ActiveCollision> active;
-  std::set<std::string> inside_regions;
-  std::set<std::string> climbed;
-  bool tipped = false;
-  double damage = 0.0;
+  using Pair = std::pair<std::string, std::string>;
+
+  std::vector<std::unique_ptr<Robot>> robots;
+  WorldDescription world_desc;
+  dWorldID world = nullptr;
+  dSpaceID space = nullptr;         // bodies: robots, doors, objects
+  dSpaceID static_space = nullptr;  // ground, ceiling, boxes, props, walls, stairs
+  dJointGroupID contacts = nullptr;
+  std::vector<Breakable> breakables;  // addresses stay fixed after build (feedback pointers)
+  std::vector<DoorBody> doors;
+  std::vector<ObjectBody> objects;
+  std::vector<std::unique_ptr<GeomInfo>> infos;
+  std::map<Pair, Touch> seen;  // this step
+  std::map<Pair, ActiveCollision> active;
   std::vector<SimEvent> events;
-  ControlInput input;
-  DriveCommand command;
-  ArmCommand arm_command;
+  std::vector<SoundCue> sounds;  // one-shots
   int64_t steps = 0;
   dGeomID ray = nullptr;  // in no space: the scanner's probe
-  std::optional<Odometry> odometry;
-  std::optional<Imu> imu;
 
-  dGeomID add_geom(dGeomID g, GeomKind kind, const std::string& name, int side = 0) {
-    infos.push_back(std::make_unique<GeomInfo>(GeomInfo{kind, name, side, false}));
+  dGeomID add_geom(dGeomID g, GeomKind kind, const std::string& name, int side = 0, int robot = -1) {
+    infos.push_back(std::make_unique<GeomInfo>(GeomInfo{kind, name, side, false, robot}));
     dGeomSetData(g, infos.back().get());
     return g;
+  }
+  // A robot part's geom, named "<id>/<part>" when the world holds several robots.
+  dGeomID add_part(dGeomID g, GeomKind kind, const Robot& r, int index, const std::string& part, int side = 0) {
+    return add_geom(g, kind, robots.size() > 1 ? r.id + "/" + part : part, side, index);
   }
 
   void add_static_box(const std::string& name, double cx, double cy, double cz, double sx, double sy, double sz,
@@ -282,9 +308,63 @@ struct Simulation::Impl {
     events.push_back(SimEvent{time_s(), kind, std::move(a), std::move(b), std::move(detail)});
   }
 
+  // The robot file's one-shot cues for `trigger` (button: that button; impact:
+  // the collision's approach speed).
+  void cue(const Robot& r, SoundTrigger trigger, const std::string& detail, double impact_mps = 0.0,
+           const std::string& button = {}) {
+    for (const auto& c : r.desc.sounds) {
+      if (c.trigger != trigger || (trigger == SoundTrigger::Button && c.button != button)) continue;
+      double gain = c.gain;
+      if (trigger == SoundTrigger::CollisionStarted) {
+        if (impact_mps < c.min_impact_mps) continue;
+        if (c.gain_per_mps > 0.0) gain = std::min(c.gain, c.gain_per_mps * impact_mps);
+      }
+      if (sounds.size() >= kMaxPendingSounds) return;
+      sounds.push_back(SoundCue{time_s(), r.id, c.name, c.sample, false, gain, c.pitch, detail});
+    }
+  }
+  // A door's cue goes to the robots touching the door, or, when none does,
+  // to every robot.
+  void door_cue(const std::string& door, SoundTrigger trigger, const std::string& detail) {
+    std::vector<bool> near(robots.size(), false);
+    bool any = false;
+    for (const auto& [key, c] : active) {
+      if (key.second != door || c.robot_a < 0) continue;
+      near[static_cast<std::size_t>(c.robot_a)] = true;
+      any = true;
+    }
+    for (std::size_t i = 0; i < robots.size(); ++i)
+      if (near[i] || !any) cue(*robots[i], trigger, detail);
+  }
+
   double time_s() const { return static_cast<double>(steps) * kStepS; }
 
-  void build() {
+  void build(std::vector<RobotSpec> specs) {
+    if (specs.empty()) throw std::invalid_argument("simulation: no robots");
+    std::set<std::string> ids;
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      auto& spec = specs[i];
+      if (spec.id.empty() || spec.id.find('/') != std::string::npos)
+        throw std::invalid_argument("simulation: robot " + std::to_string(i) + ": bad id '" + spec.id +
+                                    "' (needs one, without '/')");
+      if (!ids.insert(spec.id).second) throw std::invalid_argument("simulation: robot id '" + spec.id + "' twice");
+      auto r = std::make_unique<Robot>();
+      r->id = spec.id;
+      r->desc = std::move(spec.description);
+      if (spec.start) {
+        r->start = *spec.start;
+      } else if (i == 0) {
+        r->start = RobotStart{world_desc.robot_start_m, world_desc.robot_start_yaw_rad};
+      } else if (i - 1 < world_desc.robot_starts.size()) {
+        r->start = world_desc.robot_starts[i - 1];
+      } else {
+        throw std::invalid_argument("simulation: robot '" + spec.id + "': no start pose (the world has robot_start and " +
+                                    std::to_string(world_desc.robot_starts.size()) + " robot_starts)");
+      }
+      for (const auto& c : r->desc.sounds) r->button_cues = r->button_cues || c.trigger == SoundTrigger::Button;
+      robots.push_back(std::move(r));
+    }
+
     init_ode_once();
     world = dWorldCreate();
     dWorldSetGravity(world, 0, 0, -9.81);
@@ -299,73 +379,100 @@ struct Simulation::Impl {
     static_space = dSimpleSpaceCreate(nullptr);
     contacts = dJointGroupCreate(0);
     // Feedback pointers into breakables must stay valid.
-    breakables.reserve(world_desc.doors.size() + 8);
+    breakables.reserve(world_desc.doors.size() + 8 * robots.size());
 
     build_world();
-    if (robot.kind == RobotKind::Tracked) build_tracked();
-    else build_skid_steer();
-    if (robot.arm && robot.control.arm) build_arm();
-    place_robot();
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      Robot& r = *robots[i];
+      const int index = static_cast<int>(i);
+      if (r.desc.kind == RobotKind::Tracked) build_tracked(r, index);
+      else build_skid_steer(r, index);
+      if (r.desc.arm && r.desc.control.arm) build_arm(r, index);
+      place_robot(r);
+      // Separate noise streams, so that one sensor's draws never shift
+      // another's, nor one robot's another robot's (the first robot's
+      // streams are those of a one-robot world).
+      const uint64_t seed = r.desc.sensors.seed + 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(i);
+      const double gauge = r.desc.kind == RobotKind::Tracked ? r.desc.tracks.gauge_m : r.desc.wheels.track_m;
+      r.odometry.emplace(r.desc.sensors.odometry, gauge, r.start.xy_m, r.start.yaw_rad, seed * 2 + 1);
+      r.imu.emplace(r.desc.sensors.imu, Eigen::Vector3d(0, 0, -9.81), seed * 2 + 2);
+    }
     ray = dCreateRay(nullptr, 1.0);
     dGeomRaySetClosestHit(ray, 1);
-    // Separate noise streams, so that one sensor's draws never shift another's.
-    const uint64_t seed = robot.sensors.seed;
-    const double gauge = robot.kind == RobotKind::Tracked ? robot.tracks.gauge_m : robot.wheels.track_m;
-    odometry.emplace(robot.sensors.odometry, gauge, world_desc.robot_start_m, world_desc.robot_start_yaw_rad,
-                     seed * 2 + 1);
-    imu.emplace(robot.sensors.imu, Eigen::Vector3d(0, 0, -9.81), seed * 2 + 2);
   }
 
   struct RayHit {
     dGeomID ray;
     double range_m;
+    int own_robot;
   };
   static void ray_callback(void* data, dGeomID a, dGeomID b) {
     auto* hit = static_cast<RayHit*>(data);
     const dGeomID other = a == hit->ray ? b : a;
     const auto* info = static_cast<const GeomInfo*>(dGeomGetData(other));
-    if (!info || is_robot(info->kind)) return;
+    if (!info || (is_robot(info->kind) && info->robot == hit->own_robot)) return;
     dContactGeom c;
     if (dCollide(hit->ray, other, 1, &c, sizeof(dContactGeom)) > 0) hit->range_m = std::min(hit->range_m, c.depth);
   }
 
-  double cast_ray_m(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range_m) {
+  double cast_ray_m(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_range_m, std::size_t own_robot) {
     const double inf = std::numeric_limits<double>::infinity();
     if (!(max_range_m > 0.0)) return inf;
     dGeomRaySetLength(ray, max_range_m);
     dGeomRaySet(ray, o[0], o[1], o[2], d[0], d[1], d[2]);
-    RayHit hit{ray, inf};
+    RayHit hit{ray, inf, static_cast<int>(own_robot)};
     dSpaceCollide2(ray, reinterpret_cast<dGeomID>(static_space), &hit, &ray_callback);
     dSpaceCollide2(ray, reinterpret_cast<dGeomID>(space), &hit, &ray_callback);
     return hit.range_m <= max_range_m ? hit.range_m : inf;
   }
 
-  Eigen::Isometry3d T_world_base() const {
-    const dReal* p = dBodyGetPosition(chassis);
-    const dReal* q = dBodyGetQuaternion(chassis);
+  static Eigen::Isometry3d T_world_base(const Robot& r) {
+    const dReal* p = dBodyGetPosition(r.chassis);
+    const dReal* q = dBodyGetQuaternion(r.chassis);
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.translate(Eigen::Vector3d(p[0], p[1], p[2]));
     T.rotate(Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized());
     return T;
   }
 
-  void update_sensors() {
-    double left = 0.0, right = 0.0;
-    if (robot.kind == RobotKind::Tracked) {
-      left = track_speed_mps[0];
-      right = track_speed_mps[1];
-    } else {
-      // Wheel rim speeds, each side the mean of its two wheels (fl, fr, rl, rr).
-      const double r = robot.wheels.radius_m;
-      left = r * (dJointGetHingeAngleRate(hinges[0]) + dJointGetHingeAngleRate(hinges[2])) / 2;
-      right = r * (dJointGetHingeAngleRate(hinges[1]) + dJointGetHingeAngleRate(hinges[3])) / 2;
+  // Left and right belt speeds (tracks) or mean rim speeds of each side's
+  // wheels (fl, fr, rl, rr), m/s.
+  static std::array<double, 2> side_speeds_mps(const Robot& r) {
+    if (r.desc.kind == RobotKind::Tracked) return r.track_speed_mps;
+    const double radius = r.desc.wheels.radius_m;
+    return {radius * (dJointGetHingeAngleRate(r.hinges[0]) + dJointGetHingeAngleRate(r.hinges[2])) / 2,
+            radius * (dJointGetHingeAngleRate(r.hinges[1]) + dJointGetHingeAngleRate(r.hinges[3])) / 2};
+  }
+
+  void update_sensors(Robot& r) {
+    const auto [left, right] = side_speeds_mps(r);
+    r.odometry->update(left, right, kStepS);
+    const Eigen::Isometry3d T = T_world_base(r);
+    const dReal* v = dBodyGetLinearVel(r.chassis);
+    const dReal* w = dBodyGetAngularVel(r.chassis);
+    r.imu->update(T.linear(), Eigen::Vector3d(v[0], v[1], v[2]),
+                  T.linear().transpose() * Eigen::Vector3d(w[0], w[1], w[2]), kStepS);
+  }
+
+  // The value a continuous cue follows (sim/sound_description.hpp).
+  static double sound_source_value(const Robot& r, SoundSource source) {
+    switch (source) {
+      case SoundSource::DriveSpeed: {
+        const auto [left, right] = side_speeds_mps(r);
+        return (std::fabs(left) + std::fabs(right)) / 2;
+      }
+      case SoundSource::ArmRate: {
+        double rate = 0.0;
+        for (const auto& a : r.arm_joints)
+          if (a.joint && !a.slider) rate = std::max(rate, std::fabs(dJointGetHingeAngleRate(a.joint)));
+        return rate;
+      }
+      case SoundSource::GripperSpeed:
+        for (const auto& a : r.arm_joints)
+          if (a.joint && a.slider) return std::fabs(dJointGetSliderPositionRate(a.joint));
+        return 0.0;
     }
-    odometry->update(left, right, kStepS);
-    const Eigen::Isometry3d T = T_world_base();
-    const dReal* v = dBodyGetLinearVel(chassis);
-    const dReal* w = dBodyGetAngularVel(chassis);
-    imu->update(T.linear(), Eigen::Vector3d(v[0], v[1], v[2]), T.linear().transpose() * Eigen::Vector3d(w[0], w[1], w[2]),
-                kStepS);
+    return 0.0;
   }
 
   void build_world() {
@@ -439,22 +546,24 @@ struct Simulation::Impl {
     }
   }
 
-  void build_chassis(double chassis_z) {
-    const auto& c = robot.chassis;
-    chassis = dBodyCreate(world);
+  void build_chassis(Robot& r, int index, double chassis_z) {
+    const auto& c = r.desc.chassis;
+    r.chassis = dBodyCreate(world);
     dMass m;
     dMassSetBoxTotal(&m, c.mass_kg, c.size_m[0], c.size_m[1], c.size_m[2]);
-    dBodySetMass(chassis, &m);
-    dBodySetPosition(chassis, 0, 0, chassis_z);
-    dGeomSetBody(add_geom(dCreateBox(space, c.size_m[0], c.size_m[1], c.size_m[2]), GeomKind::Chassis, "chassis"),
-                 chassis);
-    robot_bodies.push_back(chassis);
+    dBodySetMass(r.chassis, &m);
+    dBodySetPosition(r.chassis, 0, 0, chassis_z);
+    dGeomSetBody(add_part(dCreateBox(space, c.size_m[0], c.size_m[1], c.size_m[2]), GeomKind::Chassis, r, index, "chassis"),
+                 r.chassis);
+    r.bodies.push_back(r.chassis);
   }
 
-  void build_skid_steer() {
-    const auto& c = robot.chassis;
-    const auto& w = robot.wheels;
-    build_chassis(c.clearance_m + c.size_m[2] / 2);
+  void build_skid_steer(Robot& r, int index) {
+    const auto& c = r.desc.chassis;
+    const auto& w = r.desc.wheels;
+    auto& wheels = r.wheels;
+    auto& hinges = r.hinges;
+    build_chassis(r, index, c.clearance_m + c.size_m[2] / 2);
     const double xs[4] = {w.wheelbase_m / 2, w.wheelbase_m / 2, -w.wheelbase_m / 2, -w.wheelbase_m / 2};
     const double ys[4] = {w.track_m / 2, -w.track_m / 2, w.track_m / 2, -w.track_m / 2};
     dMatrix3 R;
@@ -466,27 +575,27 @@ struct Simulation::Impl {
       dBodySetMass(wheels[i], &wm);
       dBodySetPosition(wheels[i], xs[i], ys[i], w.radius_m);
       dBodySetRotation(wheels[i], R);
-      dGeomSetBody(add_geom(dCreateCylinder(space, w.radius_m, w.width_m), GeomKind::Wheel, kWheelNames[i]),
+      dGeomSetBody(add_part(dCreateCylinder(space, w.radius_m, w.width_m), GeomKind::Wheel, r, index, kWheelNames[i]),
                    wheels[i]);
-      robot_bodies.push_back(wheels[i]);
+      r.bodies.push_back(wheels[i]);
       hinges[i] = dJointCreateHinge(world, nullptr);
-      dJointAttach(hinges[i], chassis, wheels[i]);
+      dJointAttach(hinges[i], r.chassis, wheels[i]);
       dJointSetHingeAnchor(hinges[i], xs[i], ys[i], w.radius_m);
       // Axis along -y: a positive motor speed rolls the robot forward (+x).
       dJointSetHingeAxis(hinges[i], 0, -1, 0);
       dJointSetHingeParam(hinges[i], dParamFMax, w.max_torque_nm);
       dJointSetHingeParam(hinges[i], dParamVel, 0.0);
-      dJointSetFeedback(hinges[i], &feedback[i]);
+      dJointSetFeedback(hinges[i], &r.feedback[i]);
     }
   }
 
   // Tracks are geoms of the chassis body (no track joints): their contacts
   // carry the track speed as surface motion.
-  void build_tracked() {
-    const auto& c = robot.chassis;
-    const auto& t = robot.tracks;
+  void build_tracked(Robot& r, int index) {
+    const auto& c = r.desc.chassis;
+    const auto& t = r.desc.tracks;
     const double chassis_z = c.clearance_m + c.size_m[2] / 2;
-    build_chassis(chassis_z);
+    build_chassis(r, index, chassis_z);
     dMatrix3 along_x;  // capsule axis (z) along the body's x
     dRFromAxisAndAngle(along_x, 0, 1, 0, M_PI / 2);
     dMatrix3 rising;  // capsule axis along the front run, rising at approach_rad
@@ -499,15 +608,17 @@ struct Simulation::Impl {
       // the centre, where the loads balance.
       const double segment = t.length_m / kTrackSegments;
       for (int k = 0; k < kTrackSegments; ++k) {
-        dGeomID bottom = add_geom(dCreateCapsule(space, t.radius_m, segment), GeomKind::Track, kTrackNames[side], side);
-        dGeomSetBody(bottom, chassis);
+        dGeomID bottom =
+            add_part(dCreateCapsule(space, t.radius_m, segment), GeomKind::Track, r, index, kTrackNames[side], side);
+        dGeomSetBody(bottom, r.chassis);
         dGeomSetOffsetPosition(bottom, -t.length_m / 2 + (k + 0.5) * segment, y, t.radius_m - chassis_z);
         dGeomSetOffsetRotation(bottom, along_x);
       }
       if (t.approach_length_m > 0) {
         dGeomID front =
-            add_geom(dCreateCapsule(space, t.radius_m, t.approach_length_m), GeomKind::Track, kTrackNames[side], side);
-        dGeomSetBody(front, chassis);
+            add_part(dCreateCapsule(space, t.radius_m, t.approach_length_m), GeomKind::Track, r, index,
+                     kTrackNames[side], side);
+        dGeomSetBody(front, r.chassis);
         // Starts one radius up the run, so that at rest only the bottom run
         // bears on flat ground (the load spreads over the whole track).
         const double from = t.radius_m + t.approach_length_m / 2;
@@ -518,7 +629,7 @@ struct Simulation::Impl {
     }
   }
 
-  dBodyID link_body(const std::string& name, double mass_kg, double sx, double sy, double sz, const double pos[3],
+  dBodyID link_body(Robot& r, int index, const std::string& name, double mass_kg, double sx, double sy, double sz, const double pos[3],
                     double pitch_up_rad) {
     dBodyID b = dBodyCreate(world);
     dMass m;
@@ -528,14 +639,15 @@ struct Simulation::Impl {
     dMatrix3 R;
     dRFromAxisAndAngle(R, 0, 1, 0, -pitch_up_rad);
     dBodySetRotation(b, R);
-    dGeomSetBody(add_geom(dCreateBox(space, sx, sy, sz), GeomKind::Arm, name), b);
-    robot_bodies.push_back(b);
+    dGeomSetBody(add_part(dCreateBox(space, sx, sy, sz), GeomKind::Arm, r, index, name), b);
+    r.bodies.push_back(b);
     return b;
   }
 
-  void add_arm_joint(const std::string& name, dJointID j, dBodyID child, double break_nm) {
+  void add_arm_joint(Robot& r, int index, const std::string& name, dJointID j, dBodyID child, double break_nm) {
     Breakable b;
-    b.owner = robot.name;
+    b.owner = r.id;
+    b.robot = index;
     b.name = name;
     b.joint = j;
     b.child = child;
@@ -547,55 +659,56 @@ struct Simulation::Impl {
     a.breakable = breakables.size();
     breakables.push_back(b);
     dJointSetFeedback(breakables.back().joint, &breakables.back().feedback);
-    arm_joints.push_back(a);
+    r.arm_joints.push_back(a);
   }
 
-  void build_arm() {
-    const ArmDescription& a = *robot.arm;
-    const ArmMapping& m = *robot.control.arm;
-    const auto& c = robot.chassis;
+  void build_arm(Robot& r, int index) {
+    const ArmDescription& a = *r.desc.arm;
+    const ArmMapping& m = *r.desc.control.arm;
+    const auto& c = r.desc.chassis;
+    auto& arm_joints = r.arm_joints;
     const double top = c.clearance_m + c.size_m[2];
     const double w = a.link_width_m;
     const double turret_h = 0.08;
     const double base[3] = {a.mount_m[0], a.mount_m[1], top + turret_h / 2};
-    dBodyID turret = link_body("arm_turret", a.link_mass_kg, 0.14, 0.14, turret_h, base, 0.0);
+    dBodyID turret = link_body(r, index, "arm_turret", a.link_mass_kg, 0.14, 0.14, turret_h, base, 0.0);
     const double shoulder[3] = {a.mount_m[0], a.mount_m[1], top + turret_h};
     const double up = M_PI / 4;
     const double upper_c[3] = {shoulder[0] + std::cos(up) * a.upper_length_m / 2, shoulder[1],
                                shoulder[2] + std::sin(up) * a.upper_length_m / 2};
-    dBodyID upper = link_body("arm_upper", a.link_mass_kg, a.upper_length_m, w, w, upper_c, up);
+    dBodyID upper = link_body(r, index, "arm_upper", a.link_mass_kg, a.upper_length_m, w, w, upper_c, up);
     const double elbow[3] = {shoulder[0] + std::cos(up) * a.upper_length_m, shoulder[1],
                              shoulder[2] + std::sin(up) * a.upper_length_m};
     const double fore_c[3] = {elbow[0] + a.forearm_length_m / 2, elbow[1], elbow[2]};
-    dBodyID fore = link_body("arm_forearm", a.link_mass_kg, a.forearm_length_m, w, w, fore_c, 0.0);
+    dBodyID fore = link_body(r, index, "arm_forearm", a.link_mass_kg, a.forearm_length_m, w, w, fore_c, 0.0);
     // The fixed jaw is a second geom of the forearm at its tip, hanging down.
     const double jaw_h = 0.12;
-    dGeomID jaw = add_geom(dCreateBox(space, 0.03, 0.02, jaw_h), GeomKind::Arm, "gripper_jaw");
+    dGeomID jaw = add_part(dCreateBox(space, 0.03, 0.02, jaw_h), GeomKind::Arm, r, index, "gripper_jaw");
     dGeomSetBody(jaw, fore);
     dGeomSetOffsetPosition(jaw, a.forearm_length_m / 2, -a.gripper_stroke_m / 2, -jaw_h / 2);
     const double finger_c[3] = {fore_c[0] + a.forearm_length_m / 2, elbow[1] + a.gripper_stroke_m / 2,
                                 elbow[2] - jaw_h / 2};
-    finger = link_body("gripper_finger", 0.3, 0.03, 0.02, jaw_h, finger_c, 0.0);
+    r.finger = link_body(r, index, "gripper_finger", 0.3, 0.03, 0.02, jaw_h, finger_c, 0.0);
 
     // Hinge axes: ODE's hinge angle is body1's rotation relative to body2
     // about the axis, so with the parent as body1 the child turns about
     // −axis for a positive angle: −z makes yaw counter-clockwise, +y makes
     // pitch raise the arm.
     dJointID yaw = dJointCreateHinge(world, nullptr);
-    dJointAttach(yaw, chassis, turret);
+    dJointAttach(yaw, r.chassis, turret);
     dJointSetHingeAnchor(yaw, base[0], base[1], top);
     dJointSetHingeAxis(yaw, 0, 0, -1);
-    add_arm_joint("shoulder_yaw", yaw, turret, m.joints[0].break_torque_nm);
+    add_arm_joint(r, index, "shoulder_yaw", yaw, turret, m.joints[0].break_torque_nm);
     dJointID pitch = dJointCreateHinge(world, nullptr);
     dJointAttach(pitch, turret, upper);
     dJointSetHingeAnchor(pitch, shoulder[0], shoulder[1], shoulder[2]);
     dJointSetHingeAxis(pitch, 0, 1, 0);
-    add_arm_joint("shoulder_pitch", pitch, upper, m.joints[1].break_torque_nm);
+    add_arm_joint(r, index, "shoulder_pitch", pitch, upper, m.joints[1].break_torque_nm);
     dJointID el = dJointCreateHinge(world, nullptr);
     dJointAttach(el, upper, fore);
     dJointSetHingeAnchor(el, elbow[0], elbow[1], elbow[2]);
     dJointSetHingeAxis(el, 0, 1, 0);
-    add_arm_joint("elbow_pitch", el, fore, m.joints[2].break_torque_nm);
+    add_arm_joint(r, index, "elbow_pitch", el, fore, m.joints[2].break_torque_nm);
     for (std::size_t i = 0; i < 3; ++i) {
       dJointID j = arm_joints[i].joint;
       dJointSetHingeParam(j, dParamLoStop, m.joints[i].min_rad);
@@ -605,28 +718,28 @@ struct Simulation::Impl {
     }
     // Gripper: position 0 = open; closing (negative) moves the finger to the jaw.
     dJointID grip = dJointCreateSlider(world, nullptr);
-    dJointAttach(grip, fore, finger);
+    dJointAttach(grip, fore, r.finger);
     dJointSetSliderAxis(grip, 0, 1, 0);
     dJointSetSliderParam(grip, dParamLoStop, -a.gripper_stroke_m);
     dJointSetSliderParam(grip, dParamHiStop, 0.0);
     dJointSetSliderParam(grip, dParamFMax, m.gripper_max_force_n);
     dJointSetSliderParam(grip, dParamVel, 0.0);
     // The gripper's slide is not a breakable joint: its force is capped by the motor.
-    add_arm_joint("gripper", grip, finger, std::numeric_limits<double>::infinity());
+    add_arm_joint(r, index, "gripper", grip, r.finger, std::numeric_limits<double>::infinity());
     arm_joints.back().slider = true;
-    arm_efforts.assign(arm_joints.size(), 0.0);
+    r.arm_efforts.assign(arm_joints.size(), 0.0);
   }
 
-  // Moves every robot body rigidly from the origin to the world's start pose
+  // Moves every body of the robot rigidly from the origin to its start pose
   // (joint anchors and axes are stored body-relative, so they follow).
-  void place_robot() {
-    const double yaw = world_desc.robot_start_yaw_rad;
-    const double tx = world_desc.robot_start_m[0], ty = world_desc.robot_start_m[1];
+  static void place_robot(Robot& r) {
+    const double yaw = r.start.yaw_rad;
+    const double tx = r.start.xy_m[0], ty = r.start.xy_m[1];
     if (yaw == 0.0 && tx == 0.0 && ty == 0.0) return;
     dMatrix3 Ryaw;
     dRFromAxisAndAngle(Ryaw, 0, 0, 1, yaw);
     const double c = std::cos(yaw), s = std::sin(yaw);
-    for (dBodyID b : robot_bodies) {
+    for (dBodyID b : r.bodies) {
       const dReal* p = dBodyGetPosition(b);
       dBodySetPosition(b, c * p[0] - s * p[1] + tx, s * p[0] + c * p[1] + ty, p[2]);
       dMatrix3 R;
@@ -637,13 +750,24 @@ struct Simulation::Impl {
 
   static void near_callback(void* data, dGeomID a, dGeomID b) { static_cast<Impl*>(data)->collide(a, b); }
 
+  // The speed (m/s) at which two geoms' bodies approach along the contact
+  // normal at the contact point (0 for two resting surfaces).
+  static double approach_speed_mps(const dContactGeom& c) {
+    dVector3 va{0, 0, 0, 0}, vb{0, 0, 0, 0};
+    if (dBodyID b1 = dGeomGetBody(c.g1)) dBodyGetPointVel(b1, c.pos[0], c.pos[1], c.pos[2], va);
+    if (dBodyID b2 = dGeomGetBody(c.g2)) dBodyGetPointVel(b2, c.pos[0], c.pos[1], c.pos[2], vb);
+    return std::fabs((va[0] - vb[0]) * c.normal[0] + (va[1] - vb[1]) * c.normal[1] + (va[2] - vb[2]) * c.normal[2]);
+  }
+
   void collide(dGeomID a, dGeomID b) {
     const auto* ia = static_cast<const GeomInfo*>(dGeomGetData(a));
     const auto* ib = static_cast<const GeomInfo*>(dGeomGetData(b));
     if (is_static(ia->kind) && is_static(ib->kind)) return;
-    if (is_robot(ia->kind) && is_robot(ib->kind)) return;  // the robot's own parts never collide
+    // A robot's own parts never collide; two robots do.
+    const bool robot_pair = is_robot(ia->kind) && is_robot(ib->kind);
+    if (robot_pair && ia->robot == ib->robot) return;
     // The door hangs in its frame just above the floor: it only meets the
-    // robot and objects (and the floor once it has come off its hinge).
+    // robots and objects (and the floor once it has come off its hinge).
     const auto door_vs_static = [](const GeomInfo* door, const GeomInfo* other) {
       return door->kind == GeomKind::Door && is_static(other->kind) &&
              !(door->loose && other->kind == GeomKind::Ground);
@@ -651,9 +775,15 @@ struct Simulation::Impl {
     if (door_vs_static(ia, ib) || door_vs_static(ib, ia)) return;
     const dBodyID ba = dGeomGetBody(a), bb = dGeomGetBody(b);
     if (ba && bb && dAreConnectedExcluding(ba, bb, dJointTypeContact)) return;
-    // The robot part goes first: g1 of every contact is the robot's, so the
-    // surface motion below is the track's own.
-    if (is_robot(ib->kind)) {
+    // A robot part goes first: g1 of every contact is a robot's, so the
+    // surface motion below is the track's own. Between two robots a track
+    // goes first, else the robot listed first.
+    bool swap = is_robot(ib->kind);
+    if (robot_pair) {
+      const bool track_a = ia->kind == GeomKind::Track, track_b = ib->kind == GeomKind::Track;
+      swap = track_a != track_b ? track_b : ib->robot < ia->robot;
+    }
+    if (swap) {
       std::swap(a, b);
       std::swap(ia, ib);
     }
@@ -663,15 +793,31 @@ struct Simulation::Impl {
     if (n <= 0) return;
     const bool robot_contact = is_robot(ia->kind);
     if (robot_contact && ib->kind != GeomKind::Ground) {
-      touching.insert(ib->name);
-      seen.emplace(ia->name, ib->name);
+      double impact = 0.0;
+      for (int i = 0; i < n; ++i) impact = std::max(impact, approach_speed_mps(contact[i].geom));
+      robots[static_cast<std::size_t>(ia->robot)]->touching.insert(ib->name);
+      if (robot_pair) robots[static_cast<std::size_t>(ib->robot)]->touching.insert(ia->name);
+      // Events name the first-listed robot's part first.
+      const bool ordered = !robot_pair || ia->robot < ib->robot;
+      const GeomInfo* first = ordered ? ia : ib;
+      const GeomInfo* second = ordered ? ib : ia;
+      Touch& t = seen[Pair(first->name, second->name)];
+      t.robot_a = first->robot;
+      t.robot_b = robot_pair ? second->robot : -1;
+      t.impact_mps = std::max(t.impact_mps, impact);
     }
 
+    const Robot* owner = robot_contact ? robots[static_cast<std::size_t>(ia->robot)].get() : nullptr;
     const double erp = kStepS * kContactKp / (kStepS * kContactKp + kContactKd);
     const double cfm = 1.0 / (kStepS * kContactKp + kContactKd);
     const bool on_ground = ib->kind == GeomKind::Ground;
-    const dReal* R = dBodyGetRotation(chassis);
-    const double forward[3] = {R[0], R[4], R[8]};  // chassis x axis in the world
+    double forward[3] = {1, 0, 0};  // the robot's chassis x axis in the world
+    if (owner) {
+      const dReal* R = dBodyGetRotation(owner->chassis);
+      forward[0] = R[0];
+      forward[1] = R[4];
+      forward[2] = R[8];
+    }
     for (int i = 0; i < n; ++i) {
       dSurfaceParameters& s = contact[i].surface;
       s.mode = dContactApprox1 | dContactSoftERP | dContactSoftCFM;
@@ -680,7 +826,8 @@ struct Simulation::Impl {
       s.soft_cfm = cfm;
       if (ia->kind == GeomKind::Wheel) {
         // Tyre friction is anisotropic: rolling direction along the chassis' x.
-        const double mu = on_ground ? std::min(robot.wheels.friction, world_desc.ground_friction) : kObstacleFriction;
+        const double mu =
+            on_ground ? std::min(owner->desc.wheels.friction, world_desc.ground_friction) : kObstacleFriction;
         s.mu = mu;
         s.mode |= dContactMu2 | dContactFDir1;
         s.mu2 = mu * kLateralFrictionRatio;
@@ -698,12 +845,12 @@ struct Simulation::Impl {
         double f[3] = {forward[0] - along * nrm[0], forward[1] - along * nrm[1], forward[2] - along * nrm[2]};
         const double len = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
         const double mu_ground = on_ground ? world_desc.ground_friction : 1.0;
-        s.mu = robot.tracks.friction * mu_ground;
+        s.mu = owner->desc.tracks.friction * mu_ground;
         if (len > 0.2) {  // a face square to the track (a wall ahead) gets plain friction
           s.mode |= dContactMu2 | dContactFDir1 | dContactMotion1;
-          s.mu2 = robot.tracks.lateral_friction * mu_ground;
+          s.mu2 = owner->desc.tracks.lateral_friction * mu_ground;
           for (int k = 0; k < 3; ++k) contact[i].fdir1[k] = f[k] / len;
-          s.motion1 = track_speed_mps[static_cast<std::size_t>(ia->side)];
+          s.motion1 = owner->track_speed_mps[static_cast<std::size_t>(ia->side)];
         }
       } else if (!robot_contact || on_ground) {
         s.mu = world_desc.ground_friction * kObstacleFriction * 2.0;
@@ -713,8 +860,11 @@ struct Simulation::Impl {
     }
   }
 
-  void apply_command() {
-    command = map_controls(robot.control, input);
+  void apply_command(Robot& r) {
+    const RobotDescription& robot = r.desc;
+    const ControlInput& input = r.input;
+    r.command = map_controls(robot.control, input);
+    const DriveCommand& command = r.command;
     if (robot.kind == RobotKind::Tracked) {
       const auto& t = robot.tracks;
       double left = command.linear_mps - command.angular_radps * t.gauge_m / 2;
@@ -726,7 +876,7 @@ struct Simulation::Impl {
         right *= t.max_speed_mps / peak;
       }
       if (!command.enabled) left = right = 0.0;  // brake: stopped belts hold the ground
-      track_speed_mps = {left, right};
+      r.track_speed_mps = {left, right};
     } else {
       const auto& w = robot.wheels;
       double left = (command.linear_mps - command.angular_radps * w.track_m / 2) / w.radius_m;
@@ -737,18 +887,33 @@ struct Simulation::Impl {
         right *= w.max_speed_radps / peak;
       }
       if (!command.enabled) left = right = 0.0;  // brake: the motors hold the wheels
-      for (std::size_t i = 0; i < 4; ++i) dJointSetHingeParam(hinges[i], dParamVel, (i % 2 == 0) ? left : right);
+      for (std::size_t i = 0; i < 4; ++i) dJointSetHingeParam(r.hinges[i], dParamVel, (i % 2 == 0) ? left : right);
     }
-    if (!arm_joints.empty()) {
-      arm_command = map_arm_controls(robot.control, input);
-      for (std::size_t i = 0; i < arm_joints.size(); ++i) {
-        dJointID j = arm_joints[i].joint;
+    if (!r.arm_joints.empty()) {
+      r.arm_command = map_arm_controls(robot.control, input);
+      for (std::size_t i = 0; i < r.arm_joints.size(); ++i) {
+        dJointID j = r.arm_joints[i].joint;
         if (!j) continue;
-        if (arm_joints[i].slider) {
-          dJointSetSliderParam(j, dParamVel, arm_command.gripper_mps);
+        if (r.arm_joints[i].slider) {
+          dJointSetSliderParam(j, dParamVel, r.arm_command.gripper_mps);
         } else {
           // Joints are held (zero rate) whenever arm motion is not allowed.
-          dJointSetHingeParam(j, dParamVel, arm_command.enabled ? arm_command.joint_radps[i] : 0.0);
+          dJointSetHingeParam(j, dParamVel, r.arm_command.enabled ? r.arm_command.joint_radps[i] : 0.0);
+        }
+      }
+    }
+    if (r.button_cues) {
+      // A horn sounds on the press, from a panel that can be trusted.
+      const bool live = input.fresh && !input.failsafe;
+      for (const auto& c : robot.sounds) {
+        if (c.trigger != SoundTrigger::Button) continue;
+        const bool down = live && pressed(input, c.button);
+        const bool was = r.buttons_down.count(c.button) > 0;
+        if (down && !was) {
+          r.buttons_down.insert(c.button);
+          cue(r, SoundTrigger::Button, "button " + c.button, 0.0, c.button);
+        } else if (!down && was) {
+          r.buttons_down.erase(c.button);
         }
       }
     }
@@ -773,12 +938,16 @@ struct Simulation::Impl {
       if (b.over_steps >= b.break_steps) {
         dJointDestroy(b.joint);
         b.joint = nullptr;
-        for (auto& a : arm_joints)
-          if (&breakables[a.breakable] == &b) a.joint = nullptr;
         for (auto& d : doors)
           if (&breakables[d.hinge] == &b) d.info->loose = true;
-        damage = std::min(1.0, damage + b.damage);
         emit(SimEventKind::JointBroken, b.owner, b.name, newton_metres(load));
+        if (b.robot >= 0) {
+          Robot& r = *robots[static_cast<std::size_t>(b.robot)];
+          for (auto& a : r.arm_joints)
+            if (&breakables[a.breakable] == &b) a.joint = nullptr;
+          r.damage = std::min(1.0, r.damage + b.damage);
+          cue(r, SoundTrigger::JointBroken, "joint_broken " + b.name + " " + newton_metres(load));
+        }
       }
     }
   }
@@ -788,11 +957,16 @@ struct Simulation::Impl {
     // that a track rolling over step noses does not chatter.
     // A collision that lasts is reported again each second it goes on
     // (the seed's "touch continues"), detail = seconds since it started.
-    for (const auto& key : seen) {
+    for (const auto& [key, touch] : seen) {
       const auto it = active.find(key);
       if (it == active.end()) {
-        active.emplace(key, ActiveCollision{steps, steps});
-        emit(SimEventKind::CollisionStarted, key.first, key.second);
+        active.emplace(key, ActiveCollision{steps, steps, touch.robot_a, touch.robot_b});
+        char speed[32];
+        std::snprintf(speed, sizeof speed, "%.2f m/s", touch.impact_mps);
+        emit(SimEventKind::CollisionStarted, key.first, key.second, std::string("impact ") + speed);
+        const std::string detail = "collision_started " + key.first + " " + key.second + " " + speed;
+        for (const int ri : {touch.robot_a, touch.robot_b})
+          if (ri >= 0) cue(*robots[static_cast<std::size_t>(ri)], SoundTrigger::CollisionStarted, detail, touch.impact_mps);
       } else {
         it->second.last_seen = steps;
       }
@@ -819,24 +993,14 @@ struct Simulation::Impl {
       if (!d.open && angle > kDoorOpenRad) {
         d.open = true;
         emit(SimEventKind::DoorOpened, d.desc->name);
+        door_cue(d.desc->name, SoundTrigger::DoorOpened, "door_opened " + d.desc->name);
       } else if (d.open && angle < kDoorClosedRad) {
         d.open = false;
         emit(SimEventKind::DoorClosed, d.desc->name);
+        door_cue(d.desc->name, SoundTrigger::DoorClosed, "door_closed " + d.desc->name);
       }
     }
-    const dReal* p = dBodyGetPosition(chassis);
-    for (const auto& r : world_desc.regions) {
-      bool inside = true;
-      for (std::size_t k = 0; k < 3; ++k) inside = inside && p[k] >= r.min_m[k] && p[k] <= r.max_m[k];
-      const bool was = inside_regions.count(r.name) > 0;
-      if (inside && !was) {
-        inside_regions.insert(r.name);
-        emit(SimEventKind::RegionEntered, robot.name, r.name);
-      } else if (!inside && was) {
-        inside_regions.erase(r.name);
-        emit(SimEventKind::RegionLeft, robot.name, r.name);
-      }
-    }
+    for (auto& r : robots) update_robot_events(*r);
     for (auto& o : objects) {
       if (o.moved) continue;
       const dReal* q = dBodyGetPosition(o.body);
@@ -848,6 +1012,24 @@ struct Simulation::Impl {
         emit(SimEventKind::ObjectMoved, o.desc->name, {}, "moved " + std::to_string(static_cast<int>(d * 100)) + " cm");
       }
     }
+  }
+
+  // Regions, stairs and tip-over: each robot's own.
+  void update_robot_events(Robot& r) {
+    const dReal* p = dBodyGetPosition(r.chassis);
+    for (const auto& g : world_desc.regions) {
+      bool inside = true;
+      for (std::size_t k = 0; k < 3; ++k) inside = inside && p[k] >= g.min_m[k] && p[k] <= g.max_m[k];
+      const bool was = r.inside_regions.count(g.name) > 0;
+      if (inside && !was) {
+        r.inside_regions.insert(g.name);
+        emit(SimEventKind::RegionEntered, r.id, g.name);
+        cue(r, SoundTrigger::RegionEntered, "region_entered " + g.name);
+      } else if (!inside && was) {
+        r.inside_regions.erase(g.name);
+        emit(SimEventKind::RegionLeft, r.id, g.name);
+      }
+    }
     for (const auto& s : world_desc.stairs) {
       // Base position in the stairs' frame: along the climb, across it.
       const double dx = p[0] - s.start_m[0], dy = p[1] - s.start_m[1];
@@ -856,28 +1038,33 @@ struct Simulation::Impl {
       const double landing0 = s.steps * s.tread_m;
       const bool on = p[2] > s.landing_height_m() && along >= landing0 && along <= landing0 + s.landing_m &&
                       std::fabs(across) <= s.width_m / 2;
-      const bool was = climbed.count(s.name) > 0;
+      const bool was = r.climbed.count(s.name) > 0;
       if (on && !was) {
-        climbed.insert(s.name);
-        emit(SimEventKind::StairsClimbed, robot.name, s.name);
+        r.climbed.insert(s.name);
+        emit(SimEventKind::StairsClimbed, r.id, s.name);
+        cue(r, SoundTrigger::StairsClimbed, "stairs_climbed " + s.name);
       } else if (!on && was && p[2] < s.landing_height_m()) {
-        climbed.erase(s.name);  // back down: climbing again counts again
+        r.climbed.erase(s.name);  // back down: climbing again counts again
       }
     }
-    const dReal* R = dBodyGetRotation(chassis);
+    const dReal* R = dBodyGetRotation(r.chassis);
     const double up = R[10];  // world z of the base's z axis
-    if (!tipped && up < kTipCos) {
-      tipped = true;
+    if (!r.tipped && up < kTipCos) {
+      r.tipped = true;
       const auto tilt_deg = static_cast<int>(std::acos(std::clamp(up, -1.0, 1.0)) * 180.0 / M_PI);
-      emit(SimEventKind::TippedOver, robot.name, {}, "tilt " + std::to_string(tilt_deg) + "°");
-    } else if (tipped && up > kUprightCos) {
-      tipped = false;
+      const std::string tilt = "tilt " + std::to_string(tilt_deg) + "°";
+      emit(SimEventKind::TippedOver, r.id, {}, tilt);
+      cue(r, SoundTrigger::TippedOver, "tipped_over " + tilt);
+    } else if (r.tipped && up > kUprightCos) {
+      r.tipped = false;
     }
   }
 
   void step() {
-    apply_command();
-    touching.clear();
+    for (auto& r : robots) {
+      apply_command(*r);
+      r->touching.clear();
+    }
     seen.clear();
     dSpaceCollide(space, this, &near_callback);
     dSpaceCollide2(reinterpret_cast<dGeomID>(space), reinterpret_cast<dGeomID>(static_space), this, &near_callback);
@@ -888,21 +1075,24 @@ struct Simulation::Impl {
     dWorldStep(world, kStepS);
     dJointGroupEmpty(contacts);
     ++steps;
-    for (std::size_t i = 0; i < 2; ++i) track_travel_m[i] += track_speed_mps[i] * kStepS;
-    for (std::size_t i = 0; i < arm_joints.size(); ++i) {
-      const Breakable& b = breakables[arm_joints[i].breakable];
-      if (!arm_joints[i].joint) {
-        arm_efforts[i] = 0.0;
-        continue;
+    for (auto& rp : robots) {
+      Robot& r = *rp;
+      for (std::size_t i = 0; i < 2; ++i) r.track_travel_m[i] += r.track_speed_mps[i] * kStepS;
+      for (std::size_t i = 0; i < r.arm_joints.size(); ++i) {
+        const Breakable& b = breakables[r.arm_joints[i].breakable];
+        if (!r.arm_joints[i].joint) {
+          r.arm_efforts[i] = 0.0;
+          continue;
+        }
+        // Motor + limit effort along the joint axis, on the child.
+        dVector3 axis;
+        const dReal* t = r.arm_joints[i].slider ? b.feedback.f2 : b.feedback.t2;
+        if (r.arm_joints[i].slider) dJointGetSliderAxis(r.arm_joints[i].joint, axis);
+        else dJointGetHingeAxis(r.arm_joints[i].joint, axis);
+        r.arm_efforts[i] = t[0] * axis[0] + t[1] * axis[1] + t[2] * axis[2];
       }
-      // Motor + limit effort along the joint axis, on the child.
-      dVector3 axis;
-      const dReal* t = arm_joints[i].slider ? b.feedback.f2 : b.feedback.t2;
-      if (arm_joints[i].slider) dJointGetSliderAxis(arm_joints[i].joint, axis);
-      else dJointGetHingeAxis(arm_joints[i].joint, axis);
-      arm_efforts[i] = t[0] * axis[0] + t[1] * axis[1] + t[2] * axis[2];
+      update_sensors(r);
     }
-    update_sensors();
     check_breakables();
     update_events();
   }
@@ -917,21 +1107,46 @@ struct Simulation::Impl {
 };
 
 Simulation::Simulation(RobotDescription robot, WorldDescription world) : impl_(std::make_unique<Impl>()) {
-  impl_->robot = std::move(robot);
+  std::vector<RobotSpec> specs(1);
+  specs[0].id = robot.name.empty() ? "robot" : robot.name;
+  specs[0].description = std::move(robot);
   impl_->world_desc = std::move(world);
-  impl_->build();
+  impl_->build(std::move(specs));
+}
+
+Simulation::Simulation(std::vector<RobotSpec> robots, WorldDescription world) : impl_(std::make_unique<Impl>()) {
+  impl_->world_desc = std::move(world);
+  impl_->build(std::move(robots));
 }
 
 Simulation::~Simulation() = default;
 
-void Simulation::set_input(const ControlInput& input) { impl_->input = input; }
+std::size_t Simulation::robot_count() const { return impl_->robots.size(); }
+const std::string& Simulation::robot_id(std::size_t robot) const { return impl_->robots.at(robot)->id; }
+std::size_t Simulation::robot_index(const std::string& id) const {
+  for (std::size_t i = 0; i < impl_->robots.size(); ++i)
+    if (impl_->robots[i]->id == id) return i;
+  throw std::out_of_range("simulation: no robot '" + id + "'");
+}
+
+void Simulation::set_input(const ControlInput& input) { impl_->robots.front()->input = input; }
+void Simulation::set_input(std::size_t robot, const ControlInput& input) {
+  if (robot < impl_->robots.size()) impl_->robots[robot]->input = input;
+}
 void Simulation::step() { impl_->step(); }
 double Simulation::time_s() const { return impl_->time_s(); }
-const RobotDescription& Simulation::robot() const { return impl_->robot; }
+const RobotDescription& Simulation::robot() const { return impl_->robots.front()->desc; }
+const RobotDescription& Simulation::robot(std::size_t robot) const { return impl_->robots.at(robot)->desc; }
 
 std::vector<SimEvent> Simulation::take_events() {
   std::vector<SimEvent> out;
   out.swap(impl_->events);
+  return out;
+}
+
+std::vector<SoundCue> Simulation::take_sound_cues() {
+  std::vector<SoundCue> out;
+  out.swap(impl_->sounds);
   return out;
 }
 
@@ -964,21 +1179,27 @@ std::array<double, 3> Simulation::object_position_m(const std::string& object) c
   return {nan, nan, nan};
 }
 
-Eigen::Isometry3d Simulation::T_world_base() const { return impl_->T_world_base(); }
+Eigen::Isometry3d Simulation::T_world_base(std::size_t robot) const {
+  return Impl::T_world_base(*impl_->robots[std::min(robot, impl_->robots.size() - 1)]);
+}
 
-std::optional<Eigen::Isometry3d> Simulation::T_world_camera(const std::string& camera) const {
-  for (const auto& c : impl_->robot.sensors.cameras)
-    if (c.name == camera) return impl_->T_world_base() * c.mount.T_base_mount();
+std::optional<Eigen::Isometry3d> Simulation::T_world_camera(const std::string& camera, std::size_t robot) const {
+  if (robot >= impl_->robots.size()) return std::nullopt;
+  const auto& r = *impl_->robots[robot];
+  for (const auto& c : r.desc.sensors.cameras)
+    if (c.name == camera) return Impl::T_world_base(r) * c.mount.T_base_mount();
   return std::nullopt;
 }
 
 double Simulation::cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
-                              double max_range_m) const {
-  return impl_->cast_ray_m(origin_world, direction_world, max_range_m);
+                              double max_range_m, std::size_t own_robot) const {
+  return impl_->cast_ray_m(origin_world, direction_world, max_range_m, own_robot);
 }
 
-RobotSnapshot Simulation::snapshot() const {
-  const Impl& s = *impl_;
+RobotSnapshot Simulation::snapshot() const { return snapshot(0); }
+
+RobotSnapshot Simulation::snapshot(std::size_t robot) const {
+  const Impl::Robot& s = *impl_->robots.at(robot);
   RobotSnapshot r;
   r.time_s = time_s();
   const dReal* p = dBodyGetPosition(s.chassis);
@@ -992,9 +1213,9 @@ RobotSnapshot Simulation::snapshot() const {
   dBodyVectorFromWorld(s.chassis, av[0], av[1], av[2], w);
   r.linear_velocity_mps = {v[0], v[1], v[2]};
   r.angular_velocity_radps = {w[0], w[1], w[2]};
-  if (s.robot.kind == RobotKind::Tracked) {
+  if (s.desc.kind == RobotKind::Tracked) {
     // Tracks as their end rollers: angle and rate of a roller of the track's radius.
-    const double radius = s.robot.tracks.radius_m;
+    const double radius = s.desc.tracks.radius_m;
     for (std::size_t i = 0; i < 2; ++i)
       r.wheels.push_back(WheelState{kTrackNames[i], s.track_travel_m[i] / radius, s.track_speed_mps[i] / radius, 0.0});
   } else {
@@ -1013,7 +1234,7 @@ RobotSnapshot Simulation::snapshot() const {
   for (std::size_t i = 0; i < s.arm_joints.size(); ++i) {
     const auto& a = s.arm_joints[i];
     JointState j;
-    j.name = s.breakables[a.breakable].name;
+    j.name = impl_->breakables[a.breakable].name;
     j.broken = a.joint == nullptr;
     if (!j.broken) {
       j.position = a.slider ? dJointGetSliderPosition(a.joint) : dJointGetHingeAngle(a.joint);
@@ -1035,6 +1256,18 @@ RobotSnapshot Simulation::snapshot() const {
   r.commanded_angular_radps = s.command.angular_radps;
   r.odometry = s.odometry->reading();
   r.imu = s.imu->reading();
+  for (const auto& c : s.desc.sounds) {
+    if (!c.source) continue;
+    // Linear from [0] at rest to [1] at full_at; silent at or below silent_below.
+    const double value = Impl::sound_source_value(s, *c.source);
+    const double x = std::min(1.0, value / c.full_at);
+    const bool audible = value > c.silent_below;
+    char detail[64];
+    std::snprintf(detail, sizeof detail, "%s %.3f", to_string(*c.source), value);
+    r.sounds.push_back(SoundCue{r.time_s, s.id, c.name, c.sample, true,
+                                audible ? c.gain_range[0] + (c.gain_range[1] - c.gain_range[0]) * x : 0.0,
+                                c.pitch_range[0] + (c.pitch_range[1] - c.pitch_range[0]) * x, detail});
+  }
   return r;
 }
 

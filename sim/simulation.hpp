@@ -1,10 +1,11 @@
 #pragma once
 
-// The ODE world with one robot (skid-steer or tracked, optionally with an
-// arm), stepped at a fixed 1 ms. Pure simulation: no clock, no I/O. The same
-// inputs give the same trajectory, bit for bit. Each step also records the
-// semantic events a scenario engine scores (collisions, doors, regions,
-// stairs, broken joints, tip-over).
+// The ODE world with one or several robots (skid-steer or tracked,
+// optionally with an arm), stepped at a fixed 1 ms. Pure simulation: no
+// clock, no I/O. The same inputs give the same trajectories, bit for bit.
+// Each step also records the semantic events a scenario engine scores
+// (collisions, doors, regions, stairs, broken joints, tip-over) and the sound
+// cues of the robot files' `sounds` sections.
 
 #include <Eigen/Geometry>
 
@@ -52,16 +53,16 @@ struct JointState {
 };
 
 enum class SimEventKind {
-  CollisionStarted,  ///< a = robot part, b = entity
-  CollisionStopped,  ///< a = robot part, b = entity (no contact for 50 ms)
+  CollisionStarted,  ///< a = robot part, b = entity (or the other robot's part); detail = impact speed
+  CollisionStopped,  ///< a = robot part, b = entity or the other robot's part (no contact for 50 ms)
   DoorOpened,        ///< a = door; |angle| > 10°
   DoorClosed,        ///< a = door; |angle| < 5° again
-  JointBroken,       ///< a = robot or door, b = joint; detail = load
-  RegionEntered,     ///< a = robot, b = region; base inside the box
-  RegionLeft,        ///< a = robot, b = region
+  JointBroken,       ///< a = robot id or door, b = joint; detail = load
+  RegionEntered,     ///< a = robot id, b = region; base inside the box
+  RegionLeft,        ///< a = robot id, b = region
   ObjectMoved,       ///< a = object; > 5 cm from its start (once)
-  StairsClimbed,     ///< a = robot, b = stairs; base above the landing, on it
-  TippedOver,        ///< a = robot; base z axis > 60° from vertical
+  StairsClimbed,     ///< a = robot id, b = stairs; base above the landing, on it
+  TippedOver,        ///< a = robot id; base z axis > 60° from vertical
   CollisionContinues,  ///< a = robot part, b = entity; each full second a collision lasts, detail "N s"
 };
 /// Stable snake_case name, e.g. "door_opened" (also the LCM `kind`).
@@ -74,6 +75,20 @@ struct SimEvent {
   std::string a;
   std::string b;
   std::string detail;
+};
+
+/// A sound for the player to play. Continuous cues are a robot's state
+/// (RobotSnapshot::sounds, every snapshot, silent ones with gain 0);
+/// one-shots come once, from Simulation::take_sound_cues().
+struct SoundCue {
+  double time_s = 0.0;
+  std::string robot;   ///< robot id
+  std::string name;    ///< the cue's key in the robot file's `sounds`
+  std::string sample;  ///< what to play
+  bool continuous = false;
+  double gain = 0.0;   ///< 0..1, 0 = silent
+  double pitch = 1.0;  ///< playback rate, 1 = as recorded
+  std::string detail;  ///< what drives or set it off, e.g. "drive_speed 0.62" or "collision_started chassis crate 0.42 m/s"
 };
 
 struct RobotSnapshot {
@@ -94,6 +109,7 @@ struct RobotSnapshot {
   double commanded_angular_radps = 0.0;
   OdometryReading odometry;  ///< from the tracks' belt speeds or the wheels' rates, with the robot file's noise
   ImuReading imu;            ///< the last step's sample
+  std::vector<SoundCue> sounds;  ///< the robot file's continuous cues, in file order
 
   double yaw_rad() const;
   double speed_mps() const;
@@ -120,44 +136,77 @@ struct ArmCommand {
 };
 ArmCommand map_arm_controls(const ControlMapping& mapping, const ControlInput& input);
 
+/// One robot of a Simulation.
+struct RobotSpec {
+  /// Names the robot in events and sound cues: unique, not empty, no '/'.
+  std::string id;
+  RobotDescription description;
+  /// Where it starts; default: the world's robot_start for the first robot,
+  /// robot_starts[i - 1] for the i-th (from 0) after it.
+  std::optional<RobotStart> start;
+};
+
 class Simulation {
  public:
   static constexpr double kStepS = 0.001;
 
+  /// One robot, id = its description's name, at the world's robot_start.
   Simulation(RobotDescription robot, WorldDescription world);
+  /// Several robots in one world (robot index = position in `robots`).
+  /// With more than one, the robots' parts are named "<id>/<part>" in
+  /// contacts and collision events (e.g. "r2/chassis"). Throws
+  /// std::invalid_argument for no robots, a bad or repeated id, or a robot
+  /// without a start pose. Not for the cyclic path.
+  Simulation(std::vector<RobotSpec> robots, WorldDescription world);
   ~Simulation();
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
 
+  std::size_t robot_count() const;
+  const std::string& robot_id(std::size_t robot) const;
+  /// The index of the robot `id`; throws std::out_of_range for an unknown id.
+  std::size_t robot_index(const std::string& id) const;
+
+  /// The first robot's panel input (the one-robot API).
   void set_input(const ControlInput& input);
+  /// Robot `robot`'s panel input; ignored for an index out of range. Safe
+  /// in the cyclic path.
+  void set_input(std::size_t robot, const ControlInput& input);
   /// Advances the world by one fixed step (1 ms).
   void step();
   double time_s() const;
-  RobotSnapshot snapshot() const;
-  const RobotDescription& robot() const;
+  RobotSnapshot snapshot() const;  ///< the first robot
+  RobotSnapshot snapshot(std::size_t robot) const;  ///< precondition: robot < robot_count()
+  const RobotDescription& robot() const;  ///< the first robot
+  const RobotDescription& robot(std::size_t robot) const;
   /// Events since the last call, oldest first; at most 4096 are kept
   /// between calls (later ones are dropped). Safe in the cyclic path: never
   /// throws.
   std::vector<SimEvent> take_events();
+  /// One-shot sound cues of all robots since the last call, oldest first;
+  /// at most 1024 are kept between calls. Safe in the cyclic path: never throws.
+  std::vector<SoundCue> take_sound_cues();
   /// Door angle (rad, + = swung about +z) or NaN for an unknown door.
   double door_angle_rad(const std::string& door) const;
   /// Centre of a movable object or a door panel (m), NaNs for an unknown name.
   std::array<double, 3> object_position_m(const std::string& object) const;
 
-  /// The true pose of the base frame (the chassis centre; x forward, y left,
-  /// z up) in the world. Safe in the cyclic path.
-  Eigen::Isometry3d T_world_base() const;
+  /// The true pose of robot `robot`'s base frame (the chassis centre; x
+  /// forward, y left, z up) in the world (an index past the end reads the
+  /// last robot). Safe in the cyclic path.
+  Eigen::Isometry3d T_world_base(std::size_t robot = 0) const;
   /// The true world pose of the robot file's camera `camera`
   /// (sensors.cameras), nullopt for an unknown name. Safe in the cyclic path.
-  std::optional<Eigen::Isometry3d> T_world_camera(const std::string& camera) const;
+  std::optional<Eigen::Isometry3d> T_world_camera(const std::string& camera, std::size_t robot = 0) const;
   /// Distance (m) from `origin_world` along the unit `direction_world` to the
   /// first surface of the world — ground, ceiling, static boxes, props,
-  /// walls, stairs, doors, objects; never the robot's own parts — or
-  /// +infinity when there is none within max_range_m. ODE ray casting
-  /// (dCreateRay + dCollide), the laser scanner's primitive. Safe in the cyclic path: no allocation,
-  /// never throws. It reuses one ray geom: not from two threads at once.
+  /// walls, stairs, doors, objects, the other robots; never robot
+  /// `own_robot`'s parts — or +infinity when there is none within
+  /// max_range_m. ODE ray casting (dCreateRay + dCollide), the laser
+  /// scanner's primitive. Safe in the cyclic path: no allocation, never
+  /// throws. It reuses one ray geom: not from two threads at once.
   double cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
-                    double max_range_m) const;
+                    double max_range_m, std::size_t own_robot = 0) const;
 
  private:
   struct Impl;

@@ -170,7 +170,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with world, ground, boxes, ...");
-  r.only_keys(root, "", {"world", "ground", "robot_start", "ceiling", "boxes", "props", "walls", "doors", "stairs", "objects", "regions"});
+  r.only_keys(root, "", {"world", "ground", "robot_start", "robot_starts", "ceiling", "boxes", "props", "walls", "doors", "stairs", "objects", "regions"});
   WorldDescription w;
   w.file = file;
   Names names;
@@ -183,6 +183,17 @@ WorldDescription parse_world_description(const std::string& text, const std::str
     r.only_keys(s, "robot_start", {"xy_m", "yaw_deg"});
     if (s["xy_m"]) w.robot_start_m = r.vector<2>(s, "xy_m", "robot_start");
     w.robot_start_yaw_rad = degrees(r, s, "yaw_deg", "robot_start", 0.0);
+  }
+  if (const YAML::Node starts = list(r, root, "robot_starts")) {
+    for (std::size_t i = 0; i < starts.size(); ++i) {
+      const YAML::Node s = starts[i];
+      const std::string where = item("robot_starts", i);
+      r.only_keys(s, where, {"xy_m", "yaw_deg"});
+      RobotStart start;
+      start.xy_m = r.vector<2>(s, "xy_m", where);
+      start.yaw_rad = degrees(r, s, "yaw_deg", where, 0.0);
+      w.robot_starts.push_back(start);
+    }
   }
   if (const YAML::Node boxes = list(r, root, "boxes")) {
     for (std::size_t i = 0; i < boxes.size(); ++i) {

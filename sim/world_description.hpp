@@ -112,6 +112,12 @@ struct Region {
   std::array<double, 3> max_m{};
 };
 
+/// Where a robot's base starts on the floor.
+struct RobotStart {
+  std::array<double, 2> xy_m{0, 0};
+  double yaw_rad = 0.0;
+};
+
 struct WorldDescription {
   std::string name = "yard";
   std::string file;
@@ -126,6 +132,9 @@ struct WorldDescription {
   std::vector<Region> regions;
   std::array<double, 2> robot_start_m{0, 0};  ///< where the robot's base starts
   double robot_start_yaw_rad = 0.0;
+  /// `robot_starts`: where the second, third, ... robot starts (the first
+  /// starts at robot_start).
+  std::vector<RobotStart> robot_starts;
 };
 
 /// The built-in yard: flat ground, a few boxes away from the start.

@@ -1,10 +1,13 @@
-// rise-sim: the ODE simulator as an LCM node. Subscribes the trainee's
-// PanelState, steps the world at a fixed 1 ms, publishes RobotState, the
-// console feedback (the speed display) and every simulation event
-// (SimEvent on rise/<id>/sim_event). With --scan-dir it also writes the
-// robot's 3D laser scans as PCD files with their true pose beside them.
-// SimControl on rise/<id>/sim_control pauses, resumes, single-steps and
-// resets the simulation; each handled command is answered with a SimEvent.
+// rise-sim: the ODE simulator as an LCM node, one world with one or several
+// robots. For each robot it subscribes the trainee's PanelState, and
+// publishes RobotState, the console feedback (the speed display), every
+// simulation event (SimEvent on rise/<id>/sim_event) and the robot file's
+// sound cues (SoundCue on rise/<id>/sound); the world steps at a fixed 1 ms.
+// With --scan-dir it also writes the first robot's 3D laser scans as PCD
+// files with their true pose beside them. SimControl on any robot's
+// rise/<id>/sim_control pauses, resumes, single-steps and resets the whole
+// world; each handled command is answered with a SimEvent on that robot's
+// sim_event.
 
 #include <CLI/CLI.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -15,9 +18,12 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <optional>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -26,6 +32,7 @@
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimControl.hpp"
 #include "rise_msgs/SimEvent.hpp"
+#include "rise_msgs/SoundCue.hpp"
 #include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
 
@@ -75,11 +82,56 @@ struct PanelListener {
 // take LCM messages while it steps.
 constexpr int32_t kMaxControlSteps = 3600 * 1000;
 
-// Commands in arrival order, applied by the main loop between steps.
+// Commands from every robot's control channel, in arrival order, applied by
+// the main loop between steps; each remembers the robot it came in for.
 struct ControlListener {
-  std::vector<rise_msgs::SimControl> pending;
-  void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::SimControl* m) { pending.push_back(*m); }
+  std::vector<std::pair<std::size_t, rise_msgs::SimControl>>* pending = nullptr;
+  std::size_t robot = 0;
+  void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::SimControl* m) {
+    pending->emplace_back(robot, *m);
+  }
 };
+
+// One --robot: ID=FILE[@x,y,yaw_deg] or FILE[@x,y,yaw_deg].
+struct RobotArg {
+  std::string id;  // empty: the plain FILE form
+  std::string file;
+  std::optional<rise::sim::RobotStart> start;
+};
+
+// Throws std::invalid_argument naming the flag's value and what is wrong.
+RobotArg parse_robot_arg(const std::string& text) {
+  RobotArg a;
+  std::string rest = text;
+  if (const auto eq = rest.find('='); eq != std::string::npos) {
+    a.id = rest.substr(0, eq);
+    rest = rest.substr(eq + 1);
+    if (a.id.empty() || a.id.find('/') != std::string::npos)
+      throw std::invalid_argument("--robot " + text + ": the id before '=' must be non-empty, without '/'");
+  }
+  if (const auto at = rest.rfind('@'); at != std::string::npos) {
+    const std::string pose = rest.substr(at + 1);
+    rest = rest.substr(0, at);
+    std::vector<double> v;
+    std::size_t from = 0;
+    while (true) {
+      const auto comma = pose.find(',', from);
+      const std::string part = pose.substr(from, comma == std::string::npos ? std::string::npos : comma - from);
+      char* end = nullptr;
+      const double x = std::strtod(part.c_str(), &end);
+      if (part.empty() || end != part.c_str() + part.size() || !std::isfinite(x)) v.clear();
+      else v.push_back(x);
+      if (v.empty() || comma == std::string::npos) break;
+      from = comma + 1;
+    }
+    if (v.size() != 2 && v.size() != 3)
+      throw std::invalid_argument("--robot " + text + ": start pose '" + pose + "': expected x,y or x,y,yaw_deg");
+    a.start = rise::sim::RobotStart{{v[0], v[1]}, v.size() == 3 ? v[2] * M_PI / 180.0 : 0.0};
+  }
+  if (rest.empty()) throw std::invalid_argument("--robot " + text + ": no robot file");
+  a.file = rest;
+  return a;
+}
 
 rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::string& robot_id) {
   rise_msgs::RobotState m;
@@ -114,6 +166,20 @@ rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::s
   return m;
 }
 
+rise_msgs::SoundCue to_message(const rise::sim::SoundCue& c) {
+  rise_msgs::SoundCue m;
+  m.utime = wall_us();
+  m.sim_time_s = c.time_s;
+  m.robot_id = c.robot;
+  m.name = c.name;
+  m.sample = c.sample;
+  m.continuous = c.continuous;
+  m.gain = static_cast<float>(c.gain);
+  m.pitch = static_cast<float>(c.pitch);
+  m.detail = c.detail;
+  return m;
+}
+
 rise_msgs::SimEvent to_message(const rise::sim::SimEvent& e, const std::string& robot_id) {
   rise_msgs::SimEvent m;
   m.utime = wall_us();
@@ -135,11 +201,26 @@ void log_event(const rise::sim::SimEvent& e) {
   spdlog::log(contact ? spdlog::level::debug : spdlog::level::info, "event {:.3f} s: {} {} {} {}", e.time_s,
               rise::sim::to_string(e.kind), e.a, e.b, e.detail);
 }
+// Whether event `e` names robot `id` (as the robot, or "<id>/<part>").
+bool names_robot(const rise::sim::SimEvent& e, const std::string& id) {
+  const std::string part = id + "/";
+  return e.a == id || e.b == id || e.a.rfind(part, 0) == 0 || e.b.rfind(part, 0) == 0;
+}
+
+// One robot of the world and its LCM side.
+struct Station {
+  std::string id;  // channel id: rise/<id>/...
+  rise::sim::RobotSpec spec;
+  std::string panel_channel, state_channel, feedback_channel, event_channel, control_channel, sound_channel;
+  PanelListener panel;
+  ControlListener control;
+  std::string last_reason = "-";
+};
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"rise-sim: ODE robot simulator driven by PanelState over LCM"};
-  std::string robot_file = "sim/robots/skid4.yaml";
+  std::vector<std::string> robot_args{"sim/robots/skid4.yaml"};
   std::string world_file;
   std::string id = "t1";
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
@@ -151,9 +232,14 @@ int main(int argc, char** argv) {
   std::string scan_dir;
   double scan_every_s = 0.0;
   std::string scan_format = "binary";
-  app.add_option("--robot", robot_file, "robot file (YAML)")->capture_default_str();
+  app.add_option("--robot", robot_args,
+                 "robot file (YAML), FILE[@x,y,yaw_deg] for one robot on rise/<--id>/..., or repeated "
+                 "ID=FILE[@x,y,yaw_deg] for several robots, each on rise/<ID>/... (start pose default: the world's "
+                 "robot_start, then robot_starts)")
+      ->capture_default_str();
   app.add_option("--world", world_file, "world file (YAML); default: the built-in yard");
-  app.add_option("--id", id, "trainee/station id used in channel names")->capture_default_str();
+  app.add_option("--id", id, "trainee/station id used in channel names (the plain --robot FILE form)")
+      ->capture_default_str();
   app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
   app.add_flag("--fast", fast, "run as fast as possible instead of real-time paced");
   app.add_option("--duration", duration_s, "stop after S simulated seconds (0: run until SIGINT/SIGTERM)");
@@ -162,7 +248,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
-  app.add_option("--scan-dir", scan_dir, "write a laser scan (scan_NNNN.pcd + .pose) here at start");
+  app.add_option("--scan-dir", scan_dir, "write the first robot's laser scan (scan_NNNN.pcd + .pose) here at start");
   app.add_option("--scan-every", scan_every_s, "and every S seconds of sim time (0: only at start)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--scan-format", scan_format, "PCD DATA: ascii or binary")
@@ -171,34 +257,64 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
 
-  rise::sim::RobotDescription robot;
+  std::vector<std::unique_ptr<Station>> stations;
   rise::sim::WorldDescription world = rise::sim::default_world();
   try {
-    robot = rise::sim::load_robot_description(source_file(robot_file));
+    std::vector<RobotArg> args;
+    for (const auto& text : robot_args) args.push_back(parse_robot_arg(text));
+    const bool plain = args.size() == 1 && args[0].id.empty();
+    for (auto& a : args) {
+      if (!plain && a.id.empty())
+        throw std::invalid_argument("--robot " + a.file + ": with several robots each is ID=FILE[@x,y,yaw_deg]");
+      auto st = std::make_unique<Station>();
+      st->id = plain ? id : a.id;
+      st->spec.description = rise::sim::load_robot_description(source_file(a.file));
+      // The one-robot form keeps the robot file's name as the robot's id in messages and events.
+      st->spec.id = plain ? st->spec.description.name : a.id;
+      st->spec.start = a.start;
+      for (const auto& other : stations)
+        if (other->id == st->id) throw std::invalid_argument("--robot " + a.id + "=...: id given twice");
+      stations.push_back(std::move(st));
+    }
     if (!world_file.empty()) world = rise::sim::load_world_description(source_file(world_file));
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  const auto specs = [&] {
+    std::vector<rise::sim::RobotSpec> out;
+    for (const auto& st : stations) out.push_back(st->spec);
+    return out;
+  };
 
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
     spdlog::error("cannot open LCM at {}", lcm_url);
     return 2;
   }
-  const std::string panel_channel = "rise/" + id + "/panel_state";
-  const std::string state_channel = "rise/" + id + "/robot_state";
-  const std::string feedback_channel = "rise/" + id + "/panel_feedback";
-  const std::string event_channel = "rise/" + id + "/sim_event";
-  PanelListener panel;
-  // Only the newest panel state matters to the physics; a short queue keeps
-  // a stalled sim from acting on old sticks.
-  lcm.subscribe(panel_channel, &PanelListener::on, &panel)->setQueueCapacity(8);
+  std::vector<std::pair<std::size_t, rise_msgs::SimControl>> pending_control;
+  for (std::size_t i = 0; i < stations.size(); ++i) {
+    Station& st = *stations[i];
+    const std::string prefix = "rise/" + st.id + "/";
+    st.panel_channel = prefix + "panel_state";
+    st.state_channel = prefix + "robot_state";
+    st.feedback_channel = prefix + "panel_feedback";
+    st.event_channel = prefix + "sim_event";
+    st.control_channel = prefix + "sim_control";
+    st.sound_channel = prefix + "sound";
+    // Only the newest panel state matters to the physics; a short queue keeps
+    // a stalled sim from acting on old sticks.
+    lcm.subscribe(st.panel_channel, &PanelListener::on, &st.panel)->setQueueCapacity(8);
+    st.control.pending = &pending_control;
+    st.control.robot = i;
+    lcm.subscribe(st.control_channel, &ControlListener::on, &st.control)->setQueueCapacity(64);
+  }
+  const rise::sim::RobotDescription& first_robot = stations.front()->spec.description;
 
   std::optional<rise::sim::LaserScanner> scanner;
   if (!scan_dir.empty()) {
-    if (!robot.sensors.laser) {
-      spdlog::error("--scan-dir: {} has no sensors.laser", robot.file);
+    if (!first_robot.sensors.laser) {
+      spdlog::error("--scan-dir: {} has no sensors.laser", first_robot.file);
       return 2;
     }
     std::error_code ec;
@@ -207,31 +323,37 @@ int main(int argc, char** argv) {
       spdlog::error("--scan-dir {}: {}", scan_dir, ec.message());
       return 2;
     }
-    scanner.emplace(*robot.sensors.laser, robot.sensors.seed);
+    scanner.emplace(*first_robot.sensors.laser, first_robot.sensors.seed);
   }
   int scans = 0;
   double next_scan_s = 0.0;
   const auto format = scan_format == "ascii" ? rise::sim::PcdFormat::Ascii : rise::sim::PcdFormat::Binary;
 
-  const std::string control_channel = "rise/" + id + "/sim_control";
-  ControlListener control;
-  lcm.subscribe(control_channel, &ControlListener::on, &control)->setQueueCapacity(64);
-
-  // Reset rebuilds the whole world and robot: a Simulation is not assignable.
+  // Reset rebuilds the whole world and robots: a Simulation is not assignable.
   std::optional<rise::sim::Simulation> sim;
-  sim.emplace(robot, world);
+  try {
+    sim.emplace(specs(), world);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  spdlog::info("rise-sim ready: robot '{}' ({}), world '{}', {} on {}, {} → {}, {}; control on {}", robot.name,
-               robot.file, world.name, fast ? "as fast as possible" : "real time", lcm_url, panel_channel,
-               state_channel, event_channel, control_channel);
+  spdlog::info("rise-sim ready: world '{}', {} robot(s), {} on {}", world.name, stations.size(),
+               fast ? "as fast as possible" : "real time", lcm_url);
+  for (std::size_t i = 0; i < stations.size(); ++i) {
+    const Station& st = *stations[i];
+    const auto T = sim->T_world_base(i);
+    spdlog::info("robot '{}' ({}) at ({:.2f}, {:.2f}): {} → {}, {}, {}; control on {}", st.spec.id,
+                 st.spec.description.file, T.translation().x(), T.translation().y(), st.panel_channel,
+                 st.state_channel, st.event_channel, st.sound_channel, st.control_channel);
+  }
 
   const int steps_per_state = std::max(1, static_cast<int>(std::lround(1.0 / (state_hz * rise::sim::Simulation::kStepS))));
   const int steps_per_feedback = 100;  // 10 Hz
   const auto start = std::chrono::steady_clock::now();
   const auto state_period = std::chrono::microseconds(static_cast<int64_t>(std::lround(1e6 / state_hz)));
   const auto timeout = std::chrono::milliseconds(panel_timeout_ms);
-  std::string last_reason = "-";
   int64_t step = 0;  // since start or the last reset
   // Real-time pacing restarts from here after a pause, step or reset.
   auto paced_from = start;
@@ -239,26 +361,45 @@ int main(int argc, char** argv) {
   bool paused = false;
   auto next_paused_state = start;
 
-  const auto publish_state = [&] {
-    const auto snap = sim->snapshot();
-    const auto msg = to_message(snap, robot.name);
-    lcm.publish(state_channel, &msg);
-    if (snap.stop_reason != last_reason) {
-      if (snap.motors_enabled) spdlog::info("motors enabled");
-      else spdlog::info("motors stopped: {}", snap.stop_reason);
-      last_reason = snap.stop_reason;
+  // Every robot's RobotState and continuous sound cues; feedback too when asked.
+  const auto publish_states = [&](bool feedback) {
+    for (std::size_t i = 0; i < stations.size(); ++i) {
+      Station& st = *stations[i];
+      const auto snap = sim->snapshot(i);
+      const auto msg = to_message(snap, st.spec.id);
+      lcm.publish(st.state_channel, &msg);
+      for (const auto& c : snap.sounds) {
+        const auto cue = to_message(c);
+        lcm.publish(st.sound_channel, &cue);
+      }
+      if (snap.stop_reason != st.last_reason) {
+        if (snap.motors_enabled) spdlog::info("{}: motors enabled", st.spec.id);
+        else spdlog::info("{}: motors stopped: {}", st.spec.id, snap.stop_reason);
+        st.last_reason = snap.stop_reason;
+      }
+      if (feedback) {
+        rise_msgs::PanelFeedback fb;
+        fb.utime = msg.utime;
+        fb.panel_id = "";
+        fb.num_leds = 0;  // the bridge owns power/fault/e-stop LEDs
+        fb.display_names = {"speed"};
+        fb.display_values = {static_cast<float>(snap.speed_mps())};
+        fb.num_displays = 1;
+        fb.buzzer = 0;
+        fb.rumble = 0.0f;
+        lcm.publish(st.feedback_channel, &fb);
+      }
     }
-    return std::make_pair(snap, msg.utime);
   };
 
-  // One 1 ms step with everything that hangs on it: scans, events, state.
+  // One 1 ms step with everything that hangs on it: scans, events, sounds, states.
   const auto advance = [&] {
     // Stop-and-go scanning: the whole scan at one instant of sim time.
     if (scanner && sim->time_s() >= next_scan_s - 1e-9) {
       char name[32];
       std::snprintf(name, sizeof name, "scan_%04d", scans++);
       const auto stem = (std::filesystem::path(scan_dir) / name).string();
-      const auto scan = scanner->scan(*sim);
+      const auto scan = scanner->scan(*sim, 0);
       try {
         rise::sim::write_scan(stem, scan, format);
         spdlog::info("scan {:.3f} s: {}.pcd, {} points", scan.time_s, stem, scan.points_sensor.size());
@@ -268,70 +409,72 @@ int main(int argc, char** argv) {
       next_scan_s = scan_every_s > 0 ? next_scan_s + scan_every_s : std::numeric_limits<double>::infinity();
     }
 
-    rise::sim::ControlInput input = panel.input;
-    input.fresh = panel.any && std::chrono::steady_clock::now() - panel.received <= timeout;
-    sim->set_input(input);
+    const auto now = std::chrono::steady_clock::now();
+    for (std::size_t i = 0; i < stations.size(); ++i) {
+      const PanelListener& panel = stations[i]->panel;
+      rise::sim::ControlInput input = panel.input;
+      input.fresh = panel.any && now - panel.received <= timeout;
+      sim->set_input(i, input);
+    }
     sim->step();
     ++step;
     for (const auto& e : sim->take_events()) {
       log_event(e);
-      const auto msg = to_message(e, robot.name);
-      lcm.publish(event_channel, &msg);
-    }
-
-    if (step % steps_per_state == 0) {
-      const auto [snap, utime] = publish_state();
-      if (step % steps_per_feedback == 0) {
-        rise_msgs::PanelFeedback fb;
-        fb.utime = utime;
-        fb.panel_id = "";
-        fb.num_leds = 0;  // the bridge owns power/fault/e-stop LEDs
-        fb.display_names = {"speed"};
-        fb.display_values = {static_cast<float>(snap.speed_mps())};
-        fb.num_displays = 1;
-        fb.buzzer = 0;
-        fb.rumble = 0.0f;
-        lcm.publish(feedback_channel, &fb);
+      // To the robots it names; world events (doors, objects) to all.
+      bool named = false;
+      for (const auto& st : stations) named = named || names_robot(e, st->spec.id);
+      for (const auto& st : stations) {
+        if (named && stations.size() > 1 && !names_robot(e, st->spec.id)) continue;
+        const auto msg = to_message(e, st->spec.id);
+        lcm.publish(st->event_channel, &msg);
       }
     }
+    for (const auto& c : sim->take_sound_cues()) {
+      const auto msg = to_message(c);
+      lcm.publish(stations[sim->robot_index(c.robot)]->sound_channel, &msg);
+    }
+    if (step % steps_per_state == 0) publish_states(step % steps_per_feedback == 0);
   };
 
-  const auto answer = [&](const rise_msgs::SimControl& c, const std::string& kind, const std::string& what) {
+  const auto answer = [&](std::size_t robot, const rise_msgs::SimControl& c, const std::string& kind,
+                          const std::string& what) {
+    const Station& st = *stations[robot];
     rise_msgs::SimEvent msg;
     msg.utime = wall_us();
     msg.sim_time_s = sim->time_s();
-    msg.robot_id = robot.name;
+    msg.robot_id = st.spec.id;
     msg.kind = kind;
     msg.a = c.issuer;
     msg.detail = "seq " + std::to_string(c.seq) + (what.empty() ? "" : ": " + what);
-    spdlog::info("sim_control {:.3f} s: {} from '{}' {}", msg.sim_time_s, kind, c.issuer, msg.detail);
-    lcm.publish(event_channel, &msg);
+    spdlog::info("sim_control {:.3f} s: {} from '{}' on {} {}", msg.sim_time_s, kind, c.issuer, st.control_channel,
+                 msg.detail);
+    lcm.publish(st.event_channel, &msg);
   };
 
-  const auto apply = [&](const rise_msgs::SimControl& c) {
+  const auto apply = [&](std::size_t robot, const rise_msgs::SimControl& c) {
     if (c.command == "pause") {
       paused = true;
       next_paused_state = std::chrono::steady_clock::now();
-      answer(c, "sim_paused", "");
+      answer(robot, c, "sim_paused", "");
     } else if (c.command == "resume") {
       paused = false;
-      answer(c, "sim_resumed", "");
+      answer(robot, c, "sim_resumed", "");
     } else if (c.command == "step" && c.steps >= 1 && c.steps <= kMaxControlSteps) {
       paused = true;
       for (int32_t i = 0; i < c.steps && !g_stop; ++i) advance();
-      answer(c, "sim_stepped", std::to_string(c.steps) + " steps of 1 ms");
-      publish_state();
+      answer(robot, c, "sim_stepped", std::to_string(c.steps) + " steps of 1 ms");
+      publish_states(false);
       next_paused_state = std::chrono::steady_clock::now() + state_period;
     } else if (c.command == "reset") {
-      sim.emplace(robot, world);
+      sim.emplace(specs(), world);
       step = 0;
       next_scan_s = 0.0;
-      last_reason = "-";
-      answer(c, "sim_reset", "world and robot rebuilt, robot at the start pose");
-      publish_state();
+      for (auto& st : stations) st->last_reason = "-";
+      answer(robot, c, "sim_reset", "world and robots rebuilt, robots at their start poses");
+      publish_states(false);
       next_paused_state = std::chrono::steady_clock::now() + state_period;
     } else {
-      answer(c, "sim_control_refused",
+      answer(robot, c, "sim_control_refused",
              "command '" + c.command + "' with steps " + std::to_string(c.steps) + ": expected pause, resume, step " +
                  "(steps 1.." + std::to_string(kMaxControlSteps) + ") or reset");
       return;
@@ -344,13 +487,13 @@ int main(int argc, char** argv) {
     // Take every waiting LCM message without blocking the physics.
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     while (::poll(&pfd, 1, 0) > 0) lcm.handle();
-    for (const auto& c : control.pending) apply(c);
-    control.pending.clear();
+    for (const auto& [robot, c] : pending_control) apply(robot, c);
+    pending_control.clear();
 
     if (paused) {
       // No stepping; RobotState still goes out, with the same sim time.
       if (std::chrono::steady_clock::now() >= next_paused_state) {
-        publish_state();
+        publish_states(false);
         next_paused_state += state_period;
       }
       ::poll(&pfd, 1, 1);
@@ -361,7 +504,9 @@ int main(int argc, char** argv) {
     if (!fast) std::this_thread::sleep_until(paced_from + std::chrono::microseconds(paced_steps * 1000));
   }
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} panel states", sim->time_s(),
-               wall_s, wall_s > 0 ? sim->time_s() / wall_s : 0.0, panel.count);
+  int64_t panel_states = 0;
+  for (const auto& st : stations) panel_states += st->panel.count;
+  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} robot(s), {} panel states",
+               sim->time_s(), wall_s, wall_s > 0 ? sim->time_s() / wall_s : 0.0, stations.size(), panel_states);
   return 0;
 }
