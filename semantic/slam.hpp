@@ -19,7 +19,13 @@
 namespace rise::semantic {
 
 struct SlamSettings {
-  IcpSettings icp;                  ///< for the sequential and the loop matches
+  /// For the sequential and the loop matches; point-to-plane, as indoor
+  /// scans are mostly planes (walls, floor, ceiling).
+  IcpSettings icp = [] {
+    IcpSettings s;
+    s.metric = IcpMetric::PointToPlane;
+    return s;
+  }();
   double scan_voxel_m = 0.05;       ///< each scan is voxel-filtered to this for matching; 0: not
   int normals_k = 10;               ///< neighbours per normal (point-to-plane ICP only)
   int map_scans = 3;                ///< scan i is matched onto the merged scans i-k .. i-1

@@ -1,0 +1,230 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "semantic/slam.hpp"
+#include "sim/simulation.hpp"
+
+using namespace rise::semantic;
+
+namespace {
+const std::string kTracked = std::string(RISE_SOURCE_DIR) + "/sim/robots/tracked_eod.yaml";
+const std::string kBuilding = std::string(RISE_SOURCE_DIR) + "/sim/worlds/building.yaml";
+constexpr double kDeg = M_PI / 180.0;
+
+Eigen::Isometry3d pose(double x, double y, double z, double yaw_rad, double pitch_rad = 0.0, double roll_rad = 0.0) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = Eigen::Vector3d(x, y, z);
+  return T;
+}
+
+double translation_error_m(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return (a.translation() - b.translation()).norm();
+}
+
+double rotation_error_rad(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
+}
+
+// A loop of 8 sensor poses through room A of the example building, 0.6 m
+// above the floor, tilting a little as a robot on a rough floor would, and
+// back near the start: the scans see room A's walls, the doorway to the
+// corridor (and the stairs through it), the door to room B, floor and ceiling.
+std::vector<Eigen::Isometry3d> room_a_loop() {
+  return {pose(-2.5, -2.0, 0.60, 0.0 * kDeg),           pose(-0.6, -2.1, 0.61, 5.0 * kDeg, 0.8 * kDeg),
+          pose(1.6, -1.8, 0.60, 40.0 * kDeg, 0.0, -0.7 * kDeg), pose(2.1, 0.3, 0.62, 95.0 * kDeg, -0.5 * kDeg),
+          pose(1.4, 2.0, 0.60, 150.0 * kDeg),            pose(-0.7, 2.1, 0.59, 185.0 * kDeg, 0.0, 0.9 * kDeg),
+          pose(-2.6, 1.2, 0.60, 240.0 * kDeg, 0.6 * kDeg), pose(-2.3, -1.5, 0.61, 350.0 * kDeg)};
+}
+
+// Ray casts the building (the simulator's own ray cast, the laser scanner's
+// primitive) from each sensor pose: 120 azimuths × 26 elevations (−50°..50°),
+// ranges 0.1..15 m with Gaussian noise σ 1 cm, points in the sensor frame.
+std::vector<Cloud> scan_building(const std::vector<Eigen::Isometry3d>& T_world_sensor, uint64_t seed) {
+  auto world = rise::sim::load_world_description(kBuilding);
+  world.robot_start_m = {7.5, -2.0};  // in room B, behind the closed door: out of the way (rays skip it anyway)
+  rise::sim::Simulation sim(rise::sim::load_robot_description(kTracked), world);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Cloud> clouds;
+  for (const auto& T : T_world_sensor) {
+    Cloud c;
+    for (int e = 0; e < 26; ++e) {
+      const double elevation = (-50.0 + 4.0 * e) * kDeg;
+      for (int a = 0; a < 120; ++a) {
+        const double azimuth = 3.0 * a * kDeg;
+        const Eigen::Vector3d d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                                std::sin(elevation));
+        const double r = sim.cast_ray_m(T.translation(), T.linear() * d, 15.0);
+        if (!std::isfinite(r) || r < 0.1) continue;
+        c.points.push_back(((r + noise(rng)) * d).cast<float>());
+      }
+    }
+    clouds.push_back(std::move(c));
+  }
+  return clouds;
+}
+
+// Odometry that drifts: each true step turned by an extra 2° of yaw and
+// stretched 3 %, chained from the true first pose.
+std::vector<Eigen::Isometry3d> drifting_odometry(const std::vector<Eigen::Isometry3d>& truth) {
+  std::vector<Eigen::Isometry3d> odometry{truth[0]};
+  for (std::size_t i = 1; i < truth.size(); ++i) {
+    Eigen::Isometry3d step = truth[i - 1].inverse() * truth[i];
+    step.translation() *= 1.03;
+    odometry.push_back(odometry.back() * step * pose(0, 0, 0, 2.0 * kDeg));
+  }
+  return odometry;
+}
+
+struct Errors {
+  double max_t_m = 0, max_r_rad = 0, sum_t_m = 0;
+};
+
+Errors errors(const std::vector<Eigen::Isometry3d>& got, const std::vector<Eigen::Isometry3d>& truth) {
+  Errors e;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    e.max_t_m = std::max(e.max_t_m, translation_error_m(got[i], truth[i]));
+    e.max_r_rad = std::max(e.max_r_rad, rotation_error_rad(got[i], truth[i]));
+    e.sum_t_m += translation_error_m(got[i], truth[i]);
+  }
+  return e;
+}
+}  // namespace
+
+TEST_CASE("slam recovers a loop through the simulated building within 2 cm and 0.5 deg per scan", "[semantic]") {
+  const auto truth = room_a_loop();
+  const auto clouds = scan_building(truth, 3);
+  const auto odometry = drifting_odometry(truth);
+  std::vector<Scan> scans;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    REQUIRE(clouds[i].size() > 2000);
+    scans.push_back({"scan" + std::to_string(i), clouds[i], odometry[i]});
+  }
+  const Errors guess = errors(odometry, truth);
+  INFO("odometry: max " << guess.max_t_m << " m, " << guess.max_r_rad / kDeg << " deg");
+  REQUIRE(guess.max_t_m > 0.3);  // the initial guess is really off
+  REQUIRE(guess.max_r_rad > 10 * kDeg);
+
+  std::vector<std::string> stages;
+  std::size_t calls = 0;
+  const SlamResult r = slam(scans, SlamSettings{}, [&](std::size_t done, std::size_t total, std::string_view stage) {
+    CHECK(done <= total);
+    ++calls;
+    if (stages.empty() || stages.back() != stage) stages.emplace_back(stage);
+  });
+
+  REQUIRE(r.T_world_scan.size() == truth.size());
+  const Errors sequential = errors(r.T_world_scan_sequential, truth);
+  const Errors relaxed = errors(r.T_world_scan, truth);
+  INFO("sequential icp: max " << sequential.max_t_m << " m, " << sequential.max_r_rad / kDeg << " deg, sum "
+                              << sequential.sum_t_m << " m");
+  INFO("relaxed: max " << relaxed.max_t_m << " m, " << relaxed.max_r_rad / kDeg << " deg, sum " << relaxed.sum_t_m
+                       << " m");
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    INFO("scan " << i);
+    CHECK(translation_error_m(r.T_world_scan[i], truth[i]) < 0.02);
+    CHECK(rotation_error_rad(r.T_world_scan[i], truth[i]) < 0.5 * kDeg);
+  }
+  // The loop back to the start is found and relaxation improves on the chain.
+  bool closes_loop = false;
+  for (const auto& l : r.loops) {
+    CHECK(l.to >= l.from + 4);
+    CHECK(l.rmse_m <= 0.05);
+    if (l.from <= 1 && l.to == truth.size() - 1) closes_loop = true;
+  }
+  CHECK(closes_loop);
+  CHECK(r.relaxation.iterations > 0);
+  CHECK(r.relaxation.final_cost <= r.relaxation.initial_cost);
+  CHECK(relaxed.sum_t_m < sequential.sum_t_m);
+  CHECK(relaxed.max_t_m < sequential.max_t_m);
+
+  // The merged map is voxel-filtered: fewer points than all scans together,
+  // and it lies on the building (its floor at z = 0 is among them).
+  std::size_t all = 0;
+  for (const auto& c : clouds) all += c.size();
+  CHECK(r.map.size() > 2000);
+  CHECK(r.map.size() < all);
+  std::size_t floor = 0;
+  for (const auto& p : r.map.points) floor += std::abs(p.z()) < 0.03 ? 1 : 0;
+  CHECK(floor > 200);
+  CHECK(r.timings.total_s >= r.timings.sequential_s + r.timings.loops_s);
+
+  CHECK(stages == std::vector<std::string>{"preprocess", "sequential icp", "loop closing", "relaxation",
+                                           "sequential icp", "loop closing", "relaxation", "map"});
+  CHECK(calls > 2 * truth.size());
+}
+
+TEST_CASE("slam without odometry chains the scans from identity and keeps a single scan where it is", "[semantic]") {
+  const std::vector<Eigen::Isometry3d> truth = {pose(-2.0, -1.0, 0.6, 0.0), pose(-1.7, -1.0, 0.6, 3.0 * kDeg),
+                                                pose(-1.4, -0.9, 0.6, 6.0 * kDeg)};
+  const auto clouds = scan_building(truth, 5);
+  std::vector<Scan> scans;
+  for (std::size_t i = 0; i < truth.size(); ++i) scans.push_back({"s" + std::to_string(i), clouds[i], std::nullopt});
+
+  SECTION("three scans, no poses: relative to the first") {
+    const SlamResult r = slam(scans);
+    REQUIRE(r.T_world_scan.size() == 3);
+    CHECK(r.loops.empty());
+    CHECK(r.relaxation.iterations == 0);
+    CHECK(r.T_world_scan[0].isApprox(Eigen::Isometry3d::Identity()));
+    for (std::size_t i = 1; i < 3; ++i) {
+      const Eigen::Isometry3d want = truth[0].inverse() * truth[i];
+      CHECK(translation_error_m(r.T_world_scan[i], want) < 0.02);
+      CHECK(rotation_error_rad(r.T_world_scan[i], want) < 0.5 * kDeg);
+    }
+  }
+  SECTION("one scan with a pose") {
+    scans.resize(1);
+    scans[0].T_world_scan = truth[0];
+    const SlamResult r = slam(scans);
+    REQUIRE(r.T_world_scan.size() == 1);
+    CHECK(r.T_world_scan[0].isApprox(truth[0]));
+    CHECK(r.map.size() > 1000);
+  }
+}
+
+TEST_CASE("slam refuses no scans, an empty scan and bad settings", "[semantic]") {
+  const auto error_of = [](std::vector<Scan> scans, const SlamSettings& s = {}) {
+    try {
+      slam(std::move(scans), s);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  Scan good{"good", {}, std::nullopt};
+  good.cloud.points = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  CHECK(error_of({}) == "slam: no scans");
+  CHECK(error_of({good, Scan{"hole", {}, std::nullopt}}) == "slam: scan 1 ('hole') has no points");
+  SlamSettings s;
+  s.map_scans = 0;
+  CHECK(error_of({good}, s) == "slam settings: map_scans must be >= 1");
+  s = {};
+  s.loop_min_inlier_ratio = 1.5;
+  CHECK(error_of({good}, s) == "slam settings: loop_min_inlier_ratio must be in 0..1");
+}
+
+TEST_CASE("the information of a match grows with its points and shrinks with its error", "[semantic]") {
+  const std::vector<Eigen::Vector3f> points = {{1, 0, 0}, {0, 2, 0}, {0, 0, 3}, {-1, -1, 1}};
+  const auto a = match_information(points, 0.01);
+  const auto b = match_information(points, 0.02);
+  const auto c = match_information({points[0], points[1], points[2], points[3], points[0], points[1], points[2],
+                                    points[3]},
+                                   0.01);
+  CHECK(a.isApprox(a.transpose()));
+  CHECK(a(0, 0) == Approx(4 / 1e-4).epsilon(1e-6));  // Σ 1 / σ² for x translation
+  CHECK((a - 4 * b).norm() < 1e-6 * a.norm());
+  CHECK((c - 2 * a).norm() < 1e-6 * a.norm());
+  // Rotation about z is pinned by the points' distance from the z axis: Σ (x² + y²) / σ².
+  CHECK(a(5, 5) == Approx((1 + 4 + 0 + 2) / 1e-4).epsilon(1e-6));
+  Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt(a);
+  CHECK(llt.info() == Eigen::Success);
+}
