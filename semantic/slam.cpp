@@ -50,6 +50,21 @@ Cloud local_map(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isome
   return map;
 }
 
+// Scan i with its neighbours in the sequence (i-1, i+1), in scan i's frame:
+// the target a loop match is checked on; one scan alone is sparse far from
+// its sensor.
+Cloud neighbourhood(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isometry3d>& T_world_scan,
+                    std::size_t i) {
+  Cloud map;
+  const std::size_t first = i > 0 ? i - 1 : 0, last = std::min(i + 1, clouds.size() - 1);
+  for (std::size_t j = first; j <= last; ++j) {
+    Cloud part = transformed(clouds[j], T_world_scan[i].inverse() * T_world_scan[j]);
+    map.points.insert(map.points.end(), part.points.begin(), part.points.end());
+    map.normals.insert(map.normals.end(), part.normals.begin(), part.normals.end());
+  }
+  return map;
+}
+
 class Pipeline {
  public:
   Pipeline(const SlamSettings& settings, const SlamProgress& progress) : s_(settings), progress_(progress) {}
@@ -100,7 +115,8 @@ class Pipeline {
     report(0, pairs.size(), "loop closing");
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       const auto [i, j] = pairs[k];
-      const IcpResult r = icp(clouds[j], clouds[i], T_world_scan[i].inverse() * T_world_scan[j], s_.icp);
+      const IcpResult r =
+          icp(clouds[j], neighbourhood(clouds, T_world_scan, i), T_world_scan[i].inverse() * T_world_scan[j], s_.icp);
       if (r.rmse_m <= s_.loop_max_rmse_m && r.inlier_ratio >= s_.loop_min_inlier_ratio) {
         found.push_back({i, j, r.T_target_source, r.rmse_m, r.inlier_ratio});
       }

@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <random>
 #include <string>
@@ -45,7 +46,7 @@ std::vector<Eigen::Isometry3d> room_a_loop() {
 }
 
 // Ray casts the building (the simulator's own ray cast, the laser scanner's
-// primitive) from each sensor pose: 120 azimuths × 26 elevations (−50°..50°),
+// primitive) from each sensor pose: 180 azimuths × 26 elevations (−50°..50°),
 // ranges 0.1..15 m with Gaussian noise σ 1 cm, points in the sensor frame.
 std::vector<Cloud> scan_building(const std::vector<Eigen::Isometry3d>& T_world_sensor, uint64_t seed) {
   auto world = rise::sim::load_world_description(kBuilding);
@@ -58,8 +59,8 @@ std::vector<Cloud> scan_building(const std::vector<Eigen::Isometry3d>& T_world_s
     Cloud c;
     for (int e = 0; e < 26; ++e) {
       const double elevation = (-50.0 + 4.0 * e) * kDeg;
-      for (int a = 0; a < 120; ++a) {
-        const double azimuth = 3.0 * a * kDeg;
+      for (int a = 0; a < 180; ++a) {
+        const double azimuth = 2.0 * a * kDeg;
         const Eigen::Vector3d d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
                                 std::sin(elevation));
         const double r = sim.cast_ray_m(T.translation(), T.linear() * d, 15.0);
@@ -101,13 +102,18 @@ Errors errors(const std::vector<Eigen::Isometry3d>& got, const std::vector<Eigen
 
 TEST_CASE("slam recovers a loop through the simulated building within 2 cm and 0.5 deg per scan", "[semantic]") {
   const auto truth = room_a_loop();
+  const auto t0 = std::chrono::steady_clock::now();
   const auto clouds = scan_building(truth, 3);
+  const double scan_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto odometry = drifting_odometry(truth);
   std::vector<Scan> scans;
   for (std::size_t i = 0; i < truth.size(); ++i) {
     REQUIRE(clouds[i].size() > 2000);
     scans.push_back({"scan" + std::to_string(i), clouds[i], odometry[i]});
   }
+  std::size_t points = 0;
+  for (const auto& c : clouds) points += c.size();
+  INFO(points << " points in " << clouds.size() << " scans, ray cast in " << scan_s << " s");
   const Errors guess = errors(odometry, truth);
   INFO("odometry: max " << guess.max_t_m << " m, " << guess.max_r_rad / kDeg << " deg");
   REQUIRE(guess.max_t_m > 0.3);  // the initial guess is really off
@@ -134,6 +140,10 @@ TEST_CASE("slam recovers a loop through the simulated building within 2 cm and 0
     CHECK(rotation_error_rad(r.T_world_scan[i], truth[i]) < 0.5 * kDeg);
   }
   // The loop back to the start is found and relaxation improves on the chain.
+  INFO("loop candidates " << r.loop_candidates << ", kept " << r.loops.size());
+  INFO("timings: preprocess " << r.timings.preprocess_s << " s, sequential " << r.timings.sequential_s
+                              << " s, loops " << r.timings.loops_s << " s, relaxation " << r.timings.relaxation_s
+                              << " s, map " << r.timings.map_s << " s, total " << r.timings.total_s << " s");
   bool closes_loop = false;
   for (const auto& l : r.loops) {
     CHECK(l.to >= l.from + 4);
