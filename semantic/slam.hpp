@@ -33,7 +33,7 @@ struct SlamSettings {
   int loop_min_separation = 4;      ///< ... and at least this many scans apart in the sequence
   int loop_max_per_scan = 2;        ///< the nearest candidates tried per scan
   double loop_max_rmse_m = 0.05;    ///< a loop match is kept when its rmse is at most this ...
-  double loop_min_inlier_ratio = 0.5;  ///< ... and at least this share of points paired
+  double loop_min_inlier_ratio = 0.4;  ///< ... and at least this share of points paired
   double information_sigma_min_m = 0.005;  ///< floor of the rmse used to weigh an edge
   int relaxation_rounds = 2;        ///< match the edges again from the relaxed poses, relax again
   PoseGraphSettings graph;
