@@ -36,13 +36,26 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return m;
 }
 
-// The scans i-k .. i-1 at their current poses, merged in the world frame:
-// the target that scan i is matched onto.
+// The scans scan i is matched onto, merged in the world frame at their
+// current poses: the last k (i-k .. i-1), or i-1 and the k-1 earlier scans
+// nearest to where scan i is expected.
 Cloud local_map(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isometry3d>& T_world_scan, std::size_t i,
-                int map_scans) {
+                const Eigen::Vector3d& expected_m, const SlamSettings& s) {
+  const auto k = static_cast<std::size_t>(s.map_scans);
+  std::vector<std::size_t> chosen;
+  if (s.map == SlamMap::LastScans) {
+    for (std::size_t j = i > k ? i - k : 0; j < i; ++j) chosen.push_back(j);
+  } else {
+    std::vector<std::pair<double, std::size_t>> by_distance;
+    for (std::size_t j = 0; j + 1 < i; ++j) {
+      by_distance.emplace_back((T_world_scan[j].translation() - expected_m).norm(), j);
+    }
+    std::sort(by_distance.begin(), by_distance.end());
+    chosen.push_back(i - 1);
+    for (std::size_t m = 0; m < by_distance.size() && chosen.size() < k; ++m) chosen.push_back(by_distance[m].second);
+  }
   Cloud map;
-  const std::size_t first = i > static_cast<std::size_t>(map_scans) ? i - static_cast<std::size_t>(map_scans) : 0;
-  for (std::size_t j = first; j < i; ++j) {
+  for (const std::size_t j : chosen) {
     Cloud part = transformed(clouds[j], T_world_scan[j]);
     map.points.insert(map.points.end(), part.points.begin(), part.points.end());
     map.normals.insert(map.normals.end(), part.normals.begin(), part.normals.end());
@@ -86,7 +99,7 @@ class Pipeline {
     for (std::size_t i = 1; i < n; ++i) {
       const Eigen::Isometry3d guess =
           chain ? T_world_scan[i - 1] * odometry[i - 1].inverse() * odometry[i] : T_world_scan[i];
-      results[i] = icp(clouds[i], local_map(clouds, T_world_scan, i, s_.map_scans), guess, s_.icp);
+      results[i] = icp(clouds[i], local_map(clouds, T_world_scan, i, guess.translation(), s_), guess, s_.icp);
       if (chain) T_world_scan[i] = results[i].T_target_source;
       report(i, n - 1, "sequential icp");
     }
