@@ -329,7 +329,7 @@ TEST_CASE("slam registers 3DTK's three scans near slam6d's own frames from a poo
   const Errors ours = errors(r.T_world_scan, slam6d);
   INFO("vs slam6d: odometry " << odo.max_t_m << " m, " << odo.max_r_rad / kDeg << " deg; poor guess " << guess.max_t_m
                               << " m, " << guess.max_r_rad / kDeg << " deg; ours " << ours.max_t_m << " m, "
-                              << ours.max_r_rad / kDeg << " deg; loops " << r.loops.size() << ", "
+                              << ours.max_r_rad / kDeg << " deg; loops " << r.loops.size() << " of " << r.loop_candidates << ", "
                               << r.timings.total_s << " s");
   REQUIRE(guess.max_t_m > 0.15);
   CHECK(r.T_world_scan[0].isApprox(odometry[0]));
