@@ -43,7 +43,7 @@ Cloud local_map(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isome
                 const Eigen::Vector3d& expected_m, const SlamSettings& s) {
   const auto k = static_cast<std::size_t>(s.map_scans);
   std::vector<std::size_t> chosen;
-  if (s.map == SlamMap::LastScans) {
+  if (s.target == SlamTarget::LastScans) {
     for (std::size_t j = i > k ? i - k : 0; j < i; ++j) chosen.push_back(j);
   } else {
     std::vector<std::pair<double, std::size_t>> by_distance;

@@ -19,7 +19,7 @@
 namespace rise::semantic {
 
 /// Which earlier scans a scan is matched onto in the sequential step.
-enum class SlamMap {
+enum class SlamTarget {
   LastScans,     ///< the map_scans scans before it in the sequence
   NearestScans,  ///< the one before it and the map_scans-1 earlier ones nearest to where it is expected
 };
@@ -35,7 +35,7 @@ struct SlamSettings {
   double scan_voxel_m = 0.05;       ///< each scan is voxel-filtered to this for matching; 0: not
   int normals_k = 10;               ///< neighbours per normal (point-to-plane ICP only)
   int map_scans = 3;                ///< scan i is matched onto this many earlier scans, merged ...
-  SlamMap map = SlamMap::LastScans; ///< ... chosen so
+  SlamTarget target = SlamTarget::LastScans;  ///< ... chosen so
   double loop_radius_m = 3.0;       ///< candidate loop: scan centres at most this far apart ...
   int loop_min_separation = 4;      ///< ... and at least this many scans apart in the sequence
   int loop_max_per_scan = 2;        ///< the nearest candidates tried per scan

@@ -208,7 +208,7 @@ TEST_CASE("slam matching onto the nearest scans keeps a run into the corridor an
   // little of what it is matched onto and lands 15 cm off, a wrong edge that
   // relaxation can only spread (to 5 cm); onto the nearest scans it holds.
   SlamSettings settings;
-  settings.map = SlamMap::NearestScans;
+  settings.target = SlamTarget::NearestScans;
   const SlamResult r = slam(scans, settings);
   const Errors sequential = errors(r.T_world_scan_sequential, truth);
   const Errors relaxed = errors(r.T_world_scan, truth);
