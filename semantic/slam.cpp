@@ -220,8 +220,8 @@ SlamResult slam(std::vector<Scan> scans, const SlamSettings& settings, const Sla
     t = Clock::now();
     result.loops = pipeline.loops(clouds, T_world_scan, result.loop_candidates);
     result.timings.loops_s += seconds_since(t);
-    if (result.loops.empty()) {  // a chain is its own optimum: nothing to relax
-      result.relaxation = {T_world_scan, 0, 0.0, 0.0, true};
+    if (result.loops.empty()) {  // a chain is its own optimum: nothing (more) to relax
+      if (round == 0) result.relaxation = {T_world_scan, 0, 0.0, 0.0, true};
       break;
     }
 

@@ -70,9 +70,9 @@ struct SlamResult {
   std::vector<Eigen::Isometry3d> T_world_scan;             ///< the final poses, scan 0 where its guess put it
   std::vector<Eigen::Isometry3d> T_world_scan_sequential;  ///< after sequential ICP alone
   std::vector<IcpResult> sequential;  ///< the match of scan i onto the ones before it (i ≥ 1; [0] empty)
-  std::vector<SlamLoop> loops;        ///< the loop matches kept (of the last relaxation round)
+  std::vector<SlamLoop> loops;        ///< the loop matches kept (of the last round)
   int loop_candidates = 0;            ///< loop matches tried (last round)
-  PoseGraphResult relaxation;         ///< the last round's; no iterations when no loop was found
+  PoseGraphResult relaxation;         ///< the last relaxation's; no iterations when no loop was ever found
   SlamTimings timings;
   Cloud map;                          ///< all scans in the world frame, voxel-filtered
 };
