@@ -170,7 +170,9 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   validate(source, target, settings);
   const auto schedule = correspondence_schedule(settings);
   const bool plane = settings.metric == IcpMetric::PointToPlane;
-  const int threads = settings.threads > 0 ? settings.threads : omp_get_max_threads();
+  // A thread per 2048 source points at most: below that, waking threads costs more than it saves.
+  const int useful = static_cast<int>(std::min<size_t>(1024, source.points.size() / 2048 + 1));
+  const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
 
   const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
                             settings.max_points_per_cell);
