@@ -74,34 +74,58 @@ Eigen::Isometry3d gauss_newton(const Sums& s) {
 // cells are twice a radius that halves level by level, down to about the
 // point spacing. A query tries the finest level first (8 cells, exact within
 // its radius) and climbs only while it finds nothing, so a converged pair
-// costs one small lookup however large the first radius was. Coarse levels
-// read a bounded, evenly spread sample of a crowded cell: a far point's
-// partner only has to point the right way.
+// costs one small lookup however large the first radius was. Levels above
+// the minimum pairing distance read a bounded, evenly spread sample of a
+// crowded cell: in the early, wide iterations a far point's partner only has
+// to point the right way; pairs within the minimum distance stay exact.
 class GridPyramid {
  public:
-  GridPyramid(const std::vector<Eigen::Vector3f>& points, double max_radius_m, int max_points_per_cell) {
+  GridPyramid(const std::vector<Eigen::Vector3f>& points, double max_radius_m, double exact_radius_m,
+              int max_points_per_cell) {
     constexpr int kMaxLevels = 8;
     std::vector<float> radii{static_cast<float>(max_radius_m)};
     auto top = std::make_unique<VoxelGrid>(points, 2.0f * radii[0], max_points_per_cell);
     // A surface's points per cell grow with the cell's area: spacing ~ cell / sqrt(points per cell).
-    const double per_cell = static_cast<double>(top->size()) / std::max<double>(1.0, static_cast<double>(top->occupied_cells()));
+    // The median over points of their cell's count: what a typical query sees.
+    std::vector<uint32_t> counts;
+    const auto& offsets = top->cell_offsets();
+    for (size_t c = 0; c + 1 < offsets.size(); ++c) counts.push_back(offsets[c + 1] - offsets[c]);
+    std::sort(counts.begin(), counts.end());
+    double per_cell = 1.0;
+    for (size_t c = 0, seen = 0; c < counts.size(); ++c)
+      if ((seen += counts[c]) * 2 >= top->size()) {
+        per_cell = counts[c];
+        break;
+      }
     const double spacing_m = 2.0 * max_radius_m / std::sqrt(std::max(1.0, per_cell));
     while (static_cast<int>(radii.size()) < kMaxLevels && radii.back() * 0.5 >= spacing_m)
       radii.push_back(radii.back() * 0.5f);
+    exact_radius_m_ = static_cast<float>(exact_radius_m * (1.0 + 1e-6));
+    const auto cap = [&](size_t l) { return l + 1 == radii.size() ? 0u : kStrideCap; };
     for (size_t l = radii.size(); l-- > 1;)
-      levels_.push_back({std::make_unique<VoxelGrid>(points, 2.0f * radii[l], max_points_per_cell), radii[l],
-                         l + 1 == radii.size() ? 0u : kStrideCap});
-    levels_.push_back({std::move(top), radii[0], radii.size() == 1 ? 0u : kStrideCap});
+      levels_.push_back({std::make_unique<VoxelGrid>(points, 2.0f * radii[l], max_points_per_cell), radii[l], cap(l)});
+    levels_.push_back({std::move(top), radii[0], cap(0)});
   }
 
-  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m) const {
-    for (const auto& level : levels_) {
-      const float r = std::min(level.radius_m, radius_m);
-      const VoxelGrid::Neighbour nb = level.grid->nearest(q, r, level.stride_cap);
-      if (nb.index != VoxelGrid::kNone || r >= radius_m) return nb;
+  /// `level` in: where to start (the level one below the last answer is a
+  /// good guess: pairs change little between iterations); out: where it
+  /// was found. Starting higher finds the same point, at more cost: what a
+  /// level finds is the nearest within its whole radius.
+  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level) const {
+    for (size_t l = std::min<size_t>(level, levels_.size() - 1); l < levels_.size(); ++l) {
+      const Level& lv = levels_[l];
+      const float r = std::min(lv.radius_m, radius_m);
+      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, r > exact_radius_m_ ? lv.stride_cap : 0u);
+      if (nb.index != VoxelGrid::kNone) {
+        level = static_cast<uint8_t>(l);
+        return nb;
+      }
+      if (r >= radius_m) break;
     }
+    level = static_cast<uint8_t>(levels_.size());
     return {};
   }
+  size_t levels() const { return levels_.size(); }
 
  private:
   static constexpr uint32_t kStrideCap = 32;
@@ -111,6 +135,7 @@ class GridPyramid {
     uint32_t stride_cap;
   };
   std::vector<Level> levels_;  // finest first
+  float exact_radius_m_ = 0.0f;  // searches up to this radius read every point
 };
 
 void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
@@ -145,14 +170,18 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   validate(source, target, settings);
   const auto schedule = correspondence_schedule(settings);
   const bool plane = settings.metric == IcpMetric::PointToPlane;
-  const int threads = settings.threads > 0 ? settings.threads : omp_get_max_threads();
+  // A thread per 2048 source points at most: below that, waking threads costs more than it saves.
+  const int useful = static_cast<int>(std::min<size_t>(1024, source.points.size() / 2048 + 1));
+  const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
 
-  const GridPyramid pyramid(target.points, schedule.front(), settings.max_points_per_cell);
+  const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
+                            settings.max_points_per_cell);
 
   const auto& src = source.points;
   const auto& tn = target.normals;
   const auto n = static_cast<std::ptrdiff_t>(src.size());
   std::vector<Sums> partial(static_cast<size_t>(threads));
+  std::vector<uint8_t> hint(src.size(), 0);  // per source point: the pyramid level to start at
 
   IcpResult result;
   Eigen::Isometry3d T = T_initial;
@@ -170,7 +199,9 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
 #pragma omp for schedule(static, 1024)
       for (std::ptrdiff_t i = 0; i < n; ++i) {
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
-        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf);
+        uint8_t& level = hint[static_cast<size_t>(i)];
+        level = level > 0 ? static_cast<uint8_t>(level - 1) : 0;
+        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level);
         if (nb.index == VoxelGrid::kNone) continue;
         const Eigen::Vector3d pd = p.cast<double>();
         const Eigen::Vector3d qd = target.points[nb.index].cast<double>();

@@ -39,6 +39,18 @@ VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, i
     }
     if (s.count < cap) ++s.count;
   }
+  // Queries probe this table at random: re-hash it to twice the cells (not
+  // twice the points) so that it stays in cache.
+  {
+    std::vector<Slot> counted;
+    counted.swap(slots_);
+    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ * 2));
+    slots_.assign(compact, Slot{});
+    mask_ = compact - 1;
+    shift_ = 64 - std::countr_zero(compact);
+    for (const Slot& c : counted)
+      if (c.key != kEmpty) slot_of(c.key) = c;
+  }
   uint32_t offset = 0;
   offsets_.reserve(cell_count_ + 1);
   for (Slot& s : slots_) {

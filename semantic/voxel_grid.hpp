@@ -99,26 +99,46 @@ class VoxelGrid {
 inline VoxelGrid::Neighbour VoxelGrid::nearest(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap) const {
   Neighbour best;
   best.distance2_m2 = radius_m * radius_m;
-  // The cells the cube [q - r, q + r] touches: 1 or 2 per axis when r <= cell / 2.
-  const int32_t x0 = coord(q.x() - radius_m), x1 = coord(q.x() + radius_m);
-  const int32_t y0 = coord(q.y() - radius_m), y1 = coord(q.y() + radius_m);
-  const int32_t z0 = coord(q.z() - radius_m), z1 = coord(q.z() + radius_m);
+  // The cells the cube [q - r, q + r] touches (1 or 2 per axis when r <=
+  // cell / 2), q's own cell first so that its best prunes the others: a
+  // cell whose nearest face is farther than the best so far is not read.
+  const int32_t c[3] = {coord(q.x()), coord(q.y()), coord(q.z())};
+  int32_t lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = coord(q[a] - radius_m);
+    hi[a] = coord(q[a] + radius_m);
+  }
   const Eigen::Vector4f q4(q.x(), q.y(), q.z(), 0.0f);
-  for (int32_t x = x0; x <= x1; ++x)
-    for (int32_t y = y0; y <= y1; ++y)
-      for (int32_t z = z0; z <= z1; ++z) {
-        const Slot* s = find(pack(x, y, z));
-        if (s == nullptr) continue;
-        const Eigen::Vector4f* p = sorted_.data() + s->begin;
-        const uint32_t step = (stride_cap > 0 && s->count > stride_cap) ? s->count / stride_cap : 1;
-        for (uint32_t i = 0; i < s->count; i += step) {
-          const float d2 = (p[i] - q4).squaredNorm();
-          if (d2 <= best.distance2_m2) {
-            best.distance2_m2 = d2;
-            best.index = s->begin + i;
-          }
-        }
+  const auto gap = [&](int a, int32_t cell) {  // distance from q to the slab of `cell` along axis a
+    if (cell == c[a]) return 0.0f;
+    return cell < c[a] ? q[a] - static_cast<float>(cell + 1) * cell_m_ : static_cast<float>(cell) * cell_m_ - q[a];
+  };
+  const auto visit = [&](int32_t x, int32_t y, int32_t z, float box2) {
+    if (box2 > best.distance2_m2) return;
+    const Slot* s = find(pack(x, y, z));
+    if (s == nullptr) return;
+    const Eigen::Vector4f* p = sorted_.data() + s->begin;
+    const uint32_t step = (stride_cap > 0 && s->count > stride_cap) ? s->count / stride_cap : 1;
+    for (uint32_t i = 0; i < s->count; i += step) {
+      const float d2 = (p[i] - q4).squaredNorm();
+      if (d2 <= best.distance2_m2) {
+        best.distance2_m2 = d2;
+        best.index = s->begin + i;
       }
+    }
+  };
+  visit(c[0], c[1], c[2], 0.0f);
+  for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+    const float gx = gap(0, x);
+    for (int32_t y = lo[1]; y <= hi[1]; ++y) {
+      const float gy = gap(1, y);
+      for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+        if (x == c[0] && y == c[1] && z == c[2]) continue;
+        const float gz = gap(2, z);
+        visit(x, y, z, gx * gx + gy * gy + gz * gz);
+      }
+    }
+  }
   if (best.index != kNone) best.index = index_[best.index];
   return best;
 }
