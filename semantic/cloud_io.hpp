@@ -9,11 +9,17 @@
 #include "semantic/cloud.hpp"
 
 #include <string>
+#include <vector>
 
 namespace rise::semantic {
 
 /// Reads a cloud, the format from the extension (.pcd .ply .xyz .3d).
 Cloud read_cloud(const std::string& path);
+
+/// Parses `contents` as the file `path` would be read (format from its
+/// extension; errors name `path`). A PCD goes through a temporary file,
+/// since PCL's reader reads only files.
+Cloud parse_cloud(const std::string& path, const std::string& contents);
 
 /// Reads a scan: the cloud, and the pose beside it if there is one — the
 /// simulator's `<stem>.pose` beside a `.pcd`, or 3DTK's `<stem>.pose` beside
@@ -22,6 +28,18 @@ Scan read_scan(const std::string& path);
 
 /// Writes by extension (.pcd binary, .ply binary little endian, .xyz).
 void write_cloud(const std::string& path, const Cloud& cloud);
+
+/// 3DTK's `.pose`: "x y z" (cm) then "roll pitch yaw" (degrees), as
+/// slam6d's EulerToMatrix4 reads them (R = Rx·Ry·Rz), converted to ours.
+Eigen::Isometry3d read_3dtk_pose(const std::string& path);
+
+/// 3DTK's `.frames` (slam6d's output): per line a 4x4 column-major
+/// (OpenGL) matrix and a colour code, one line per registration step; the
+/// last line is the final pose. Converted to ours.
+std::vector<Eigen::Isometry3d> read_3dtk_frames(const std::string& path);
+
+/// slam6d's pose from position (cm) and Euler angles (rad), in 3DTK's frame.
+Eigen::Isometry3d euler_3dtk(const Eigen::Vector3d& position_cm, const Eigen::Vector3d& angles_rad);
 
 /// 3DTK's coordinate convention (x right, y up, z forward, cm) to ours
 /// (x forward, y left, z up, m), as a change of basis for points and poses.

@@ -7,6 +7,8 @@
 
 #include "semantic/cloud.hpp"
 
+#include <vector>
+
 namespace rise::semantic {
 
 enum class IcpMetric { PointToPoint, PointToPlane };
@@ -20,6 +22,7 @@ struct IcpSettings {
   double translation_epsilon_m = 1e-5; ///< converged when an update moves less ...
   double rotation_epsilon_rad = 1e-5;  ///< ... and turns less than these
   int threads = 0;                     ///< 0: OpenMP's default
+  int max_points_per_cell = 0;         ///< grid cell lists capped at this many target points; 0: all
 };
 
 struct IcpResult {
@@ -35,6 +38,12 @@ struct IcpResult {
 /// std::invalid_argument on empty clouds or bad settings.
 IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
               const IcpSettings& settings = {});
+
+/// The pairing distance of each iteration: geometric from
+/// max_correspondence_m down to min_correspondence_m over the first half of
+/// max_iterations, then min_correspondence_m. ICP converges only once it
+/// pairs at the minimum.
+std::vector<double> correspondence_schedule(const IcpSettings& settings);
 
 /// Unit normals from the k nearest neighbours' covariance (PCA), oriented
 /// towards `viewpoint`; fills cloud.normals.

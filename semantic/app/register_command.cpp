@@ -1,0 +1,136 @@
+#include "semantic/app/register_command.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include "semantic/cloud_io.hpp"
+#include "semantic/icp.hpp"
+
+namespace rise::semantic {
+namespace {
+
+struct RegisterOptions {
+  std::string source, target;
+  std::string init, init_file;
+  std::string metric = "point";
+  int iterations = IcpSettings{}.max_iterations;
+  double max_dist_m = IcpSettings{}.max_correspondence_m;
+  double min_dist_m = IcpSettings{}.min_correspondence_m;
+  double huber_m = 0.0;
+  int threads = 0;
+};
+
+// 16 numbers, row-major, the last row 0 0 0 1.
+Eigen::Isometry3d parse_matrix(const std::string& text, const std::string& where) {
+  std::istringstream in(text);
+  std::vector<double> v;
+  for (std::string w; in >> w;) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(w, &used));
+      if (used != w.size()) throw std::invalid_argument(w);
+    } catch (const std::exception&) {
+      throw std::runtime_error(where + ": not a number: '" + w + "'");
+    }
+  }
+  if (v.size() != 16) throw std::runtime_error(where + ": expected 16 numbers (row-major 4x4), found " + std::to_string(v.size()));
+  Eigen::Matrix4d M;
+  for (int i = 0; i < 16; ++i) M(i / 4, i % 4) = v[static_cast<size_t>(i)];
+  if ((M.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-9) throw std::runtime_error(where + ": last row must be 0 0 0 1");
+  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+  if ((R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-4 || R.determinant() < 0)
+    throw std::runtime_error(where + ": the rotation part is not a rotation");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
+  T.translation() = M.topRightCorner<3, 1>();
+  return T;
+}
+
+int run_register(const RegisterOptions& o) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  const Scan source = read_scan(o.source);
+  Scan target = read_scan(o.target);
+  spdlog::info("read {} ({} points) and {} ({} points) in {:.0f} ms", o.source, source.cloud.size(), o.target,
+               target.cloud.size(), std::chrono::duration<double, std::milli>(clock::now() - t0).count());
+
+  Eigen::Isometry3d T_initial = Eigen::Isometry3d::Identity();
+  if (!o.init.empty()) {
+    T_initial = parse_matrix(o.init, "--init");
+  } else if (!o.init_file.empty()) {
+    std::ifstream in(o.init_file);
+    if (!in) throw std::runtime_error(o.init_file + ":0: cannot open");
+    std::ostringstream s;
+    s << in.rdbuf();
+    T_initial = parse_matrix(s.str(), o.init_file);
+  } else if (source.T_world_scan && target.T_world_scan) {
+    T_initial = target.T_world_scan->inverse() * *source.T_world_scan;
+    spdlog::info("initial guess from the scans' poses");
+  }
+
+  IcpSettings s;
+  s.metric = o.metric == "plane" ? IcpMetric::PointToPlane : IcpMetric::PointToPoint;
+  s.max_iterations = o.iterations;
+  s.max_correspondence_m = o.max_dist_m;
+  s.min_correspondence_m = o.min_dist_m;
+  s.huber_m = o.huber_m;
+  s.threads = o.threads;
+  if (s.metric == IcpMetric::PointToPlane && target.cloud.normals.size() != target.cloud.size()) {
+    const auto tn = clock::now();
+    estimate_normals(target.cloud, 10);
+    spdlog::info("estimated target normals in {:.0f} ms", std::chrono::duration<double, std::milli>(clock::now() - tn).count());
+  }
+  const auto ti = clock::now();
+  const IcpResult r = icp(source.cloud, target.cloud, T_initial, s);
+  spdlog::info("icp: {} iterations in {:.1f} ms", r.iterations,
+               std::chrono::duration<double, std::milli>(clock::now() - ti).count());
+
+  const Eigen::Matrix4d M = r.T_target_source.matrix();
+  for (int i = 0; i < 4; ++i)
+    std::printf("%.9g %.9g %.9g %.9g\n", M(i, 0), M(i, 1), M(i, 2), M(i, 3));
+  std::printf("rmse_m %.9g\niterations %d\ninlier_ratio %.6f\nconverged %s\n", r.rmse_m, r.iterations, r.inlier_ratio,
+              r.converged ? "true" : "false");
+  return 0;
+}
+
+}  // namespace
+
+void add_register_command(CLI::App& app) {
+  auto o = std::make_shared<RegisterOptions>();
+  CLI::App* cmd = app.add_subcommand("register", "ICP: print the 4x4 transform that maps SOURCE onto TARGET, then rmse and iterations");
+  cmd->add_option("SOURCE", o->source, "cloud to move (.pcd .ply .xyz .3d)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("TARGET", o->target, "cloud to align to")->required()->check(CLI::ExistingFile);
+  auto* init = cmd->add_option("--init", o->init, "initial guess: 16 numbers, row-major (default: from the scans' poses, else identity)");
+  cmd->add_option("--init-file", o->init_file, "initial guess from a file of 16 numbers, row-major")
+      ->check(CLI::ExistingFile)
+      ->excludes(init);
+  cmd->add_option("--metric", o->metric, "point (point-to-point) or plane (point-to-plane)")
+      ->check(CLI::IsMember({"point", "plane"}))
+      ->capture_default_str();
+  cmd->add_option("--iterations", o->iterations, "at most this many iterations")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--max-dist", o->max_dist_m, "first iteration's pairing distance, m")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--min-dist", o->min_dist_m, "pairing distance it shrinks to, m")->check(CLI::PositiveNumber)->capture_default_str();
+  cmd->add_option("--huber", o->huber_m, "Huber kernel width, m (0: none)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->callback([o]() {
+    if (o->min_dist_m > o->max_dist_m) throw CLI::ValidationError("--min-dist", "must not exceed --max-dist");
+    try {
+      const int rc = run_register(*o);
+      if (rc != 0) throw CLI::RuntimeError(rc);
+    } catch (const std::runtime_error& e) {
+      spdlog::error("{}", e.what());
+      throw CLI::RuntimeError(1);
+    } catch (const std::invalid_argument& e) {
+      spdlog::error("{}", e.what());
+      throw CLI::RuntimeError(1);
+    }
+  });
+}
+
+}  // namespace rise::semantic

@@ -1,0 +1,27 @@
+// rise-semantic: the semantic engine's command line. Each subcommand lives in
+// its own semantic/app/<name>_command.{hpp,cpp} and adds itself with one
+// add_<name>_command(app) line below.
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include "semantic/app/register_command.hpp"
+
+int main(int argc, char** argv) {
+  // Results go to stdout; the log goes to stderr so that both can be piped.
+  spdlog::set_default_logger(spdlog::stderr_color_mt("rise-semantic"));
+
+  CLI::App app{"rise-semantic: scans -> registered map -> walls, doors, floor, stairs -> a world file"};
+  app.require_subcommand(1);
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet, "log warnings and errors only");
+  app.parse_complete_callback([&quiet]() {
+    if (quiet) spdlog::set_level(spdlog::level::warn);
+  });
+
+  rise::semantic::add_register_command(app);
+
+  CLI11_PARSE(app, argc, argv);
+  return 0;
+}

@@ -1,0 +1,336 @@
+#include "semantic/icp.hpp"
+
+#include <omp.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "semantic/voxel_grid.hpp"
+
+namespace rise::semantic {
+namespace {
+
+// Per-thread sums of one iteration. Point-to-point keeps the moments of the
+// weighted pairs (Horn/Umeyama closed form); point-to-plane the normal
+// equations JᵀWJ δ = -JᵀWr of the linearised residual n·(p' + ω×p' + v - q).
+struct Sums {
+  Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> Jtr = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix3d Spq = Eigen::Matrix3d::Zero();  // Σ w p' qᵀ
+  Eigen::Vector3d Sp = Eigen::Vector3d::Zero();   // Σ w p'
+  Eigen::Vector3d Sq = Eigen::Vector3d::Zero();   // Σ w q
+  double Sw = 0.0;
+  double squared_error = 0.0;  // Σ d², unweighted, for the rmse
+  size_t pairs = 0;
+
+  void add(const Sums& o) {
+    JtJ += o.JtJ;
+    Jtr += o.Jtr;
+    Spq += o.Spq;
+    Sp += o.Sp;
+    Sq += o.Sq;
+    Sw += o.Sw;
+    squared_error += o.squared_error;
+    pairs += o.pairs;
+  }
+};
+
+double huber_weight(double residual, double huber_m) {
+  const double a = std::abs(residual);
+  return (huber_m > 0.0 && a > huber_m) ? huber_m / a : 1.0;
+}
+
+// The rigid motion that best maps the weighted p' onto q (Umeyama 1991,
+// eq. 39-41 without scale), from the accumulated moments.
+Eigen::Isometry3d closed_form(const Sums& s) {
+  const Eigen::Vector3d mp = s.Sp / s.Sw, mq = s.Sq / s.Sw;
+  const Eigen::Matrix3d H = s.Spq - s.Sw * mp * mq.transpose();  // Σ w (p'-mp)(q-mq)ᵀ
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  if ((svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0) D(2, 2) = -1.0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = svd.matrixV() * D * svd.matrixU().transpose();
+  T.translation() = mq - T.linear() * mp;
+  return T;
+}
+
+Eigen::Isometry3d gauss_newton(const Sums& s) {
+  const Eigen::Matrix<double, 6, 1> delta = s.JtJ.ldlt().solve(-s.Jtr);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Vector3d w = delta.head<3>();
+  if (!delta.allFinite()) return T;
+  const double angle = w.norm();
+  if (angle > 0.0) T.linear() = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+  T.translation() = delta.tail<3>();
+  return T;
+}
+
+// Nearest neighbours at any radius up to the first iteration's: grids whose
+// cells are twice a radius that halves level by level, down to about the
+// point spacing. A query tries the finest level first (8 cells, exact within
+// its radius) and climbs only while it finds nothing, so a converged pair
+// costs one small lookup however large the first radius was. Levels above
+// the minimum pairing distance read a bounded, evenly spread sample of a
+// crowded cell: in the early, wide iterations a far point's partner only has
+// to point the right way; pairs within the minimum distance stay exact.
+class GridPyramid {
+ public:
+  GridPyramid(const std::vector<Eigen::Vector3f>& points, double max_radius_m, double exact_radius_m,
+              int max_points_per_cell) {
+    constexpr int kMaxLevels = 8;
+    std::vector<float> radii{static_cast<float>(max_radius_m)};
+    auto top = std::make_unique<VoxelGrid>(points, 2.0f * radii[0], max_points_per_cell);
+    // A surface's points per cell grow with the cell's area: spacing ~ cell / sqrt(points per cell).
+    // The median over points of their cell's count: what a typical query sees.
+    std::vector<uint32_t> counts;
+    const auto& offsets = top->cell_offsets();
+    for (size_t c = 0; c + 1 < offsets.size(); ++c) counts.push_back(offsets[c + 1] - offsets[c]);
+    std::sort(counts.begin(), counts.end());
+    double per_cell = 1.0;
+    for (size_t c = 0, seen = 0; c < counts.size(); ++c)
+      if ((seen += counts[c]) * 2 >= top->size()) {
+        per_cell = counts[c];
+        break;
+      }
+    const double spacing_m = 2.0 * max_radius_m / std::sqrt(std::max(1.0, per_cell));
+    while (static_cast<int>(radii.size()) < kMaxLevels && radii.back() * 0.5 >= spacing_m)
+      radii.push_back(radii.back() * 0.5f);
+    exact_radius_m_ = static_cast<float>(exact_radius_m * (1.0 + 1e-6));
+    const auto cap = [&](size_t l) { return l + 1 == radii.size() ? 0u : kStrideCap; };
+    for (size_t l = radii.size(); l-- > 1;)
+      levels_.push_back({std::make_unique<VoxelGrid>(points, 2.0f * radii[l], max_points_per_cell), radii[l], cap(l)});
+    levels_.push_back({std::move(top), radii[0], cap(0)});
+  }
+
+  /// `level` in: where to start (the level one below the last answer is a
+  /// good guess: pairs change little between iterations); out: where it
+  /// was found. Starting higher finds the same point, at more cost: what a
+  /// level finds is the nearest within its whole radius.
+  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level) const {
+    for (size_t l = std::min<size_t>(level, levels_.size() - 1); l < levels_.size(); ++l) {
+      const Level& lv = levels_[l];
+      const float r = std::min(lv.radius_m, radius_m);
+      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, r > exact_radius_m_ ? lv.stride_cap : 0u);
+      if (nb.index != VoxelGrid::kNone) {
+        level = static_cast<uint8_t>(l);
+        return nb;
+      }
+      if (r >= radius_m) break;
+    }
+    level = static_cast<uint8_t>(levels_.size());
+    return {};
+  }
+  size_t levels() const { return levels_.size(); }
+
+ private:
+  static constexpr uint32_t kStrideCap = 32;
+  struct Level {
+    std::unique_ptr<VoxelGrid> grid;
+    float radius_m;
+    uint32_t stride_cap;
+  };
+  std::vector<Level> levels_;  // finest first
+  float exact_radius_m_ = 0.0f;  // searches up to this radius read every point
+};
+
+void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
+  if (source.empty()) throw std::invalid_argument("icp: source cloud is empty");
+  if (target.empty()) throw std::invalid_argument("icp: target cloud is empty");
+  if (s.metric == IcpMetric::PointToPlane && target.normals.size() != target.points.size())
+    throw std::invalid_argument("icp: point-to-plane needs one normal per target point (estimate_normals)");
+  if (s.max_iterations < 1) throw std::invalid_argument("icp: max_iterations must be at least 1");
+  if (!(s.min_correspondence_m > 0.0) || !(s.max_correspondence_m >= s.min_correspondence_m) ||
+      !std::isfinite(s.max_correspondence_m))
+    throw std::invalid_argument("icp: need 0 < min_correspondence_m <= max_correspondence_m");
+  if (!(s.huber_m >= 0.0)) throw std::invalid_argument("icp: huber_m must be >= 0");
+  if (s.threads < 0) throw std::invalid_argument("icp: threads must be >= 0");
+  if (s.max_points_per_cell < 0) throw std::invalid_argument("icp: max_points_per_cell must be >= 0");
+}
+
+}  // namespace
+
+std::vector<double> correspondence_schedule(const IcpSettings& s) {
+  // Geometric from max to min over the first half of the iterations (the
+  // paper's GPU ICP narrows its search each iteration), then min.
+  const int shrink = std::max(1, s.max_iterations / 2);
+  const double ratio = s.min_correspondence_m / s.max_correspondence_m;
+  std::vector<double> r(static_cast<size_t>(s.max_iterations), s.min_correspondence_m);
+  for (int i = 0; i < std::min(shrink, s.max_iterations); ++i)
+    r[static_cast<size_t>(i)] = s.max_correspondence_m * std::pow(ratio, static_cast<double>(i) / shrink);
+  return r;
+}
+
+IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
+              const IcpSettings& settings) {
+  validate(source, target, settings);
+  const auto schedule = correspondence_schedule(settings);
+  const bool plane = settings.metric == IcpMetric::PointToPlane;
+  // A thread per 2048 source points at most: below that, waking threads costs more than it saves.
+  const int useful = static_cast<int>(std::min<size_t>(1024, source.points.size() / 2048 + 1));
+  const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
+
+  const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
+                            settings.max_points_per_cell);
+
+  const auto& src = source.points;
+  const auto& tn = target.normals;
+  const auto n = static_cast<std::ptrdiff_t>(src.size());
+  std::vector<Sums> partial(static_cast<size_t>(threads));
+  std::vector<uint8_t> hint(src.size(), 0);  // per source point: the pyramid level to start at
+
+  IcpResult result;
+  Eigen::Isometry3d T = T_initial;
+  for (int it = 0; it < settings.max_iterations; ++it) {
+    const double radius = schedule[static_cast<size_t>(it)];
+    const float rf = static_cast<float>(radius);
+    const Eigen::Matrix3f R = T.linear().cast<float>();
+    const Eigen::Vector3f t = T.translation().cast<float>();
+    const double huber = settings.huber_m;
+    for (auto& p : partial) p = Sums{};
+
+#pragma omp parallel num_threads(threads)
+    {
+      Sums& acc = partial[static_cast<size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static, 1024)
+      for (std::ptrdiff_t i = 0; i < n; ++i) {
+        const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
+        uint8_t& level = hint[static_cast<size_t>(i)];
+        level = level > 0 ? static_cast<uint8_t>(level - 1) : 0;
+        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level);
+        if (nb.index == VoxelGrid::kNone) continue;
+        const Eigen::Vector3d pd = p.cast<double>();
+        const Eigen::Vector3d qd = target.points[nb.index].cast<double>();
+        acc.squared_error += nb.distance2_m2;
+        ++acc.pairs;
+        if (plane) {
+          const Eigen::Vector3d nd = tn[nb.index].cast<double>();
+          const double r = nd.dot(pd - qd);
+          const double w = huber_weight(r, huber);
+          Eigen::Matrix<double, 6, 1> J;
+          J.head<3>() = pd.cross(nd);
+          J.tail<3>() = nd;
+          acc.JtJ.selfadjointView<Eigen::Upper>().rankUpdate(J, w);
+          acc.Jtr += (w * r) * J;
+        } else {
+          const double w = huber_weight(std::sqrt(static_cast<double>(nb.distance2_m2)), huber);
+          acc.Sw += w;
+          acc.Sp += w * pd;
+          acc.Sq += w * qd;
+          acc.Spq += (w * pd) * qd.transpose();
+        }
+      }
+    }
+    Sums s;
+    for (const auto& p : partial) s.add(p);  // thread order: deterministic for a given thread count
+    result.iterations = it + 1;
+    result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(n);
+    result.rmse_m = s.pairs > 0 ? std::sqrt(s.squared_error / static_cast<double>(s.pairs)) : 0.0;
+    const size_t needed = plane ? 6 : 3;
+    if (s.pairs < needed) break;  // too few pairs to pin the pose down: keep the last one
+
+    Eigen::Isometry3d dT;
+    if (plane) {
+      s.JtJ = s.JtJ.selfadjointView<Eigen::Upper>();
+      dT = gauss_newton(s);
+    } else {
+      dT = closed_form(s);
+    }
+    T = dT * T;
+    const double moved = dT.translation().norm();
+    const double turned = Eigen::AngleAxisd(dT.linear()).angle();
+    if (moved < settings.translation_epsilon_m && turned < settings.rotation_epsilon_rad &&
+        radius <= settings.min_correspondence_m * (1.0 + 1e-9)) {
+      result.converged = true;
+      break;
+    }
+  }
+  T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  result.T_target_source = T;
+  return result;
+}
+
+void estimate_normals(Cloud& cloud, int k, const Eigen::Vector3f& viewpoint) {
+  const size_t n = cloud.points.size();
+  cloud.normals.assign(n, Eigen::Vector3f::UnitZ());
+  if (n == 0) return;
+  if (k < 3) throw std::invalid_argument("estimate_normals: k must be at least 3");
+
+  // A cell size that puts about k points in the 3x3x3 block around a point
+  // of a surface: start from the bounding box, then correct for the mean
+  // occupancy (a surface's points per cell grow with the square of the size).
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  Eigen::Vector3f hi = -lo;
+  size_t finite = 0;
+  for (const auto& p : cloud.points)
+    if (p.allFinite()) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      ++finite;
+    }
+  if (finite == 0) return;
+  const Eigen::Vector3f extent = (hi - lo).cwiseMax(1e-3f);
+  float cell = std::cbrt(extent.prod() / static_cast<float>(finite)) * 2.0f;
+  if (!(cell > 1e-4f) || !std::isfinite(cell)) cell = 1e-2f;
+  {
+    const VoxelGrid probe(cloud.points, cell);
+    const float per_cell = static_cast<float>(probe.size()) / static_cast<float>(probe.occupied_cells());
+    const float wanted = static_cast<float>(k) / 4.0f;
+    if (per_cell > wanted) cell *= std::sqrt(wanted / per_cell);
+  }
+  const VoxelGrid grid(cloud.points, cell);
+
+#pragma omp parallel
+  {
+    std::vector<VoxelGrid::Neighbour> nbs;
+#pragma omp for schedule(dynamic, 256)
+    for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) {
+      const Eigen::Vector3f& p = cloud.points[static_cast<size_t>(i)];
+      grid.k_nearest(p, k, nbs);
+      if (nbs.size() < 3) continue;
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (const auto& nb : nbs) mean += cloud.points[nb.index].cast<double>();
+      mean /= static_cast<double>(nbs.size());
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      for (const auto& nb : nbs) {
+        const Eigen::Vector3d d = cloud.points[nb.index].cast<double>() - mean;
+        C += d * d.transpose();
+      }
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(C);
+      Eigen::Vector3f normal = es.eigenvectors().col(0).cast<float>();  // smallest eigenvalue
+      if (normal.dot(viewpoint - p) < 0.0f) normal = -normal;
+      cloud.normals[static_cast<size_t>(i)] = normal;
+    }
+  }
+}
+
+Cloud voxel_filter(const Cloud& cloud, double leaf_m) {
+  if (!(leaf_m > 0.0) || !std::isfinite(leaf_m)) throw std::invalid_argument("voxel_filter: leaf_m must be > 0");
+  const VoxelGrid grid(cloud.points, static_cast<float>(leaf_m));
+  const bool normals = cloud.normals.size() == cloud.points.size();
+  Cloud out;
+  out.points.reserve(grid.occupied_cells());
+  const auto& pts = grid.grid_points();
+  const auto& idx = grid.grid_index();
+  const auto& offsets = grid.cell_offsets();
+  for (size_t c = 0; c + 1 < offsets.size(); ++c) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Vector3d nsum = Eigen::Vector3d::Zero();
+    for (uint32_t j = offsets[c]; j < offsets[c + 1]; ++j) {
+      sum += pts[j].head<3>().cast<double>();
+      if (normals) nsum += cloud.normals[idx[j]].cast<double>();
+    }
+    out.points.push_back((sum / static_cast<double>(offsets[c + 1] - offsets[c])).cast<float>());
+    if (normals) {
+      const double len = nsum.norm();
+      out.normals.push_back(len > 0.0 ? Eigen::Vector3f((nsum / len).cast<float>()) : Eigen::Vector3f::UnitZ());
+    }
+  }
+  return out;
+}
+
+}  // namespace rise::semantic

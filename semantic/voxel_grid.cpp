@@ -1,0 +1,114 @@
+#include "semantic/voxel_grid.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <stdexcept>
+
+namespace rise::semantic {
+
+VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, int max_points_per_cell)
+    : cell_m_(cell_m), inv_cell_(1.0f / cell_m) {
+  if (!(cell_m > 0.0f) || !std::isfinite(cell_m) || !std::isfinite(inv_cell_))
+    throw std::invalid_argument("VoxelGrid: cell_m must be positive and finite");
+  // Keys of the finite points, then a counting sort by cell through the
+  // hash table: pass 1 counts per cell, pass 2 places each point.
+  std::vector<uint64_t> keys(points.size(), kEmpty);
+  size_t finite = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    if (!p.allFinite()) continue;
+    keys[i] = pack(coord(p.x()), coord(p.y()), coord(p.z()));
+    ++finite;
+  }
+  const size_t capacity = std::bit_ceil(std::max<size_t>(16, finite * 2));
+  slots_.assign(capacity, Slot{});
+  mask_ = capacity - 1;
+  shift_ = 64 - std::countr_zero(capacity);
+  const auto slot_of = [&](uint64_t key) -> Slot& {
+    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
+    while (slots_[i].key != key && slots_[i].key != kEmpty) i = (i + 1) & mask_;
+    return slots_[i];
+  };
+  const uint32_t cap = max_points_per_cell > 0 ? static_cast<uint32_t>(max_points_per_cell) : kNone;
+  for (const uint64_t key : keys) {
+    if (key == kEmpty) continue;
+    Slot& s = slot_of(key);
+    if (s.key == kEmpty) {
+      s.key = key;
+      ++cell_count_;
+    }
+    if (s.count < cap) ++s.count;
+  }
+  // Queries probe this table at random: re-hash it to twice the cells (not
+  // twice the points) so that it stays in cache.
+  {
+    std::vector<Slot> counted;
+    counted.swap(slots_);
+    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ * 2));
+    slots_.assign(compact, Slot{});
+    mask_ = compact - 1;
+    shift_ = 64 - std::countr_zero(compact);
+    for (const Slot& c : counted)
+      if (c.key != kEmpty) slot_of(c.key) = c;
+  }
+  uint32_t offset = 0;
+  offsets_.reserve(cell_count_ + 1);
+  for (Slot& s : slots_) {
+    if (s.key == kEmpty) continue;
+    offsets_.push_back(offset);
+    s.begin = offset;
+    offset += s.count;
+    s.count = 0;
+  }
+  offsets_.push_back(offset);
+  sorted_.resize(offset);
+  index_.resize(offset);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (keys[i] == kEmpty) continue;
+    Slot& s = slot_of(keys[i]);
+    if (s.count >= cap) continue;
+    const uint32_t at = s.begin + s.count++;
+    sorted_[at] = Eigen::Vector4f(points[i].x(), points[i].y(), points[i].z(), 0.0f);
+    index_[at] = static_cast<uint32_t>(i);
+  }
+}
+
+void VoxelGrid::k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour>& out, int max_rings) const {
+  out.clear();
+  if (k <= 0 || !q.allFinite()) return;
+  const size_t want = static_cast<size_t>(k);
+  const auto closer = [](const Neighbour& a, const Neighbour& b) { return a.distance2_m2 < b.distance2_m2; };
+  const int32_t cx = coord(q.x()), cy = coord(q.y()), cz = coord(q.z());
+  const Eigen::Vector4f q4(q.x(), q.y(), q.z(), 0.0f);
+  // Ring by ring (the shell of cells at Chebyshev distance `ring`): a point
+  // outside rings 0..R is farther than R cells from q, so the k best are
+  // final once the k-th is within R * cell_m.
+  for (int ring = 0; ring <= max_rings; ++ring) {
+    for (int32_t dx = -ring; dx <= ring; ++dx)
+      for (int32_t dy = -ring; dy <= ring; ++dy)
+        for (int32_t dz = -ring; dz <= ring; ++dz) {
+          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
+          const int32_t x = cx + dx, y = cy + dy, z = cz + dz;
+          if (std::max({std::abs(x), std::abs(y), std::abs(z)}) > kCoordLimit) continue;
+          const Slot* s = find(pack(x, y, z));
+          if (s == nullptr) continue;
+          for (uint32_t i = 0; i < s->count; ++i) {
+            const Neighbour n{s->begin + i, (sorted_[s->begin + i] - q4).squaredNorm()};
+            if (out.size() < want) {
+              out.push_back(n);
+              std::push_heap(out.begin(), out.end(), closer);
+            } else if (n.distance2_m2 < out.front().distance2_m2) {
+              std::pop_heap(out.begin(), out.end(), closer);
+              out.back() = n;
+              std::push_heap(out.begin(), out.end(), closer);
+            }
+          }
+        }
+    const float reach = static_cast<float>(ring) * cell_m_;
+    if (out.size() == want && out.front().distance2_m2 <= reach * reach) break;
+  }
+  std::sort_heap(out.begin(), out.end(), closer);
+  for (auto& n : out) n.index = index_[n.index];
+}
+
+}  // namespace rise::semantic

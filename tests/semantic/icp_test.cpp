@@ -1,0 +1,153 @@
+#include "semantic/icp.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+
+#include "semantic/voxel_grid.hpp"
+#include "tests/semantic/synthetic_room.hpp"
+
+namespace sem = rise::semantic;
+using sem::test::rotation_error_deg;
+using sem::test::translation_error_m;
+
+TEST_CASE("icp recovers a known 10 degree, 0.2 m motion of a synthetic room", "[semantic]") {
+  const sem::Cloud target = sem::test::synthetic_room(40000, 1);
+  const Eigen::Isometry3d T_true = sem::test::pose(10.0, 2.0, -1.5, {0.2, -0.1, 0.05});
+  // The source is another sampling of the room, seen from the moved sensor.
+  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(40000, 2), T_true.inverse());
+
+  sem::IcpSettings s;
+  // 40000 points on ~120 m² are ~5.5 cm apart: pairing down to 0.1 m keeps
+  // every point paired once aligned.
+  s.max_iterations = 50;
+  s.max_correspondence_m = 0.5;
+  s.min_correspondence_m = 0.1;
+  const auto threads = GENERATE(1, 2);
+  s.threads = threads;
+
+  SECTION("point to point") {
+    s.metric = sem::IcpMetric::PointToPoint;
+    const auto r = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
+    CHECK(rotation_error_deg(r.T_target_source, T_true) < 0.02);
+    CHECK(translation_error_m(r.T_target_source, T_true) < 0.001);
+    CHECK(r.inlier_ratio > 0.99);
+    CHECK(r.rmse_m < 0.04);  // two samplings ~5.5 cm apart: ~3 cm to the nearest point
+  }
+  SECTION("point to plane, with a Huber kernel") {
+    sem::Cloud t = target;
+    sem::estimate_normals(t, 10, Eigen::Vector3f(3, 2, 1.5));
+    s.metric = sem::IcpMetric::PointToPlane;
+    s.huber_m = 0.02;
+    const auto r = sem::icp(source, t, Eigen::Isometry3d::Identity(), s);
+    CHECK(rotation_error_deg(r.T_target_source, T_true) < 0.02);
+    CHECK(translation_error_m(r.T_target_source, T_true) < 0.001);
+    CHECK(r.converged);
+    CHECK(r.iterations < 50);
+    CHECK(r.inlier_ratio > 0.99);
+  }
+}
+
+TEST_CASE("icp gives the same answer on one thread and on two", "[semantic]") {
+  const sem::Cloud target = sem::test::synthetic_room(20000, 3);
+  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
+  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  sem::IcpSettings s;
+  s.threads = 1;
+  const auto one = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
+  s.threads = 2;
+  const auto two = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
+  CHECK(one.iterations == two.iterations);
+  CHECK(rotation_error_deg(one.T_target_source, two.T_target_source) < 1e-4);
+  CHECK(translation_error_m(one.T_target_source, two.T_target_source) < 1e-6);
+}
+
+TEST_CASE("icp refuses empty clouds, missing normals and bad settings", "[semantic]") {
+  const sem::Cloud room = sem::test::synthetic_room(1000, 5);
+  const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
+  CHECK_THROWS_AS(sem::icp(sem::Cloud{}, room, I), std::invalid_argument);
+  CHECK_THROWS_AS(sem::icp(room, sem::Cloud{}, I), std::invalid_argument);
+  sem::IcpSettings s;
+  s.metric = sem::IcpMetric::PointToPlane;
+  CHECK_THROWS_WITH(sem::icp(room, room, I, s), Catch::Contains("normal"));
+  s = {};
+  s.min_correspondence_m = 0.0;
+  CHECK_THROWS_AS(sem::icp(room, room, I, s), std::invalid_argument);
+  s = {};
+  s.max_iterations = 0;
+  CHECK_THROWS_AS(sem::icp(room, room, I, s), std::invalid_argument);
+}
+
+TEST_CASE("icp keeps the initial guess when nothing pairs within the distance", "[semantic]") {
+  const sem::Cloud room = sem::test::synthetic_room(2000, 6);
+  const Eigen::Isometry3d far = sem::test::pose(0, 0, 0, {100, 0, 0});
+  const auto r = sem::icp(room, room, far);
+  CHECK(r.inlier_ratio == 0.0);
+  CHECK(!r.converged);
+  CHECK(translation_error_m(r.T_target_source, far) < 1e-9);
+}
+
+TEST_CASE("correspondence distance shrinks from max to min over the first half", "[semantic]") {
+  sem::IcpSettings s;
+  s.max_iterations = 10;
+  s.max_correspondence_m = 0.8;
+  s.min_correspondence_m = 0.1;
+  const auto r = sem::correspondence_schedule(s);
+  REQUIRE(r.size() == 10);
+  CHECK(r[0] == Approx(0.8));
+  for (size_t i = 1; i < r.size(); ++i) CHECK(r[i] <= r[i - 1]);
+  CHECK(r[4] > 0.1);
+  CHECK(r[5] == Approx(0.1));
+  CHECK(r[9] == Approx(0.1));
+}
+
+TEST_CASE("voxel grid finds the same nearest neighbour as brute force", "[semantic]") {
+  const sem::Cloud room = sem::test::synthetic_room(5000, 7, 0.01);
+  const sem::VoxelGrid grid(room.points, 0.2f);
+  const sem::Cloud queries = sem::test::synthetic_room(500, 8, 0.05);
+  std::vector<sem::VoxelGrid::Neighbour> knn;
+  for (const auto& q : queries.points) {
+    uint32_t best = sem::VoxelGrid::kNone;
+    float best_d2 = 0.1f * 0.1f;
+    std::vector<std::pair<float, uint32_t>> all;
+    for (uint32_t i = 0; i < room.points.size(); ++i) {
+      const float d2 = (room.points[i] - q).squaredNorm();
+      all.push_back({d2, i});
+      if (d2 <= best_d2) best_d2 = d2, best = i;
+    }
+    const auto nb = grid.nearest(q, 0.1f);
+    REQUIRE(nb.index == best);
+    std::sort(all.begin(), all.end());
+    grid.k_nearest(q, 8, knn, 6);
+    REQUIRE(knn.size() == 8);
+    for (size_t k = 0; k < 8; ++k) CHECK(knn[k].distance2_m2 == Approx(all[k].first).margin(1e-9));
+  }
+}
+
+TEST_CASE("voxel filter keeps one centroid per occupied cube", "[semantic]") {
+  sem::Cloud c;
+  c.points = {{0.01f, 0.01f, 0.01f}, {0.03f, 0.05f, 0.07f}, {0.15f, 0.0f, 0.0f}, {-0.05f, 0.0f, 0.0f}};
+  const sem::Cloud f = sem::voxel_filter(c, 0.1);
+  REQUIRE(f.size() == 3);
+  bool found = false;
+  for (const auto& p : f.points)
+    if ((p - Eigen::Vector3f(0.02f, 0.03f, 0.04f)).norm() < 1e-6f) found = true;
+  CHECK(found);
+  CHECK_THROWS_AS(sem::voxel_filter(c, 0.0), std::invalid_argument);
+}
+
+TEST_CASE("estimate_normals finds the room's wall normals facing the viewpoint", "[semantic]") {
+  sem::Cloud room = sem::test::synthetic_room(20000, 9);
+  sem::estimate_normals(room, 10, Eigen::Vector3f(3, 2, 1.5));
+  REQUIRE(room.normals.size() == room.points.size());
+  size_t floor_points = 0, floor_up = 0;
+  for (size_t i = 0; i < room.size(); ++i) {
+    const auto& p = room.points[i];
+    if (p.z() == 0.0f && p.x() > 0.3f && p.x() < 1.2f && p.y() > 0.3f && p.y() < 3.7f) {
+      ++floor_points;
+      if (room.normals[i].z() > 0.99f) ++floor_up;
+    }
+  }
+  REQUIRE(floor_points > 100);
+  CHECK(floor_up == floor_points);
+}
