@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <random>
 #include <stdexcept>
 
 #include "semantic/segmentation_internal.hpp"
@@ -156,52 +155,23 @@ Segmentation segment(const Cloud& cloud, const SegmentationSettings& settings) {
   return out;
 }
 
-Eigen::Matrix3d levelling_rotation(const Cloud& cloud, double max_tilt_rad) {
-  if (cloud.size() < 3) throw std::invalid_argument("levelling_rotation: fewer than 3 points");
-  // RANSAC over planes whose normal is within max_tilt of +z (fixed seed:
-  // the same cloud gives the same rotation).
-  std::mt19937 rng(7);
-  std::uniform_int_distribution<std::size_t> pick(0, cloud.size() - 1);
-  const std::size_t stride = std::max<std::size_t>(1, cloud.size() / 20000);
-  struct Candidate {
-    Eigen::Vector3d n;
-    double d;
-    int support;
-  };
-  std::vector<Candidate> found;
-  for (int it = 0; it < 400; ++it) {
-    const Eigen::Vector3d a = cloud.points[pick(rng)].cast<double>(), b = cloud.points[pick(rng)].cast<double>(),
-                          c = cloud.points[pick(rng)].cast<double>();
-    Eigen::Vector3d n = (b - a).cross(c - a);
-    if (n.norm() < 1e-6) continue;
-    n.normalize();
-    if (n.z() < 0) n = -n;
-    if (std::acos(std::min(1.0, n.z())) > max_tilt_rad) continue;
-    const double d = n.dot(a);
-    int support = 0;
-    for (std::size_t i = 0; i < cloud.size(); i += stride)
-      if (std::abs(n.dot(cloud.points[i].cast<double>()) - d) < 0.02) ++support;
-    found.push_back({n, d, support});
+Eigen::Matrix3d levelling_rotation(const Cloud& cloud, const SegmentationSettings& settings) {
+  if (cloud.empty()) throw std::invalid_argument("levelling_rotation: empty cloud");
+  // The floor of the height histogram, plane-fitted, turned onto +z; twice,
+  // as a tilted floor is a broad peak.
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Cloud c = cloud;
+  for (int pass = 0; pass < 2; ++pass) {
+    Floor floor;
+    Ceiling ceiling;
+    detail::find_floor_and_ceiling(c, settings, floor, ceiling);
+    const Eigen::Matrix3d step = Eigen::Quaterniond::FromTwoVectors(floor.normal, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    R = step * R;
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = step;
+    c = transformed(c, T);
   }
-  if (found.empty()) return Eigen::Matrix3d::Identity();
-  int best = 0;
-  for (const auto& f : found) best = std::max(best, f.support);
-  // The floor is the lowest of the large horizontal planes (a table top is smaller or higher).
-  const Candidate* floor = nullptr;
-  for (const auto& f : found)
-    if (f.support >= best / 2 && (!floor || f.d < floor->d)) floor = &f;
-  // Refine by least squares on the inliers (PCA normal).
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  std::vector<Eigen::Vector3d> in;
-  for (const auto& p : cloud.points)
-    if (std::abs(floor->n.dot(p.cast<double>()) - floor->d) < 0.02) in.push_back(p.cast<double>());
-  for (const auto& p : in) mean += p;
-  mean /= static_cast<double>(in.size());
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (const auto& p : in) C += (p - mean) * (p - mean).transpose();
-  Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvectors().col(0);
-  if (n.z() < 0) n = -n;
-  return Eigen::Quaterniond::FromTwoVectors(n, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return R;
 }
 
 }  // namespace rise::semantic

@@ -133,9 +133,10 @@ struct Segmentation {
 /// path.
 Segmentation segment(const Cloud& cloud, const SegmentationSettings& settings = {});
 
-/// The rotation that makes the dominant near-horizontal plane (normal
-/// within `max_tilt_rad` of +z, the lowest of the large ones) exactly
-/// horizontal, about the origin: for clouds from a tilted sensor.
-Eigen::Matrix3d levelling_rotation(const Cloud& cloud, double max_tilt_rad = 0.5);
+/// The rotation about the origin that makes the floor (as segment() finds
+/// it: the lowest large peak of the height histogram, plane-fitted)
+/// exactly horizontal: for a cloud from a sensor tilted by a few degrees.
+/// Throws std::invalid_argument when there is no floor.
+Eigen::Matrix3d levelling_rotation(const Cloud& cloud, const SegmentationSettings& settings = {});
 
 }  // namespace rise::semantic

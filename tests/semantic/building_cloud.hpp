@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "semantic/cloud.hpp"
+#include "semantic/segmentation.hpp"
 #include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
 #include "sim/world_description.hpp"
@@ -59,6 +60,12 @@ inline const std::vector<std::array<double, 3>>& building_poses() {
 inline const Cloud& building_cloud() {
   static const Cloud cloud = scan_world(sim::load_world_description(kBuilding), building_poses());
   return cloud;
+}
+
+/// Its segmentation with the default settings, made once.
+inline const Segmentation& building_segmentation() {
+  static const Segmentation seg = segment(building_cloud());
+  return seg;
 }
 
 }  // namespace rise::semantic::testing
