@@ -324,9 +324,11 @@ void write_map_png(const std::string& path, const SemanticNet& net, const Cloud*
                               : e.kind == EntityKind::Stairs ? cv::Scalar(140, 60, 0)
                               : e.kind == EntityKind::Obstacle ? cv::Scalar(0, 0, 180)
                                                               : cv::Scalar(90, 90, 90);
+    int baseline = 0;
+    const cv::Size text = cv::getTextSize(e.name, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
     cv::Point at = px(e.position_m.head<2>());
-    at.x += 4;
-    at.y -= 4;
+    at.x = std::clamp(at.x + 4, 2, std::max(2, cols - text.width - 2));
+    at.y = std::clamp(at.y - 4, text.height + 2, std::max(text.height + 2, rows - 30));
     cv::putText(img, e.name, at, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
   }
   char legend[96];

@@ -1,5 +1,6 @@
 #include "semantic/app/segment_command.hpp"
 
+#include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -22,6 +23,12 @@ struct SegmentOptions {
   std::string out_dir;
   std::string name = "semantic";
 };
+
+// Logs go to stderr: stdout carries the entities (JSON with --json).
+std::shared_ptr<spdlog::logger> logger() {
+  auto l = spdlog::get("segment");
+  return l ? l : spdlog::stderr_color_mt("segment");
+}
 
 int run_segment(const SegmentOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -68,7 +75,7 @@ int run_segment(const SegmentOptions& o) {
     write_text_file((dir / "world.sdf").string(), sdf_world(net, st));
     write_text_file((dir / "model.obj").string(), obj_mesh(net, st));
     write_map_png((dir / "map.png").string(), net, &cloud, st);
-    spdlog::info("wrote world.yaml, world.sdf, model.obj, map.png to {}", o.out_dir);
+    logger()->info("wrote world.yaml, world.sdf, model.obj, map.png to {}", o.out_dir);
   }
   return 0;
 }
@@ -88,7 +95,7 @@ void add_segment_command(CLI::App& app) {
     try {
       rc = run_segment(*opts);
     } catch (const std::exception& e) {
-      spdlog::error("segment: {}", e.what());
+      logger()->error("segment: {}", e.what());
       rc = 2;
     }
     if (rc != 0) throw CLI::RuntimeError(rc);

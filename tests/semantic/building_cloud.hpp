@@ -69,3 +69,54 @@ inline const Segmentation& building_segmentation() {
 }
 
 }  // namespace rise::semantic::testing
+
+namespace rise::semantic::testing {
+
+/// The world turned by yaw_rad about the origin and moved by (dx, dy):
+/// walls, doors, stairs, objects and a ceiling over the turned outline.
+inline sim::WorldDescription turned(const sim::WorldDescription& w, double yaw_rad, double dx, double dy) {
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  const auto map = [&](const std::array<double, 2>& p) {
+    return std::array<double, 2>{c * p[0] - s * p[1] + dx, s * p[0] + c * p[1] + dy};
+  };
+  sim::WorldDescription out = w;
+  out.regions.clear();
+  std::array<double, 2> lo{1e9, 1e9}, hi{-1e9, -1e9};
+  for (auto& wall : out.walls) {
+    wall.from_m = map(wall.from_m);
+    wall.to_m = map(wall.to_m);
+    for (const auto& p : {wall.from_m, wall.to_m})
+      for (std::size_t k = 0; k < 2; ++k) {
+        lo[k] = std::min(lo[k], p[k] - 0.5);
+        hi[k] = std::max(hi[k], p[k] + 0.5);
+      }
+  }
+  for (auto& d : out.doors) {
+    d.hinge_m = map(d.hinge_m);
+    d.yaw_rad += yaw_rad;
+  }
+  for (auto& st : out.stairs) {
+    st.start_m = map(st.start_m);
+    st.yaw_rad += yaw_rad;
+  }
+  for (auto& o : out.objects) {
+    const auto xy = map({o.center_m[0], o.center_m[1]});
+    o.center_m = {xy[0], xy[1], o.center_m[2]};
+  }
+  if (out.ceiling) {
+    out.ceiling->min_m = lo;
+    out.ceiling->max_m = hi;
+  }
+  return out;
+}
+
+/// building_poses() turned the same way.
+inline std::vector<std::array<double, 3>> turned(const std::vector<std::array<double, 3>>& poses, double yaw_rad,
+                                                 double dx, double dy) {
+  std::vector<std::array<double, 3>> out;
+  const double c = std::cos(yaw_rad), s = std::sin(yaw_rad);
+  for (const auto& p : poses) out.push_back({c * p[0] - s * p[1] + dx, s * p[0] + c * p[1] + dy, p[2] + yaw_rad});
+  return out;
+}
+
+}  // namespace rise::semantic::testing

@@ -149,3 +149,41 @@ TEST_CASE("PCL's office frame has a floor, the wall it faces and a second wall a
     if (&w != back && w.length_m() > 1.0 && std::abs(w.direction().dot(back->direction())) < std::cos(20 * kDeg)) second = true;
   CHECK(second);
 }
+
+TEST_CASE("segment refuses an empty cloud and a cloud without a floor", "[semantic]") {
+  CHECK_THROWS_WITH(segment(Cloud{}), Catch::Contains("empty cloud"));
+  Cloud wall;  // one vertical plane: no horizontal surface at all
+  for (int i = 0; i < 200; ++i)
+    for (int k = 0; k < 100; ++k) wall.points.push_back({static_cast<float>(i) * 0.02f, 0.0f, static_cast<float>(k) * 0.025f});
+  CHECK_THROWS_WITH(segment(wall), Catch::Contains("no floor"));
+  CHECK_THROWS_AS(levelling_rotation(Cloud{}), std::invalid_argument);
+}
+
+TEST_CASE("the building turned and moved is found as well: walls, doors and stairs within tolerance", "[semantic]") {
+  const double yaw = GENERATE(30.0 * kDeg, -65.0 * kDeg);
+  INFO("turned by " << yaw / kDeg << " deg");
+  const auto world = turned(rise::sim::load_world_description(kBuilding), yaw, 1.5, -2.0);
+  const Segmentation seg = segment(scan_world(world, turned(building_poses(), yaw, 1.5, -2.0)));
+  CHECK(seg.floor.height_m == Approx(0.0).margin(0.02));
+  REQUIRE(seg.ceiling.found);
+  CHECK(seg.ceiling.height_m == Approx(2.6).margin(0.02));
+  const WallScore s = score_walls(world.walls, seg.walls);
+  INFO(s.report);
+  CHECK(s.precision() >= 0.95);
+  CHECK(s.recall() >= 0.95);
+  const auto truth = truth_doors(world);
+  CHECK(seg.doors.size() == truth.size());
+  for (const auto& t : truth) {
+    INFO(t.name);
+    double best = 1e9;
+    for (const auto& d : seg.doors) best = std::min(best, (d.center_m - t.center).norm());
+    CHECK(best < 0.10);
+  }
+  REQUIRE(seg.stairs.size() == 1);
+  const auto& st = seg.stairs.front();
+  CHECK(st.steps == world.stairs[0].steps);
+  CHECK(st.riser_m == Approx(world.stairs[0].riser_m).margin(0.01));
+  CHECK(st.tread_m == Approx(world.stairs[0].tread_m).margin(0.01));
+  CHECK(angle_between(st.yaw_rad, world.stairs[0].yaw_rad) < 2 * kDeg);
+  CHECK((st.start_m - v2(world.stairs[0].start_m)).norm() < 0.05);
+}

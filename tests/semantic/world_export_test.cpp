@@ -175,3 +175,7 @@ TEST_CASE("the PNG map shows walls in black, doors in green and stairs in blue w
   CHECK((stairs[0] > 180 && stairs[2] < 140));                    // the staircase: blue
   std::filesystem::remove(path);
 }
+
+TEST_CASE("writing an export where it cannot be written fails with the path", "[semantic]") {
+  CHECK_THROWS_WITH(write_text_file("/nonexistent/dir/world.yaml", "x"), Catch::Contains("/nonexistent/dir/world.yaml"));
+}
