@@ -4,8 +4,10 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "semantic/segmentation_internal.hpp"
 
@@ -17,6 +19,14 @@ double quantile(std::vector<double> v, double q) {
   const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1) + 0.5);
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
+}
+
+void check_grid(const Eigen::Vector2d& extent_m, double cell_m, const char* what) {
+  const double cells = (extent_m.x() / cell_m + 1) * (extent_m.y() / cell_m + 1);
+  if (!(cells <= 16e6))
+    throw std::invalid_argument(std::string("segment: ") + what + " spans " + std::to_string(extent_m.x()) + " x " +
+                                std::to_string(extent_m.y()) + " m: more than 16 million cells of " +
+                                std::to_string(cell_m) + " m (crop the cloud or raise the cell size)");
 }
 
 Line2 fit_line(const std::vector<Eigen::Vector2d>& xy) {
@@ -94,6 +104,8 @@ void find_floor_and_ceiling(const Cloud& cloud, const SegmentationSettings& s, F
     zmin = std::min(zmin, p.z());
     zmax = std::max(zmax, p.z());
   }
+  if (!((zmax - zmin) / s.height_bin_m < 1e6))
+    throw std::invalid_argument("segment: the cloud spans " + std::to_string(zmax - zmin) + " m in height: more than 10^6 bins of height_bin_m");
   const int bins = std::max(1, static_cast<int>(std::ceil((zmax - zmin) / s.height_bin_m)) + 1);
   std::vector<int> h(static_cast<std::size_t>(bins), 0);
   for (const auto& p : cloud.points)
@@ -147,20 +159,31 @@ void find_floor_and_ceiling(const Cloud& cloud, const SegmentationSettings& s, F
 
 Segmentation segment(const Cloud& cloud, const SegmentationSettings& settings) {
   if (cloud.empty()) throw std::invalid_argument("segment: empty cloud");
+  // Points with NaN or infinite coordinates (an organised cloud's holes) are left out.
+  const auto finite = [](const Eigen::Vector3f& p) { return p.allFinite(); };
+  Cloud kept;
+  const bool all_finite = std::all_of(cloud.points.begin(), cloud.points.end(), finite);
+  if (!all_finite) {
+    std::copy_if(cloud.points.begin(), cloud.points.end(), std::back_inserter(kept.points), finite);
+    if (kept.empty()) throw std::invalid_argument("segment: no finite point");
+  }
+  const Cloud& c = all_finite ? cloud : kept;
   Segmentation out;
-  detail::find_floor_and_ceiling(cloud, settings, out.floor, out.ceiling);
-  detail::find_walls_and_doors(cloud, settings, out.floor, out.ceiling, out.walls, out.doors);
-  detail::find_stairs_and_obstacles(cloud, settings, out.floor, out.ceiling, out.walls, out.doors, out.stairs,
+  detail::find_floor_and_ceiling(c, settings, out.floor, out.ceiling);
+  detail::find_walls_and_doors(c, settings, out.floor, out.ceiling, out.walls, out.doors);
+  detail::find_stairs_and_obstacles(c, settings, out.floor, out.ceiling, out.walls, out.doors, out.stairs,
                                     out.obstacles);
   return out;
 }
 
 Eigen::Matrix3d levelling_rotation(const Cloud& cloud, const SegmentationSettings& settings) {
   if (cloud.empty()) throw std::invalid_argument("levelling_rotation: empty cloud");
+  Cloud c;
+  std::copy_if(cloud.points.begin(), cloud.points.end(), std::back_inserter(c.points),
+               [](const Eigen::Vector3f& p) { return p.allFinite(); });
   // The floor of the height histogram, plane-fitted, turned onto +z; twice,
   // as a tilted floor is a broad peak.
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Cloud c = cloud;
   for (int pass = 0; pass < 2; ++pass) {
     Floor floor;
     Ceiling ceiling;

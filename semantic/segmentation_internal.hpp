@@ -24,6 +24,10 @@ struct Line2 {
   double along(const Eigen::Vector2d& p) const { return direction.dot(p - point); }
 };
 
+/// Throws std::invalid_argument when a grid of `cell_m` over `extent_m`
+/// would exceed 16 million cells (a cloud with far outliers).
+void check_grid(const Eigen::Vector2d& extent_m, double cell_m, const char* what);
+
 /// Total least squares (PCA) line through the points' xy.
 Line2 fit_line(const std::vector<Eigen::Vector2d>& xy);
 

@@ -24,7 +24,7 @@ bool overlaps(const Box2& a, const Box2& b) {
 }
 
 bool has_direction(EntityKind k) {
-  return k == EntityKind::Wall || k == EntityKind::Door || k == EntityKind::Stairs;
+  return k == EntityKind::Wall || k == EntityKind::Door || k == EntityKind::Stairs || k == EntityKind::Step;
 }
 
 // Angle between two line directions, folded to 0..π/2.
@@ -51,6 +51,7 @@ const char* to_string(EntityKind kind) {
     case EntityKind::Wall: return "wall";
     case EntityKind::Door: return "door";
     case EntityKind::Stairs: return "stairs";
+    case EntityKind::Step: return "step";
     case EntityKind::Obstacle: return "obstacle";
   }
   return "?";
@@ -105,6 +106,21 @@ SemanticNet::SemanticNet(Segmentation segmentation, const SemanticNetSettings& s
     add(EntityKind::Stairs, static_cast<int>(i), {m.x(), m.y(), z0 + height / 2}, {length, s.width_m, height},
         s.yaw_rad);
   }
+  // Each tread: its middle at its height.
+  struct StepOf {
+    int stairs_id, step;
+  };
+  std::vector<StepOf> steps;
+  for (const int sid : of_kind(EntityKind::Stairs)) {
+    const auto& s = seg_.stairs[static_cast<std::size_t>(entity(sid).index)];
+    const Eigen::Vector2d d(std::cos(s.yaw_rad), std::sin(s.yaw_rad));
+    for (int k = 1; k <= s.steps; ++k) {
+      const Eigen::Vector2d m = s.start_m + d * (k - 0.5) * s.tread_m;
+      add(EntityKind::Step, entity(sid).index, {m.x(), m.y(), z0 + k * s.riser_m}, {s.tread_m, s.width_m, 0.0}, s.yaw_rad);
+      entities_.back().name = entity(sid).name + "_step_" + std::to_string(k);
+      steps.push_back({sid, k});
+    }
+  }
   for (std::size_t i = 0; i < seg_.obstacles.size(); ++i) {
     const auto& o = seg_.obstacles[i];
     add(EntityKind::Obstacle, static_cast<int>(i), o.center_m, o.size_m, o.yaw_rad);
@@ -147,6 +163,16 @@ SemanticNet::SemanticNet(Segmentation segmentation, const SemanticNetSettings& s
       const double reach = door.width_m / 2 + w.thickness_m + st.inside_margin_m;
       if (off <= w.thickness_m / 2 + st.inside_margin_m && along >= -reach && along <= w.length_m() + reach)
         links_.push_back({di, Relation::Inside, wi});
+    }
+  }
+  // The paper's stairs model: each step above and parallel to the one
+  // before it, under the next, all inside their staircase.
+  const auto step_ids = of_kind(EntityKind::Step);
+  for (std::size_t i = 0; i < step_ids.size(); ++i) {
+    links_.push_back({step_ids[i], Relation::Inside, steps[i].stairs_id});
+    if (i > 0 && steps[i - 1].stairs_id == steps[i].stairs_id) {
+      links_.push_back({step_ids[i], Relation::Above, step_ids[i - 1]});
+      links_.push_back({step_ids[i - 1], Relation::Under, step_ids[i]});
     }
   }
   const Entity& floor = entities_.front();

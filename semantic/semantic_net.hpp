@@ -16,10 +16,13 @@
 
 namespace rise::semantic {
 
-enum class EntityKind { Floor, Ceiling, Wall, Door, Stairs, Obstacle };
+/// Step: one tread of a staircase (index: the stairs'; its name says which
+/// step), as the paper's stairs model has each step above and parallel to
+/// the one before.
+enum class EntityKind { Floor, Ceiling, Wall, Door, Stairs, Step, Obstacle };
 enum class Relation { Parallel, Orthogonal, Above, Under, EqualHeight, Inside };
 
-/// "floor", "ceiling", "wall", ...; "parallel", "orthogonal", "above",
+/// "floor", "ceiling", "wall", "door", "stairs", "step", "obstacle"; "parallel", "orthogonal", "above",
 /// "under", "equal_height", "inside".
 const char* to_string(EntityKind kind);
 const char* to_string(Relation relation);

@@ -230,6 +230,7 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
     hi = hi.cwiseMax(p.xy);
   }
   const double cell = s.obstacle_cell_m;
+  check_grid(hi - lo, cell, "what stands on the floor");
   const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
   cv::Mat1b image(ny, nx, uchar{0});
   const auto rc = [&](const Eigen::Vector2d& xy) {

@@ -124,6 +124,7 @@ std::vector<Face> find_faces(const std::vector<Eigen::Vector2d>& xy, const std::
     hi = hi.cwiseMax(p);
   }
   const double cell = s.cell_m;
+  check_grid(hi - lo, cell, "the wall band");
   const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
   const int slices = std::clamp(static_cast<int>(std::ceil((zhi - zlo) / kSliceM)), 1, 64);
   const int need = std::max(1, std::min(static_cast<int>(std::lround(s.wall_min_tall_m / kSliceM)),

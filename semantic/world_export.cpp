@@ -319,7 +319,7 @@ void write_map_png(const std::string& path, const SemanticNet& net, const Cloud*
   }
   const double scale = std::clamp(k / 100.0, 0.35, 1.0);
   for (const auto& e : net.entities()) {
-    if (e.kind == EntityKind::Floor || e.kind == EntityKind::Ceiling) continue;
+    if (e.kind == EntityKind::Floor || e.kind == EntityKind::Ceiling || e.kind == EntityKind::Step) continue;
     const cv::Scalar colour = e.kind == EntityKind::Door ? cv::Scalar(0, 120, 0)
                               : e.kind == EntityKind::Stairs ? cv::Scalar(140, 60, 0)
                               : e.kind == EntityKind::Obstacle ? cv::Scalar(0, 0, 180)

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <cstdlib>
 #include <filesystem>
 
@@ -186,4 +187,16 @@ TEST_CASE("the building turned and moved is found as well: walls, doors and stai
   CHECK(st.tread_m == Approx(world.stairs[0].tread_m).margin(0.01));
   CHECK(angle_between(st.yaw_rad, world.stairs[0].yaw_rad) < 2 * kDeg);
   CHECK((st.start_m - v2(world.stairs[0].start_m)).norm() < 0.05);
+}
+
+TEST_CASE("segment leaves out non-finite points and refuses a cloud too wide for its grids", "[semantic]") {
+  Cloud holes = building_cloud();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int i = 0; i < 1000; ++i) holes.points.push_back({nan, nan, nan});
+  const Segmentation seg = segment(holes);
+  CHECK(seg.walls.size() == building_segmentation().walls.size());
+  CHECK(seg.floor.height_m == Approx(building_segmentation().floor.height_m).margin(1e-6));
+  Cloud far = building_cloud();
+  far.points.push_back({5000.0f, 5000.0f, 1.0f});  // one stray return 7 km away
+  CHECK_THROWS_WITH(segment(far), Catch::Contains("crop the cloud"));
 }

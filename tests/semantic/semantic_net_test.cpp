@@ -58,6 +58,18 @@ TEST_CASE("the building's semantic net relates walls, doors, stairs, floor and c
   CHECK(net.holds(stairs[0], Relation::Inside, floor));
   CHECK(net.holds(stairs[0], Relation::Parallel, north));
   CHECK(net.holds(stairs[0], Relation::Under, ceiling));
+  // Its steps: each above and parallel to the one before, inside the stairs.
+  const auto steps = net.of_kind(EntityKind::Step);
+  REQUIRE(steps.size() == 6);
+  for (std::size_t k = 1; k < steps.size(); ++k) {
+    CHECK(net.holds(steps[k], Relation::Above, steps[k - 1]));
+    CHECK(net.holds(steps[k - 1], Relation::Under, steps[k]));
+    CHECK(net.holds(steps[k], Relation::Parallel, steps[k - 1]));
+    CHECK_FALSE(net.holds(steps[k - 1], Relation::Above, steps[k]));
+    CHECK(net.entity(steps[k]).position_m.z() - net.entity(steps[k - 1]).position_m.z() == Approx(0.17).margin(0.01));
+  }
+  for (const int s : steps) CHECK(net.holds(s, Relation::Inside, stairs[0]));
+  CHECK(net.entity(steps[0]).name == "stairs_0_step_1");
   const auto inside_floor = net.related(stairs[0], Relation::Inside);
   CHECK(std::find(inside_floor.begin(), inside_floor.end(), floor) != inside_floor.end());
 }
