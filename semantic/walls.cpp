@@ -197,11 +197,8 @@ std::vector<Face> find_faces(const std::vector<Eigen::Vector2d>& xy, const std::
             fit.push_back(pts[near[k]]);
             break;
           }
-      if (fit.size() < 30) break;
-      const Line2 refined = fit_line(fit);
-      // Keep the orientation of the seed so that `along` keeps its sense.
-      line = refined;
-      if (pass == 2) break;
+      if (fit.size() < 30 || pass == 2) break;  // the last runs are along the last line
+      line = fit_line(fit);                     // the vertical plane through the inliers
     }
     if (members.size() < 30 || total_length(runs) < s.wall_min_length_m) continue;
     for (std::size_t i : members) used[i] = 1;

@@ -52,7 +52,7 @@ int run_segment(const SegmentOptions& o) {
     std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles\n", seg.walls.size(), seg.doors.size(),
                 seg.stairs.size(), seg.obstacles.size());
     for (const auto& e : net.entities()) {
-      std::printf("  %-12s at (%7.3f, %7.3f, %6.3f) size %.3f x %.3f x %.3f yaw %6.1f deg", e.name.c_str(),
+      std::printf("  %-16s at (%7.3f, %7.3f, %6.3f) size %.3f x %.3f x %.3f yaw %6.1f deg", e.name.c_str(),
                   e.position_m.x(), e.position_m.y(), e.position_m.z(), e.size_m.x(), e.size_m.y(), e.size_m.z(),
                   e.yaw_rad * 180.0 / M_PI);
       if (e.kind == EntityKind::Stairs) {
