@@ -30,6 +30,7 @@ struct SegmentationSettings {
   double wall_min_thickness_m = 0.06;  ///< two parallel faces this far apart ...
   double wall_max_thickness_m = 0.4;   ///< ... up to this: the two sides of one wall
   double default_wall_thickness_m = 0.15;  ///< for a wall seen from one side only
+  double corner_gap_m = 0.35;          ///< wall ends this close to another wall's face meet it
   double parallel_tolerance_rad = 2.0 * 3.14159265358979 / 180.0;
   double door_min_width_m = 0.7;
   double door_max_width_m = 1.2;

@@ -77,22 +77,31 @@ std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const Segmentat
   for (const auto& p : pts) col[static_cast<std::size_t>((d.dot(p.xy) - lo) / kBin)].push_back(p.z);
   struct Top {
     double along, z;
+    std::size_t points;
   };
   std::vector<Top> tops;
   for (std::size_t i = 0; i < nb; ++i)
-    if (col[i].size() >= 3) tops.push_back({lo + (static_cast<double>(i) + 0.5) * kBin, quantile(col[i], 0.95)});
-  // Levels: tops within 2 cm of each other, each over at least 6 cm.
-  std::vector<double> zs;
-  for (const auto& t : tops) zs.push_back(t.z);
-  std::sort(zs.begin(), zs.end());
-  std::vector<std::vector<double>> groups;
-  for (double z : zs) {
-    if (groups.empty() || z - groups.back().back() > 0.02) groups.emplace_back();
-    groups.back().push_back(z);
+    if (col[i].size() >= 3)
+      tops.push_back({lo + (static_cast<double>(i) + 0.5) * kBin, quantile(col[i], 0.95), col[i].size()});
+  // Levels: tops within 2 cm of each other holding 20 points or more (a
+  // riser seen from below is one or two slices: its top edge is the level).
+  std::vector<Top> by_z = tops;
+  std::sort(by_z.begin(), by_z.end(), [](const Top& a, const Top& b) { return a.z < b.z; });
+  std::vector<std::vector<Top>> groups;
+  for (const auto& t : by_z) {
+    if (groups.empty() || t.z - groups.back().back().z > 0.02) groups.emplace_back();
+    groups.back().push_back(t);
   }
   std::vector<double> levels;
-  for (const auto& gr : groups)
-    if (gr.size() >= 3 && quantile(gr, 0.5) > 0.5 * s.stairs_min_riser_m) levels.push_back(quantile(gr, 0.5));
+  for (const auto& gr : groups) {
+    std::size_t points = 0;
+    std::vector<double> z;
+    for (const auto& t : gr) {
+      points += t.points;
+      z.push_back(t.z);
+    }
+    if (points >= 20 && quantile(z, 0.5) > 0.5 * s.stairs_min_riser_m) levels.push_back(quantile(z, 0.5));
+  }
   const int n = static_cast<int>(levels.size());
   if (n < s.stairs_min_steps) return std::nullopt;
   // Equal steps: z_k = k·riser + b, k = 1..n, least squares.

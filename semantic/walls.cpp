@@ -20,7 +20,6 @@ namespace rise::semantic::detail {
 namespace {
 
 constexpr double kSliceM = 0.1;   // tall cells: vertical coverage in slices of this
-constexpr double kLayerM = 0.05;  // door gaps: coverage in layers of this (height and along)
 
 using Run = std::pair<double, double>;
 
@@ -138,7 +137,7 @@ std::vector<Face> find_faces(const std::vector<Eigen::Vector2d>& xy, const std::
     const int k = std::clamp(static_cast<int>((z[i] - zlo) / kSliceM), 0, slices - 1);
     mask[cell_of(xy[i])] |= uint64_t{1} << k;
   }
-  // A cell is tall when the cells within 2 of it together cover the
+  // A cell is tall when the cells within 2 of it together reach over the
   // height: a far wall's points lie on scan lines a few cells apart.
   std::vector<uint64_t> near(mask.size(), 0);
   for (int r = 0; r < ny; ++r)
@@ -152,7 +151,10 @@ std::vector<Face> find_faces(const std::vector<Eigen::Vector2d>& xy, const std::
         }
       near[static_cast<std::size_t>(r) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(c)] = m;
     }
-  const auto tall = [&](std::size_t i) { return mask[i] != 0 && std::popcount(near[i]) >= need; };
+  // Tall: from the lowest to the highest slice seen, so that a wall far
+  // from the scanner, whose points lie on a few columns of rays, counts.
+  const auto span = [](uint64_t m) { return m ? 64 - std::countl_zero(m) - std::countr_zero(m) : 0; };
+  const auto tall = [&](std::size_t i) { return mask[i] != 0 && span(near[i]) >= need; };
   cv::Mat1b image(ny, nx, uchar{0});
   for (int r = 0; r < ny; ++r)
     for (int c = 0; c < nx; ++c)
@@ -224,7 +226,7 @@ std::pair<int, int> floor_beside(const Face& f, const std::vector<Eigen::Vector2
 
 // Whether the stretch `runs` of `line` lies within the wall's slab and extent.
 bool contains(const WallLine& w, const Line2& line, const std::vector<Run>& runs, double inlier_m) {
-  const double half = w.thickness_m / 2 + inlier_m;
+  const double half = w.thickness_m / 2 + 2 * inlier_m;  // the noise tails of its faces too
   const double lo = w.runs.front().first - inlier_m, hi = w.runs.back().second + inlier_m;
   const auto in = [&](double a) {
     const Eigen::Vector2d e = line.point + line.direction * a;
@@ -238,7 +240,7 @@ std::vector<WallLine> build_wall_lines(std::vector<Face> faces, const std::vecto
   std::sort(faces.begin(), faces.end(),
             [](const Face& a, const Face& b) { return total_length(a.runs) > total_length(b.runs); });
   struct Pair {
-    double distance;
+    double distance, overlap_m;
     std::size_t i, j;
   };
   std::vector<Pair> pairs;
@@ -250,9 +252,11 @@ std::vector<WallLine> build_wall_lines(std::vector<Face> faces, const std::vecto
       const auto rj = reproject(faces[j].runs, faces[j].line, faces[i].line);
       const double ov = overlap(faces[i].runs, rj);
       if (ov < 0.5 * std::min(total_length(faces[i].runs), total_length(faces[j].runs))) continue;
-      pairs.push_back({d, i, j});
+      pairs.push_back({d, ov, i, j});
     }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.distance < b.distance; });
+  // The two sides of a wall overlap the most: a stray face close to one
+  // side (a panel's scatter) overlaps it less.
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.overlap_m > b.overlap_m; });
   std::vector<char> taken(faces.size(), 0);
   std::vector<WallLine> walls;
   for (const auto& p : pairs) {
@@ -331,20 +335,21 @@ struct GapReport {
   double lintel_bottom_m = 0, panel_top_m = 0;
 };
 
-// Height profile of the points in a wall's slab over the gap (heights above the floor).
+// Height profile of the points in a wall's slab over the gap (heights above
+// the floor), in square cells of cell_m (the faces' point spacing or more).
 GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_sz, double g0, double g1, double top_m,
-                      const SegmentationSettings& s) {
+                      double cell_m, const SegmentationSettings& s) {
   GapReport rep;
-  const double a0 = g0 + kLayerM, a1 = g1 - kLayerM;
+  const double a0 = g0 + cell_m, a1 = g1 - cell_m;
   if (a1 <= a0 || top_m <= 0) return rep;
-  const int cols = std::max(1, static_cast<int>((a1 - a0) / kLayerM));
-  const int layers = std::max(1, static_cast<int>(top_m / kLayerM));
+  const int cols = std::max(1, static_cast<int>((a1 - a0) / cell_m));
+  const int layers = std::max(1, static_cast<int>(top_m / cell_m));
   std::vector<std::vector<char>> hit(static_cast<std::size_t>(layers), std::vector<char>(static_cast<std::size_t>(cols), 0));
   std::vector<double> zs;
   for (const auto& [sa, z] : slab_sz) {
     if (sa < a0 || sa >= a1 || z < 0 || z >= top_m) continue;
-    const int c = std::min(cols - 1, static_cast<int>((sa - a0) / kLayerM));
-    hit[static_cast<std::size_t>(std::min(layers - 1, static_cast<int>(z / kLayerM)))][static_cast<std::size_t>(c)] = 1;
+    const int c = std::min(cols - 1, static_cast<int>((sa - a0) / cell_m));
+    hit[static_cast<std::size_t>(std::min(layers - 1, static_cast<int>(z / cell_m)))][static_cast<std::size_t>(c)] = 1;
     zs.push_back(z);
   }
   const auto coverage = [&](int layer) {
@@ -355,16 +360,16 @@ GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_sz, dou
   // Wall above the door: covered layers from just under the wall's top down.
   int k = layers - 2;
   while (k >= 0 && coverage(k) >= 0.6) --k;
-  const double lintel_bottom = (k + 1) * kLayerM;
+  const double lintel_bottom = (k + 1) * cell_m;
   if (k < layers - 2 && lintel_bottom >= s.door_min_height_m) {
     rep.lintel = true;
     std::vector<double> above;
     for (double z : zs)
-      if (z >= lintel_bottom - kLayerM) above.push_back(z);
+      if (z >= lintel_bottom - cell_m) above.push_back(z);
     rep.lintel_bottom_m = quantile(above, 0.02);
   }
   // A panel in the gap: covered from 0.3 m up to the door's minimum height.
-  const int k0 = static_cast<int>(0.3 / kLayerM), k1 = std::min(layers - 1, static_cast<int>(s.door_min_height_m / kLayerM));
+  const int k0 = static_cast<int>(0.3 / cell_m), k1 = std::min(layers - 1, static_cast<int>(s.door_min_height_m / cell_m));
   int covered = 0, empty = 0;
   for (int j = k0; j < k1; ++j) {
     covered += coverage(j) >= 0.6;
@@ -375,10 +380,10 @@ GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_sz, dou
   if (covered >= 0.8 * n) {
     rep.panel = true;
     int j = k0;
-    while (j < layers - 1 && coverage(j) >= 0.6 && (!rep.lintel || (j + 1) * kLayerM < rep.lintel_bottom_m)) ++j;
+    while (j < layers - 1 && coverage(j) >= 0.6 && (!rep.lintel || (j + 1) * cell_m < rep.lintel_bottom_m)) ++j;
     std::vector<double> below;
     for (double z : zs)
-      if (z <= (j + 1) * kLayerM) below.push_back(z);
+      if (z <= (j + 1) * cell_m) below.push_back(z);
     rep.panel_top_m = quantile(below, 0.98);
   }
   return rep;
@@ -445,6 +450,12 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
     // The top: the fifth highest point (the ceiling's band is left out).
     std::sort(heights.begin(), heights.end());
     const double top_m = heights.size() > 5 ? heights[heights.size() - 5] : quantile(heights, 1.0);
+    // The faces' point spacing sets the cells a gap is inspected in: twice
+    // it, 5 to 25 cm (a sparse far wall has holes between its points).
+    double seen_m2 = 0;
+    for (const auto& r : w.runs) seen_m2 += (r.second - r.first) * std::max(top_m, 0.1) * (w.both ? 2.0 : 1.0);
+    const double spacing_m = std::sqrt(seen_m2 / std::max<double>(1.0, static_cast<double>(heights.size())));
+    const double cell_m = std::clamp(2 * spacing_m, 0.05, 0.25);
     // A gap's sides (the jambs), from the points on the faces below any
     // lintel, clear of a panel in the middle of the slab.
     const auto jambs = [&](double g0, double g1) {
@@ -470,7 +481,7 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
       GapReport rep;
       if (g1 - g0 >= s.door_min_width_m - 0.15 && g1 - g0 <= s.door_max_width_m + 0.05) {
         std::tie(g0, g1) = jambs(g0, g1);
-        if (g1 - g0 >= s.door_min_width_m && g1 - g0 <= s.door_max_width_m) rep = inspect_gap(slab, g0, g1, top_m, s);
+        if (g1 - g0 >= s.door_min_width_m && g1 - g0 <= s.door_max_width_m) rep = inspect_gap(slab, g0, g1, top_m, cell_m, s);
       }
       const double gap = g1 - g0;
       const bool door = (rep.lintel && (rep.panel || rep.free_below)) || (rep.panel && !rep.lintel);
@@ -501,7 +512,8 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
     }
   }
 
-  // Corners: an end near another wall's centre line is moved onto it; a
+  // Corners: an end near another wall's centre line (both ends within
+  // corner_gap_m past the faces: a corner seen sparsely) is moved onto it; a
   // free end is drawn in by half the thickness (the world file's walls are
   // lengthened by that much past each end).
   const auto end_point = [&](const Segment& g, double a) { return lines[g.line].line.point + lines[g.line].line.direction * a; };
@@ -522,10 +534,10 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
         // li.point + a·li.dir on lj: lj.offset = 0.
         const double a = -lj.offset(li.point) / lj.normal.dot(li.direction);
         const double here = side == 0 ? segs[i].s0 : segs[i].s1;
-        const double reach = ti / 2 + tj / 2 + 0.1;
+        const double reach = ti / 2 + tj / 2 + s.corner_gap_m;
         if (std::abs(a - here) > reach) continue;
         const double along_j = lj.along(li.point + li.direction * a);
-        if (along_j < segs[j].s0 - ti / 2 - 0.15 || along_j > segs[j].s1 + ti / 2 + 0.15) continue;
+        if (along_j < segs[j].s0 - reach || along_j > segs[j].s1 + reach) continue;
         if (std::abs(a - here) < best) {
           best = std::abs(a - here);
           e[side] = a;

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <map>
 #include <cstdlib>
 #include <filesystem>
 
@@ -199,4 +200,48 @@ TEST_CASE("segment leaves out non-finite points and refuses a cloud too wide for
   Cloud far = building_cloud();
   far.points.push_back({5000.0f, 5000.0f, 1.0f});  // one stray return 7 km away
   CHECK_THROWS_WITH(segment(far), Catch::Contains("crop the cloud"));
+}
+
+namespace {
+// One point per occupied cube of leaf_m, their centroid: the merged map as
+// a SLAM pipeline hands it over.
+Cloud voxel_filtered(const Cloud& c, float leaf_m) {
+  std::map<std::array<int, 3>, std::pair<Eigen::Vector3f, int>> cubes;
+  for (const auto& p : c.points) {
+    const std::array<int, 3> key{static_cast<int>(std::floor(p.x() / leaf_m)), static_cast<int>(std::floor(p.y() / leaf_m)),
+                                 static_cast<int>(std::floor(p.z() / leaf_m))};
+    auto& e = cubes.try_emplace(key, Eigen::Vector3f::Zero(), 0).first->second;
+    e.first += p;
+    ++e.second;
+  }
+  Cloud out;
+  for (const auto& [key, e] : cubes) out.points.push_back(e.first / static_cast<float>(e.second));
+  return out;
+}
+}  // namespace
+
+TEST_CASE("the building is found as well from a voxel-filtered map and from a quarter of the rays", "[semantic]") {
+  const auto world = rise::sim::load_world_description(kBuilding);
+  const int variant = GENERATE(0, 1);
+  INFO((variant == 0 ? "5 cm voxel filter" : "every 4th ray"));
+  const Cloud cloud = variant == 0 ? voxel_filtered(building_cloud(), 0.05f) : scan_world(world, building_poses(), 4);
+  REQUIRE(cloud.size() < building_cloud().size() / 3);
+  const Segmentation seg = segment(cloud);
+  CHECK(seg.floor.height_m == Approx(0.0).margin(0.02));
+  CHECK(seg.ceiling.height_m == Approx(2.6).margin(0.02));
+  const WallScore s = score_walls(world.walls, seg.walls);
+  INFO(s.report);
+  CHECK(s.precision() >= 0.95);
+  CHECK(s.recall() >= 0.95);
+  const auto truth = truth_doors(world);
+  CHECK(seg.doors.size() == truth.size());
+  for (const auto& t : truth) {
+    double best = 1e9;
+    for (const auto& d : seg.doors) best = std::min(best, (d.center_m - t.center).norm());
+    CHECK(best < 0.10);
+  }
+  REQUIRE(seg.stairs.size() == 1);
+  CHECK(seg.stairs[0].steps == 6);
+  CHECK(seg.stairs[0].riser_m == Approx(0.17).margin(0.01));
+  CHECK(seg.stairs[0].tread_m == Approx(0.28).margin(0.01));
 }
