@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include <utility>
 #include <vector>
 
 #include "semantic/segmentation.hpp"
@@ -32,6 +33,19 @@ void check_grid(const Eigen::Vector2d& extent_m, double cell_m, const char* what
 Line2 fit_line(const std::vector<Eigen::Vector2d>& xy);
 
 void find_floor_and_ceiling(const Cloud& cloud, const SegmentationSettings& s, Floor& floor, Ceiling& ceiling);
+
+/// What fills a gap of door width in a wall (doors.cpp).
+struct GapReport {
+  bool lintel = false;      ///< wall above the door: covered layers down from the wall's top
+  bool panel = false;       ///< a door panel: covered layers from 0.3 m to the door's minimum height
+  bool free_below = false;  ///< nothing between 0.3 m and the door's minimum height
+  double lintel_bottom_m = 0, panel_top_m = 0;  ///< above the floor
+};
+
+/// The points of a wall's slab (along the wall, height above the floor)
+/// over the gap g0..g1, in square cells of cell_m, below the wall's top.
+GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_along_height, double g0, double g1,
+                      double top_m, double cell_m, const SegmentationSettings& s);
 
 /// Walls, and the doors in their gaps.
 void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
