@@ -230,7 +230,8 @@ std::string sdf_world(const SemanticNet& net, const ExportSettings& st) {
   o << "    <light type=\"directional\" name=\"sun\">\n      <cast_shadows>true</cast_shadows>\n"
        "      <pose>0 0 10 0 0 0</pose>\n      <diffuse>0.8 0.8 0.8 1</diffuse>\n"
        "      <direction>-0.5 0.1 -0.9</direction>\n    </light>\n";
-  o << "    <model name=\"ground_plane\">\n      <static>true</static>\n      <link name=\"link\">\n"
+  o << "    <model name=\"ground_plane\">\n      <static>true</static>\n      <pose>0 0 "
+    << num(net.segmentation().floor.height_m) << " 0 0 0</pose>\n      <link name=\"link\">\n"
        "        <collision name=\"collision\"><geometry><plane><normal>0 0 1</normal><size>100 100</size></plane></geometry></collision>\n"
        "        <visual name=\"visual\"><geometry><plane><normal>0 0 1</normal><size>100 100</size></plane></geometry></visual>\n"
        "      </link>\n    </model>\n";
