@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include "semantic/app/register_command.hpp"
+#include "semantic/app/segment_command.hpp"
 
 int main(int argc, char** argv) {
   // Results go to stdout; the log goes to stderr so that both can be piped.
@@ -21,6 +22,7 @@ int main(int argc, char** argv) {
   });
 
   rise::semantic::add_register_command(app);
+  rise::semantic::add_segment_command(app);
 
   CLI11_PARSE(app, argc, argv);
   return 0;

@@ -1,0 +1,105 @@
+#include "semantic/app/segment_command.hpp"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "semantic/cloud_io.hpp"
+#include "semantic/segmentation.hpp"
+#include "semantic/semantic_net.hpp"
+#include "semantic/world_export.hpp"
+
+namespace rise::semantic {
+namespace {
+
+struct SegmentOptions {
+  std::string cloud;
+  bool json = false;
+  bool level = false;
+  std::string out_dir;
+  std::string name = "semantic";
+};
+
+// Logs go to stderr: stdout carries the entities (JSON with --json).
+std::shared_ptr<spdlog::logger> logger() {
+  auto l = spdlog::get("segment");
+  return l ? l : spdlog::stderr_color_mt("segment");
+}
+
+int run_segment(const SegmentOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Cloud cloud = read_cloud(o.cloud);
+  if (o.level) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.linear() = levelling_rotation(cloud);
+    cloud = transformed(cloud, T);
+  }
+  const auto t1 = std::chrono::steady_clock::now();
+  SemanticNet net(segment(cloud));
+  const auto t2 = std::chrono::steady_clock::now();
+  const auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+  if (o.json) {
+    std::fputs(to_json(net).c_str(), stdout);
+  } else {
+    const auto& seg = net.segmentation();
+    std::printf("%s: %zu points, read %.0f ms, segmented %.0f ms\n", o.cloud.c_str(), cloud.size(), ms(t0, t1), ms(t1, t2));
+    std::printf("floor %.3f m", seg.floor.height_m);
+    if (seg.ceiling.found) std::printf(", ceiling %.3f m", seg.ceiling.height_m);
+    std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles\n", seg.walls.size(), seg.doors.size(),
+                seg.stairs.size(), seg.obstacles.size());
+    for (const auto& e : net.entities()) {
+      std::printf("  %-16s at (%7.3f, %7.3f, %6.3f) size %.3f x %.3f x %.3f yaw %6.1f deg", e.name.c_str(),
+                  e.position_m.x(), e.position_m.y(), e.position_m.z(), e.size_m.x(), e.size_m.y(), e.size_m.z(),
+                  e.yaw_rad * 180.0 / M_PI);
+      if (e.kind == EntityKind::Stairs) {
+        const auto& s = seg.stairs[static_cast<std::size_t>(e.index)];
+        std::printf("  %d steps, riser %.3f m, tread %.3f m", s.steps, s.riser_m, s.tread_m);
+      } else if (e.kind == EntityKind::Door) {
+        const auto& d = seg.doors[static_cast<std::size_t>(e.index)];
+        std::printf("  width %.3f m, height %.3f m%s%s", d.width_m, d.height_m, d.lintel ? ", lintel" : "",
+                    d.panel ? ", panel" : "");
+      }
+      std::printf("\n");
+    }
+  }
+  if (!o.out_dir.empty()) {
+    std::filesystem::create_directories(o.out_dir);
+    const std::filesystem::path dir(o.out_dir);
+    ExportSettings st;
+    st.world_name = o.name;
+    write_text_file((dir / "world.yaml").string(), world_yaml(net, st));
+    write_text_file((dir / "world.sdf").string(), sdf_world(net, st));
+    write_text_file((dir / "model.obj").string(), obj_mesh(net, st));
+    write_map_png((dir / "map.png").string(), net, &cloud, st);
+    logger()->info("wrote world.yaml, world.sdf, model.obj, map.png to {}", o.out_dir);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_segment_command(CLI::App& app) {
+  auto opts = std::make_shared<SegmentOptions>();
+  CLI::App* sub = app.add_subcommand("segment", "find floor, ceiling, walls, doors, stairs and obstacles in one registered cloud");
+  sub->add_option("CLOUD", opts->cloud, "registered cloud, world frame, z up (.pcd .ply .xyz .3d)")->required();
+  sub->add_flag("--json", opts->json, "print the entities and relations as JSON");
+  sub->add_flag("--level", opts->level, "level the cloud first (its floor made horizontal)");
+  sub->add_option("--out-dir,-o", opts->out_dir, "also write world.yaml, world.sdf, model.obj and map.png here");
+  sub->add_option("--name", opts->name, "world name in the files written")->capture_default_str();
+  sub->callback([opts] {
+    int rc = 0;
+    try {
+      rc = run_segment(*opts);
+    } catch (const std::exception& e) {
+      logger()->error("segment: {}", e.what());
+      rc = 2;
+    }
+    if (rc != 0) throw CLI::RuntimeError(rc);
+  });
+}
+
+}  // namespace rise::semantic

@@ -1,0 +1,297 @@
+// Stairs and obstacles: what is neither floor, ceiling, wall nor door,
+// clustered on the floor plane. A cluster whose height climbs along one
+// direction in equal steps is a staircase — the seed paper's "set of
+// parallel lines in the same short distance between each other", here the
+// riser edges, fitted by least squares over the steps — the rest are boxes.
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "semantic/segmentation_internal.hpp"
+
+namespace rise::semantic::detail {
+namespace {
+
+struct Point3 {
+  Eigen::Vector2d xy;
+  double z;  // above the floor
+};
+
+// Sharpness of the points' distribution along direction `theta`: risers
+// perpendicular to it pile up in few 1 cm bins.
+double sharpness(const std::vector<Point3>& pts, double theta) {
+  const Eigen::Vector2d d(std::cos(theta), std::sin(theta));
+  std::vector<int> bins;
+  double lo = std::numeric_limits<double>::infinity();
+  for (const auto& p : pts) lo = std::min(lo, d.dot(p.xy));
+  for (const auto& p : pts) {
+    const auto k = static_cast<std::size_t>((d.dot(p.xy) - lo) / 0.01);
+    if (k >= bins.size()) bins.resize(k + 1, 0);
+    ++bins[k];
+  }
+  double sum = 0;
+  for (int b : bins) sum += static_cast<double>(b) * b;
+  return sum;
+}
+
+std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const SegmentationSettings& s) {
+  if (pts.size() < 200) return std::nullopt;
+  // Climb direction: the height gradient, z ≈ g·xy + c (least squares).
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) {
+    const Eigen::Vector3d row(p.xy.x(), p.xy.y(), 1.0);
+    A += row * row.transpose();
+    rhs += row * p.z;
+  }
+  const Eigen::Vector3d g = A.ldlt().solve(rhs);
+  if (!g.allFinite() || g.head<2>().norm() < 0.15) return std::nullopt;
+  double theta = std::atan2(g.y(), g.x());
+  // Refine so that the risers are sharpest: coarse then fine search.
+  for (const double step : {0.5 * M_PI / 180.0, 0.05 * M_PI / 180.0}) {
+    double best = theta, best_v = -1;
+    for (int k = -20; k <= 20; ++k) {
+      const double t = theta + k * step;
+      const double v = sharpness(pts, t);
+      if (v > best_v) {
+        best_v = v;
+        best = t;
+      }
+    }
+    theta = best;
+  }
+  const Eigen::Vector2d d(std::cos(theta), std::sin(theta)), c(-d.y(), d.x());
+  // Profile: the top of each 2 cm slice along the climb.
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& p : pts) {
+    lo = std::min(lo, d.dot(p.xy));
+    hi = std::max(hi, d.dot(p.xy));
+  }
+  constexpr double kBin = 0.02;
+  const auto nb = static_cast<std::size_t>((hi - lo) / kBin) + 1;
+  std::vector<std::vector<double>> col(nb);
+  for (const auto& p : pts) col[static_cast<std::size_t>((d.dot(p.xy) - lo) / kBin)].push_back(p.z);
+  struct Top {
+    double along, z;
+    std::size_t points;
+  };
+  std::vector<Top> tops;
+  for (std::size_t i = 0; i < nb; ++i)
+    if (col[i].size() >= 3)
+      tops.push_back({lo + (static_cast<double>(i) + 0.5) * kBin, quantile(col[i], 0.95), col[i].size()});
+  // Levels: tops within 2 cm of each other holding 20 points or more (a
+  // riser seen from below is one or two slices: its top edge is the level).
+  std::vector<Top> by_z = tops;
+  std::sort(by_z.begin(), by_z.end(), [](const Top& a, const Top& b) { return a.z < b.z; });
+  std::vector<std::vector<Top>> groups;
+  for (const auto& t : by_z) {
+    if (groups.empty() || t.z - groups.back().back().z > 0.02) groups.emplace_back();
+    groups.back().push_back(t);
+  }
+  std::vector<double> levels;
+  for (const auto& gr : groups) {
+    std::size_t points = 0;
+    std::vector<double> z;
+    for (const auto& t : gr) {
+      points += t.points;
+      z.push_back(t.z);
+    }
+    if (points >= 20 && quantile(z, 0.5) > 0.5 * s.stairs_min_riser_m) levels.push_back(quantile(z, 0.5));
+  }
+  const int n = static_cast<int>(levels.size());
+  if (n < s.stairs_min_steps) return std::nullopt;
+  // Equal steps: z_k = k·riser + b, k = 1..n, least squares.
+  double sk = 0, sz = 0, skk = 0, skz = 0;
+  for (int k = 1; k <= n; ++k) {
+    sk += k;
+    sz += levels[static_cast<std::size_t>(k - 1)];
+    skk += k * k;
+    skz += k * levels[static_cast<std::size_t>(k - 1)];
+  }
+  const double riser = (n * skz - sk * sz) / (n * skk - sk * sk);
+  const double b = (sz - riser * sk) / n;
+  if (riser < s.stairs_min_riser_m || riser > s.stairs_max_riser_m || std::abs(b) > 0.3 * riser) return std::nullopt;
+  for (int k = 1; k <= n; ++k)
+    if (std::abs(levels[static_cast<std::size_t>(k - 1)] - (k * riser + b)) > 0.25 * riser) return std::nullopt;
+  // Width across the climb.
+  std::vector<double> across;
+  for (const auto& p : pts) across.push_back(c.dot(p.xy));
+  const double c0 = quantile(across, 0.0), c1 = quantile(across, 1.0), cm = (c0 + c1) / 2;
+  // Riser k stands where level k begins; its face points (clear of the
+  // stairs' sides) give its position along the climb.
+  std::vector<double> riser_at(static_cast<std::size_t>(n));
+  double last_end = lo;
+  for (int k = 1; k <= n; ++k) {
+    const double zk = levels[static_cast<std::size_t>(k - 1)];
+    double first = std::numeric_limits<double>::infinity();
+    for (const auto& t : tops)
+      if (std::abs(t.z - zk) < 0.03) {
+        first = std::min(first, t.along);
+        if (k == n) last_end = std::max(last_end, t.along);
+      }
+    const double z_below = k == 1 ? 0.0 : levels[static_cast<std::size_t>(k - 2)];
+    std::vector<double> face;
+    for (const auto& p : pts) {
+      const double a = d.dot(p.xy);
+      if (std::abs(a - first) > 0.06 || std::abs(c.dot(p.xy) - cm) > 0.4 * (c1 - c0)) continue;
+      if (p.z < z_below + 0.25 * riser || p.z > zk - 0.25 * riser) continue;
+      face.push_back(a);
+    }
+    riser_at[static_cast<std::size_t>(k - 1)] = face.size() >= 5 ? quantile(face, 0.5) : first;
+  }
+  double sa = 0, ska = 0;
+  for (int k = 1; k <= n; ++k) {
+    sa += riser_at[static_cast<std::size_t>(k - 1)];
+    ska += k * riser_at[static_cast<std::size_t>(k - 1)];
+  }
+  const double tread = (n * ska - sk * sa) / (n * skk - sk * sk);
+  const double a1 = (sa - tread * sk) / n + tread;  // riser 1
+  if (tread < s.stairs_min_tread_m || tread > s.stairs_max_tread_m) return std::nullopt;
+  double rss = 0;
+  for (int k = 1; k <= n; ++k) {
+    const double e = riser_at[static_cast<std::size_t>(k - 1)] - (a1 + (k - 1) * tread);
+    rss += e * e;
+  }
+  Stairs st;
+  st.rms_m = std::sqrt(rss / n);
+  if (st.rms_m > 0.3 * tread) return std::nullopt;
+  st.start_m = d * a1 + c * cm;
+  st.yaw_rad = theta;
+  st.steps = n;
+  st.riser_m = riser;
+  st.tread_m = tread;
+  st.width_m = c1 - c0;
+  st.landing_m = std::max(0.1, last_end + kBin / 2 - (a1 + n * tread));
+  st.points = static_cast<int>(pts.size());
+  return st;
+}
+
+Obstacle box_of(const std::vector<Point3>& pts, double floor_z) {
+  std::vector<cv::Point2f> xy;
+  std::vector<double> z;
+  for (const auto& p : pts) {
+    xy.emplace_back(static_cast<float>(p.xy.x()), static_cast<float>(p.xy.y()));
+    z.push_back(p.z);
+  }
+  const cv::RotatedRect r = cv::minAreaRect(xy);
+  double bottom = quantile(z, 0.01);
+  if (bottom < 0.1) bottom = 0.0;  // standing on the floor
+  const double top = quantile(z, 0.99);
+  Obstacle o;
+  o.center_m = {r.center.x, r.center.y, floor_z + (bottom + top) / 2};
+  o.size_m = {std::max(0.02f, r.size.width), std::max(0.02f, r.size.height), std::max(0.02, top - bottom)};
+  o.yaw_rad = r.angle * M_PI / 180.0;
+  o.points = static_cast<int>(pts.size());
+  return o;
+}
+
+}  // namespace
+
+void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
+                               const Ceiling& ceiling, const std::vector<Wall>& walls,
+                               const std::vector<Door>& doors, std::vector<Stairs>& stairs,
+                               std::vector<Obstacle>& obstacles) {
+  const double z0 = floor.height_m + 0.04;
+  const double z1 = ceiling.found ? ceiling.height_m - 0.04 : std::numeric_limits<double>::infinity();
+  // Slabs to leave out: each wall and each door gap, widened by the inlier distance.
+  struct Slab {
+    Line2 line;
+    double half_m, a0, a1;
+  };
+  std::vector<Slab> slabs;
+  const double m = s.wall_inlier_m + 0.02;
+  for (const auto& w : walls) {
+    Line2 l;
+    l.point = w.from_m;
+    l.direction = w.direction();
+    l.normal = {-l.direction.y(), l.direction.x()};
+    slabs.push_back({l, w.thickness_m / 2 + m, -w.thickness_m / 2 - m, w.length_m() + w.thickness_m / 2 + m});
+  }
+  for (const auto& d : doors) {
+    Line2 l;
+    l.point = d.center_m;
+    l.direction = {std::cos(d.yaw_rad), std::sin(d.yaw_rad)};
+    l.normal = {-l.direction.y(), l.direction.x()};
+    slabs.push_back({l, d.wall_thickness_m / 2 + m, -d.width_m / 2 - m, d.width_m / 2 + m});
+  }
+  std::vector<Point3> rest;
+  for (const auto& p : cloud.points) {
+    if (p.z() < z0 || p.z() > z1) continue;
+    const Eigen::Vector2d xy = p.head<2>().cast<double>();
+    bool in_wall = false;
+    for (const auto& sl : slabs) {
+      const double a = sl.line.along(xy);
+      if (a >= sl.a0 && a <= sl.a1 && std::abs(sl.line.offset(xy)) <= sl.half_m) {
+        in_wall = true;
+        break;
+      }
+    }
+    if (!in_wall) rest.push_back({xy, p.z() - floor.height_m});
+  }
+  if (rest.empty()) return;
+  Eigen::Vector2d lo = rest[0].xy, hi = rest[0].xy;
+  for (const auto& p : rest) {
+    lo = lo.cwiseMin(p.xy);
+    hi = hi.cwiseMax(p.xy);
+  }
+  const double cell = s.obstacle_cell_m;
+  check_grid(hi - lo, cell, "what stands on the floor");
+  const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
+  cv::Mat1b image(ny, nx, uchar{0});
+  const auto rc = [&](const Eigen::Vector2d& xy) {
+    return cv::Point(static_cast<int>((xy.x() - lo.x()) / cell), static_cast<int>((xy.y() - lo.y()) / cell));
+  };
+  for (const auto& p : rest) image(rc(p.xy)) = 255;
+  // Scan lines a few cells apart on a far surface are one cluster.
+  cv::dilate(image, image, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+  cv::Mat1i labels;
+  const int n = cv::connectedComponents(image, labels, 8, CV_32S);
+  std::vector<std::vector<Point3>> clusters(static_cast<std::size_t>(n));
+  for (const auto& p : rest) clusters[static_cast<std::size_t>(labels(rc(p.xy)))].push_back(p);
+  std::vector<std::size_t> others;
+  for (int k = 1; k < n; ++k) {
+    auto& pts = clusters[static_cast<std::size_t>(k)];
+    if (static_cast<int>(pts.size()) < s.obstacle_min_points) continue;
+    if (auto st = fit_stairs(pts, s)) {
+      stairs.push_back(*st);
+      continue;
+    }
+    others.push_back(static_cast<std::size_t>(k));
+  }
+  for (std::size_t k : others) {
+    const auto& pts = clusters[k];
+    // The far end of a landing seen from beyond it, apart from the flight
+    // seen from below (its top is out of sight of a low scanner).
+    bool landing = false;
+    for (auto& st : stairs) {
+      const Eigen::Vector2d d(std::cos(st.yaw_rad), std::sin(st.yaw_rad)), c(-d.y(), d.x());
+      const double top_end = d.dot(st.start_m) + st.steps * st.tread_m;
+      std::vector<double> z, along;
+      bool fits = true;
+      for (const auto& p : pts) {
+        const double a = d.dot(p.xy - st.start_m) + d.dot(st.start_m), x = c.dot(p.xy - st.start_m);
+        if (a < top_end - 0.05 || a > top_end + 3.0 || std::abs(x) > st.width_m / 2 + 0.1) {
+          fits = false;
+          break;
+        }
+        z.push_back(p.z);
+        along.push_back(a);
+      }
+      if (!fits || std::abs(quantile(z, 0.99) - st.steps * st.riser_m) > 0.05) continue;
+      st.landing_m = std::max(st.landing_m, quantile(along, 1.0) - top_end);
+      st.points += static_cast<int>(pts.size());
+      landing = true;
+      break;
+    }
+    if (landing) continue;
+    Obstacle o = box_of(pts, floor.height_m);
+    if (o.size_m.z() < s.obstacle_min_height_m) continue;
+    obstacles.push_back(o);
+  }
+}
+
+}  // namespace rise::semantic::detail

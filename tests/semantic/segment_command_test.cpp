@@ -1,0 +1,73 @@
+#include <catch2/catch.hpp>
+
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "sim/world_description.hpp"
+#include "tests/semantic/building_cloud.hpp"
+
+using namespace rise::semantic::testing;
+
+namespace {
+const std::string kProgram = std::string(RISE_BINARY_DIR) + "/bin/rise-semantic";
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The building's cloud as a binary PCD file, written once.
+std::filesystem::path building_pcd() {
+  static const std::filesystem::path path = [] {
+    const auto p = std::filesystem::temp_directory_path() / "rise_segment_command_test_building.pcd";
+    pcl::PointCloud<pcl::PointXYZ> pc;
+    for (const auto& q : building_cloud().points) pc.points.emplace_back(q.x(), q.y(), q.z());
+    pc.width = static_cast<uint32_t>(pc.points.size());
+    pc.height = 1;
+    pcl::io::savePCDFileBinary(p.string(), pc);
+    return p;
+  }();
+  return path;
+}
+}  // namespace
+
+TEST_CASE("rise-semantic segment prints the building's entities as JSON and writes a world rise::sim loads", "[semantic]") {
+  const auto dir = std::filesystem::temp_directory_path() / "rise_segment_command_test_out";
+  std::filesystem::remove_all(dir);
+  const auto json = dir.string() + ".json";
+  const std::string cmd = kProgram + " segment " + building_pcd().string() + " --json --name found -o " + dir.string() + " > " + json;
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const std::string check = "/usr/bin/python3 -c \"import json,sys; d=json.load(open(sys.argv[1])); "
+                            "s=[e for e in d['entities'] if e['kind']=='stairs']; "
+                            "assert len(s)==1 and s[0]['steps']==6 and abs(s[0]['riser_m']-0.17)<0.01, s; "
+                            "assert sum(e['kind']=='door' for e in d['entities'])==2; "
+                            "assert all(len(e['position_m'])==3 and len(e['size_m'])==3 for e in d['entities'])\" " + json;
+  CHECK(std::system(check.c_str()) == 0);
+  for (const char* f : {"world.yaml", "world.sdf", "model.obj", "map.png"}) {
+    INFO(f);
+    CHECK(std::filesystem::file_size(dir / f) > 100);
+  }
+  const auto world = rise::sim::load_world_description((dir / "world.yaml").string());
+  CHECK(world.name == "found");
+  CHECK(world.stairs.size() == 1);
+  CHECK(world.walls.size() >= 9);
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove(json);
+}
+
+TEST_CASE("rise-semantic segment refuses a missing cloud with its name and exit code 2", "[semantic]") {
+  const auto err = std::filesystem::temp_directory_path() / "rise_segment_command_test.err";
+  const std::string cmd = kProgram + " segment /nonexistent/cloud.pcd 2> " + err.string();
+  const int rc = std::system(cmd.c_str());
+  REQUIRE(WIFEXITED(rc));
+  CHECK(WEXITSTATUS(rc) == 2);
+  CHECK(slurp(err).find("/nonexistent/cloud.pcd") != std::string::npos);
+  std::filesystem::remove(err);
+}
