@@ -25,3 +25,15 @@ TEST_CASE("the metro transport script pushes the hazardous object into the neutr
   CHECK(r.counts.at("object_delivered") == 1);
   CHECK(r.score >= 20);
 }
+
+TEST_CASE("the example missions' scripts achieve them", "[training]") {
+  for (const char* f : {"sim/training/examples/approach_object.yaml", "sim/training/examples/neutralize_object.yaml"}) {
+    const auto task = load_task_description(src(f));
+    rise::trainer::ScriptedConsole console(task.panel_file, task.console_script);
+    const auto r = rise::trainer::play_task(task, &console);
+    for (const auto& e : r.events) UNSCOPED_INFO(e.time_s << " " << e.name << " " << e.points << " " << e.detail);
+    UNSCOPED_INFO(f << " end " << r.end_reason << " score " << r.score);
+    CHECK(r.success);
+    CHECK(r.score >= 20);
+  }
+}
