@@ -217,6 +217,7 @@ std::string map_svg(const TaskResult& r, const WorldDescription& w) {
     s << footprint(f, p.box.center_m[0], p.box.center_m[1], p.box.size_m[0], p.box.size_m[1], p.box.yaw_rad, "fill=\"#aaa\"");
   for (const auto& wall : w.walls)
     for (const auto& b : wall_boxes(wall))
+      if (b.center_m[2] - b.size_m[2] / 2 < 0.3)  // lintels over openings would hide them from above
       s << footprint(f, b.center_m[0], b.center_m[1], b.size_m[0], b.size_m[1], b.yaw_rad, "fill=\"#444\"");
   for (const auto& d : w.doors)
     s << "<line x1=\"" << num(f.px(d.hinge_m[0])) << "\" y1=\"" << num(f.py(d.hinge_m[1])) << "\" x2=\""

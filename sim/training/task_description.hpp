@@ -64,7 +64,7 @@ struct TaskDescription {
   std::vector<TaskEventSpec> events;
   std::vector<Region> regions;         ///< task-only regions (scored from the robot's position)
   std::vector<std::string> end_on;     ///< the task ends when any of these events fires
-  std::vector<std::string> success;    ///< success = all of these fired (empty: no end by time limit)
+  std::vector<std::string> success;    ///< success = all of these fired (empty: ended by an end_on event with points >= 0)
 };
 
 /// Loads and checks a task file; throws std::runtime_error

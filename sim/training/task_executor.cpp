@@ -103,15 +103,19 @@ void TaskExecutor::fire(const TaskEventSpec& spec, const std::string& detail) {
   result_.events.push_back(f);
   fresh_.push_back(f);
   for (const auto& end : task_.end_on)
-    if (end == spec.name) finish("event " + spec.name);
+    if (end == spec.name) {
+      finish("event " + spec.name);
+      if (task_.success.empty()) result_.success = spec.points >= 0;
+    }
 }
 
 void TaskExecutor::finish(const std::string& reason) {
   if (result_.finished) return;
   result_.finished = true;
   result_.end_reason = reason;
+  // Without `success:` a task succeeds by ending on a non-penalty end_on event (set by fire()).
   if (task_.success.empty()) {
-    result_.success = reason.rfind("event ", 0) == 0;
+    result_.success = false;
   } else {
     result_.success = true;
     for (const auto& s : task_.success) result_.success = result_.success && result_.counts[s] > 0;
