@@ -58,6 +58,7 @@ double load_average() {
 
 struct Level {
   int trainees = 0;
+  int heard = 0;  // sims whose RobotState came in both at the window's start and end
   double min_factor = 0, mean_factor = 0, load = 0;
   bool holds = false;
 };
@@ -92,7 +93,7 @@ int main(int argc, char** argv) {
   std::printf("trainees per machine: %u cores (std::thread::hardware_concurrency), LCM %s, window %.0f s\n",
               std::thread::hardware_concurrency(), lcm_url.c_str(), window_s);
   std::printf("each trainee: rise-sim (real-time paced, tracked_eod, building) + rise-trainer run-task (executor + scripted console)\n\n");
-  std::printf("%9s %12s %12s %10s %7s\n", "trainees", "min factor", "mean factor", "load avg", "holds");
+  std::printf("%9s %7s %12s %12s %10s %7s\n", "trainees", "heard", "min factor", "mean factor", "load avg", "holds");
   std::vector<Level> levels;
   // Doubling until a level fails, then halving the gap between the last
   // level that held and the first that failed (to within 2).
@@ -119,7 +120,7 @@ int main(int argc, char** argv) {
     const auto first = listener.latest;
     const auto end = Clock::now() + std::chrono::duration<double>(window_s);
     while (Clock::now() < end) lcm.handleTimeout(50);
-    Level level{n, 1e9, 0, load_average(), false};
+    Level level{n, 0, 1e9, 0, load_average(), false};
     int measured = 0;
     for (const auto& [ch, s] : listener.latest) {
       const auto it = first.find(ch);
@@ -130,10 +131,11 @@ int main(int argc, char** argv) {
       level.mean_factor += factor;
       ++measured;
     }
-    if (measured < n) level.min_factor = 0;  // a sim never came up or fell silent
+    level.heard = measured;
+    if (measured == 0) level.min_factor = 0;
     level.mean_factor = measured ? level.mean_factor / measured : 0;
     level.holds = measured == n && level.min_factor >= 0.99;
-    std::printf("%9d %12.3f %12.3f %10.2f %7s\n", n, level.min_factor, level.mean_factor, level.load,
+    std::printf("%9d %7d %12.3f %12.3f %10.2f %7s\n", n, level.heard, level.min_factor, level.mean_factor, level.load,
                 level.holds ? "yes" : "no");
     std::fflush(stdout);
     for (auto& c : children) c.stop(2000);
