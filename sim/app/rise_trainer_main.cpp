@@ -505,7 +505,9 @@ int status(const std::string& lcm_url, double every_s, int count, int min_traine
 
 int check(const std::string& file) {
   try {
-    if (rise::sim::read_text_file(file).find("\ntransitions:") != std::string::npos) {
+    // A training file has a top-level `training:` key, a task file `task:`.
+    static const std::regex training_key("(^|\n)training:");
+    if (std::regex_search(rise::sim::read_text_file(file), training_key)) {
       const auto g = tr::load_training_graph(file);
       std::printf("%s: training %s, %zu nodes, %zu transitions: ok\n", file.c_str(), g.name.c_str(), g.nodes.size(),
                   g.transitions.size());
