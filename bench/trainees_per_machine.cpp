@@ -11,6 +11,7 @@
 // Usage: bench_trainees_per_machine [max_trainees=16] [window_s=8]
 
 #include <lcm/lcm-cpp.hpp>
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -138,7 +139,11 @@ int main(int argc, char** argv) {
     std::printf("%9d %7d %12.3f %12.3f %10.2f %7s\n", n, level.heard, level.min_factor, level.mean_factor, level.load,
                 level.holds ? "yes" : "no");
     std::fflush(stdout);
+    for (auto& c : children) c.signal(SIGTERM);
     for (auto& c : children) c.stop(2000);
+    // The stopped sims' last states must not count in the next level.
+    while (lcm.handleTimeout(0) > 0) {
+    }
     levels.push_back(level);
     if (level.holds) held = n;
     else failed = n;
