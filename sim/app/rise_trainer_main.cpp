@@ -307,6 +307,7 @@ int train(const TrainOptions& o) {
   const std::string journal = (fs::path(o.out_dir) / "journal.jsonl").string();
   tr::TrainingWalker walker(graph);
   tr::TrainingReport report{graph.name, graph.title, graph.file, o.id, {}, false, "", 0, {}};
+  bool already_finished = false;
   try {
     const auto entries = tr::read_journal(journal);
     if (!entries.empty() && !o.resume) {
@@ -318,6 +319,7 @@ int train(const TrainOptions& o) {
         throw std::runtime_error(journal + ": journal of training '" + e.training + "', not '" + graph.name + "'");
       if (e.type == "training_finished") {
         spdlog::info("{}: the training is already finished", journal);
+        already_finished = true;
       }
       if (e.type != "task_finished" || !e.result) continue;
       const auto cur = walker.current();
@@ -418,11 +420,19 @@ int train(const TrainOptions& o) {
       sim->stop(1000);
       run->abort(sim_died ? "simulator lost" : "interrupted");
       run->publish_status(true);
-      tr::append_journal(journal, {"task_aborted", graph.name, o.id, node_name, attempt, std::nullopt,
-                                   sim_died ? "simulator lost" : "interrupted"});
+      try {
+        tr::append_journal(journal, {"task_aborted", graph.name, o.id, node_name, attempt, std::nullopt,
+                                     sim_died ? "simulator lost" : "interrupted"});
+      } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+      }
       spdlog::error("{}: {} attempt {}: {}; the finished tasks are in {}: rerun with --resume", o.id, node_name,
                     attempt, sim_died ? "the simulator died" : "interrupted", journal);
-      write_training_report();
+      try {
+        write_training_report();
+      } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+      }
       return sim_died ? 3 : 130;
     }
     sim->stop(2000);
@@ -446,7 +456,8 @@ int train(const TrainOptions& o) {
   if (g_stop) return 130;
   try {
     write_training_report();
-    tr::append_journal(journal, {"training_finished", graph.name, o.id, "", 0, std::nullopt, walker.end_reason()});
+    if (!already_finished)
+      tr::append_journal(journal, {"training_finished", graph.name, o.id, "", 0, std::nullopt, walker.end_reason()});
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
