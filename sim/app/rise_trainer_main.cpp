@@ -317,6 +317,9 @@ int train(const TrainOptions& o) {
     for (const auto& e : entries) {
       if (e.type == "training_started" && e.training != graph.name)
         throw std::runtime_error(journal + ": journal of training '" + e.training + "', not '" + graph.name + "'");
+      if (e.type == "training_started" && e.trainee_id != o.id)
+        throw std::runtime_error(journal + ": journal of trainee '" + e.trainee_id + "': resume it with --id " +
+                                 e.trainee_id);
       if (e.type == "training_finished") {
         spdlog::info("{}: the training is already finished", journal);
         already_finished = true;
