@@ -55,7 +55,12 @@ bool until(lcm::LCM& lcm, const std::function<bool()>& done, std::vector<ChildPr
     if (done()) return true;
     bool any = false;
     for (auto* c : watch) any = any || c->running();
-    if (!any) return done();
+    if (!any) {
+      // The children's last messages may still be in the socket.
+      while (!done() && lcm.handleTimeout(200) > 0) {
+      }
+      return done();
+    }
     lcm.handleTimeout(50);
   }
   return false;
@@ -239,4 +244,33 @@ TEST_CASE("two trainees train at once on one LCM network without cross-talk, and
   CHECK_THAT(table, Catch::Matchers::Contains("\ntb "));
   CHECK_THAT(table, Catch::Matchers::Contains("a_training"));
   CHECK_THAT(table, Catch::Matchers::Contains("b_training"));
+}
+
+TEST_CASE("run-task ends the task as simulator lost when rise-sim goes silent, and still writes the report", "[training]") {
+  const auto dir = rise::test::temp_dir("sim-lost");
+  lcm::LCM lcm(kLcm);
+  REQUIRE(lcm.good());
+  Heard heard;
+  listen(lcm, "lost", heard);
+  ChildProcess sim({kBin + "rise-sim", "--id", "lost", "--lcm", kLcm, "--robot", src("sim/robots/tracked_eod.yaml"),
+                    "--world", src("sim/worlds/building.yaml")},
+                   dir + "/sim.log");
+  auto exec = trainer({"run-task", src("sim/training/examples/metro_transport.yaml"), "--id", "lost", "--lcm", kLcm,
+                       "--out", dir, "--sim-timeout", "1"},
+                      dir + "/trainer.log");
+  REQUIRE(until(lcm, [&] {
+    for (const auto& s : heard.statuses) if (s.state == "running" && s.task_time_s > 0.5) return true;
+    return false;
+  }, {&exec}));
+  sim.signal(SIGKILL);
+  const auto finished = [&] { return !heard.statuses.empty() && heard.statuses.back().state == "finished"; };
+  CHECK(until(lcm, finished, {&exec}, 20));  // its last status goes out before it exits
+  INFO(rise::test::read_file(dir + "/trainer.log"));
+  CHECK(exec.wait_for(20000) == 0);
+  const auto r = task_result_from_json(rise::test::read_file(dir + "/task_metro_transport.json"));
+  CHECK(r.end_reason == "simulator lost");
+  CHECK_FALSE(r.success);
+  CHECK(r.time_s > 0);
+  CHECK(heard.statuses.back().state == "finished");
+  CHECK(heard.statuses.back().end_reason == "simulator lost");
 }
