@@ -174,7 +174,10 @@ TaskDescription parse_task_description(const std::string& text, const std::strin
     if (s["yaw_deg"]) start.yaw_rad = r.as<double>(s["yaw_deg"], "start.yaw_deg") * M_PI / 180.0;
     t.start = start;
   }
-  t.time_limit_s = r.positive(root, "time_limit_s", "", t.time_limit_s);
+  if (const YAML::Node n = root["time_limit_s"]) {
+    t.time_limit_s = r.as<double>(n, "time_limit_s");
+    if (!(t.time_limit_s > 0)) r.fail(n, "time_limit_s", "must be > 0");
+  }
   if (const YAML::Node regions = root["regions"]) {
     if (!regions.IsSequence()) r.fail(regions, "regions", "expected a list");
     for (std::size_t i = 0; i < regions.size(); ++i) t.regions.push_back(read_region(r, regions[i], item("regions", i)));

@@ -87,6 +87,12 @@ TEST_CASE("bad task files are refused naming the file, line and key", "[training
     CHECK_THAT(parse_error(kHead + "events:\n  - {name: a, kind: robot_disabled}\n  - {name: a, kind: robot_damaged}\n"),
                Contains("bad_task.yaml:6: events[1].name: duplicate event name 'a'"));
   }
+  SECTION("a time limit that is not positive") {
+    CHECK_THAT(parse_error(kHead + "time_limit_s: 0\nevents:\n  - {name: a, kind: robot_disabled}\n"),
+               Contains("bad_task.yaml:4: time_limit_s: must be > 0"));
+    CHECK_THAT(parse_error(kHead + "events:\n  - {name: a, kind: time_exceeded, after_s: -1}\n"),
+               Contains("bad_task.yaml:5: events[0].after_s: must be > 0"));
+  }
   SECTION("a missing robot") {
     CHECK_THAT(parse_error("task: t\nworld: w.yaml\nevents: []\n"), Contains("bad_task.yaml:1: robot: missing"));
   }
