@@ -16,7 +16,9 @@ build=${RISE_BUILD_DIR:-$root/build}
 # can-utils for the SocketCAN tests under a real CAN stack, mbpoll and
 # pymodbus as Modbus peers, hidapi + libusb for HID devices, udev's
 # systemd-udevd for the USB hot-plug test inside the VM, PCL + OpenCV +
-# Ceres for the semantic engine and Open3D as its benchmark peer). Installing
+# Ceres for the semantic engine and Open3D as its benchmark peer, jsoncpp for
+# the training reports and journal, Chromium to render the HTML report in its
+# test). Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -28,6 +30,7 @@ packages=(
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
   libhidapi-dev libusb-1.0-0-dev udev
   libpcl-dev libopencv-dev libceres-dev libopen3d-dev
+  libjsoncpp-dev chromium
 )
 
 setup() {

@@ -23,6 +23,7 @@
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
 #include "sim/simulation.hpp"
+#include "sim/training/report.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -52,6 +53,13 @@ struct DemoOptions {
   std::string record_dir;  ///< passed to rise-hild --record
   uint16_t port = 0;
   double timeout_s = 45.0;
+};
+
+// A child that is stopped when the guard goes (an exception, an early return).
+struct ChildProcessGuard {
+  explicit ChildProcessGuard(const std::vector<std::string>& argv) : child(argv, "") {}
+  ~ChildProcessGuard() { child.stop(3000); }
+  rise::app::ChildProcess child;
 };
 
 int run_demo(const DemoOptions& o) {
@@ -194,6 +202,63 @@ int run_demo(const DemoOptions& o) {
 }
 }  // namespace
 
+// `rise demo training`: the example training (sim/training/examples,
+// the seed's Fig. 10 graph ending in taskMETRO) end to end — rise-trainer
+// train starts rise-sim for each task and plays each task's scripted
+// console on LCM — then the summary from the journal and the reports.
+struct TrainingDemoOptions {
+  std::string id = "demo";
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string training = "sim/training/examples/fig10_training.yaml";
+  std::string out_dir;
+};
+
+int run_training_demo(const TrainingDemoOptions& o) {
+  const std::string bin = rise::app::executable_dir();
+  const std::string out = o.out_dir.empty() ? "/tmp/rise-training-demo-" + std::to_string(::getpid()) : o.out_dir;
+  std::printf("rise demo training: trainee '%s', LCM %s, %s → %s\n", o.id.c_str(), o.lcm_url.c_str(),
+              o.training.c_str(), out.c_str());
+  std::fflush(stdout);
+  int rc = 1;
+  try {
+    ChildProcessGuard trainer({bin + "/rise-trainer", "train", rise::panels::find_data_file(o.training), "--id", o.id,
+                               "--lcm", o.lcm_url, "--out", out, "--scripted-console"});
+    while (rc = trainer.child.wait_for(100), rc < 0) {
+      if (g_stop) {
+        std::printf("\nrise demo training: interrupted; resume with rise-trainer train %s --out %s --resume\n",
+                    o.training.c_str(), out.c_str());
+        trainer.child.stop(3000);
+        return 130;
+      }
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rise demo training: %s\n", e.what());
+    return 2;
+  }
+  std::printf("\n=== rise demo training summary ===\n");
+  int total = 0;
+  bool all_ok = true;
+  try {
+    for (const auto& e : rise::sim::training::read_journal(out + "/journal.jsonl")) {
+      if (e.type != "task_finished" || !e.result) continue;
+      const auto& r = *e.result;
+      total += r.score;
+      all_ok = all_ok && r.success;
+      std::printf("%-10s attempt %d  %-18s score %4d  %-13s %6.1f s  %s\n", e.node.c_str(), e.attempt, r.task.c_str(),
+                  r.score, r.success ? "success" : "not achieved", r.time_s, r.end_reason.c_str());
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rise demo training: %s\n", e.what());
+    return 1;
+  }
+  const bool report = std::filesystem::exists(out + "/training.html") && std::filesystem::exists(out + "/training.json");
+  std::printf("total score           %d\n", total);
+  std::printf("reports               %s/training.html (per task: %s/NN_<node>_<attempt>.html, .json)\n", out.c_str(),
+              out.c_str());
+  std::printf("result                %s\n", rc == 0 && report && all_ok ? "ok" : "FAILED");
+  return rc == 0 && report && all_ok ? 0 : 1;
+}
+
 // `rise status`: the station's panel and source health, as rise-hild
 // publishes it (one table per PanelState, refreshed every --every seconds).
 int run_status(const std::string& lcm_url, const std::string& id, double every_s, int count) {
@@ -258,6 +323,14 @@ int main(int argc, char** argv) {
   d->add_option("--record", demo.record_dir,
                 "rise-hild records the session into DIR (rise-hild --record); replay it with "
                 "`rise-hild verify --record-dir DIR`");
+  TrainingDemoOptions training_demo;
+  CLI::App* dt = d->add_subcommand(
+      "training", "run the example training (Fig. 10 graph, taskMETRO) end to end with a scripted console: "
+                  "rise-trainer train starts rise-sim per task; writes the reports");
+  dt->add_option("--id", training_demo.id, "trainee id in the channel names")->capture_default_str();
+  dt->add_option("--lcm", training_demo.lcm_url, "LCM URL")->capture_default_str();
+  dt->add_option("--training", training_demo.training, "training file")->capture_default_str();
+  dt->add_option("--out", training_demo.out_dir, "reports and journal (default /tmp/rise-training-demo-PID)");
   std::string status_id = "t1";
   std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
   double status_every_s = 1.0;
@@ -272,6 +345,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   std::signal(SIGPIPE, SIG_IGN);  // a closed stdout must not skip stopping the children
+  if (dt->parsed()) return run_training_demo(training_demo);
   if (d->parsed()) return run_demo(demo);
   if (st->parsed()) return run_status(status_lcm, status_id, status_every_s, status_count);
   return 1;

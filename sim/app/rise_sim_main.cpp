@@ -163,7 +163,19 @@ rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::s
   m.stop_reason = s.stop_reason;
   m.contacts = s.contacts;
   m.num_contacts = static_cast<int16_t>(m.contacts.size());
+  for (int i = 0; i < 3; ++i) m.gripper_position_m[i] = s.gripper_position_m[static_cast<std::size_t>(i)];
+  m.num_objects = 0;
   return m;
+}
+
+// The world's movable objects, for task executors that score where they are.
+void add_objects(rise_msgs::RobotState& m, const rise::sim::Simulation& sim, const rise::sim::WorldDescription& world) {
+  for (const auto& o : world.objects) {
+    const auto p = sim.object_position_m(o.name);
+    m.object_names.push_back(o.name);
+    m.object_positions_m.push_back({p[0], p[1], p[2]});
+  }
+  m.num_objects = static_cast<int16_t>(m.object_names.size());
 }
 
 rise_msgs::SoundCue to_message(const rise::sim::SoundCue& c) {
@@ -366,7 +378,8 @@ int main(int argc, char** argv) {
     for (std::size_t i = 0; i < stations.size(); ++i) {
       Station& st = *stations[i];
       const auto snap = sim->snapshot(i);
-      const auto msg = to_message(snap, st.spec.id);
+      auto msg = to_message(snap, st.spec.id);
+      add_objects(msg, *sim, world);
       lcm.publish(st.state_channel, &msg);
       for (const auto& c : snap.sounds) {
         const auto cue = to_message(c);

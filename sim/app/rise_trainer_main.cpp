@@ -1,0 +1,591 @@
+// rise-trainer: the task engine and the training manager as LCM nodes, and
+// the instructor's classroom view.
+//
+//   rise-trainer run-task TASK.yaml --id ID      executor beside a running rise-sim
+//   rise-trainer train TRAINING.yaml --id ID --out DIR [--resume]
+//   rise-trainer status                          every trainee's progress
+//   rise-trainer check TRAINING.yaml|TASK.yaml   load and validate
+//
+// The executor listens on rise/<id>/sim_event and rise/<id>/robot_state,
+// publishes TaskEvent on rise/<id>/task_event and TaskStatus on
+// rise/<id>/task_status. The manager starts rise-sim per task node as a
+// child process with the task's robot, world and start pose, follows the
+// graph, and keeps a journal (DIR/journal.jsonl) it resumes from after a
+// kill -9 of the simulator or of itself.
+
+#include <CLI/CLI.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <regex>
+#include <thread>
+
+#include "app/child_process.hpp"
+#include "panels/data_path.hpp"
+#include "rise_msgs/PanelState.hpp"
+#include "rise_msgs/RobotState.hpp"
+#include "rise_msgs/SimEvent.hpp"
+#include "rise_msgs/TaskEvent.hpp"
+#include "rise_msgs/TaskStatus.hpp"
+#include "sim/app/scripted_console.hpp"
+#include "sim/training/report.hpp"
+#include "sim/training/task_executor.hpp"
+#include "sim/training/training_graph.hpp"
+#include "sim/yaml_reader.hpp"
+
+namespace {
+namespace tr = rise::sim::training;
+namespace fs = std::filesystem;
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+int64_t wall_us() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+double yaw_of(const double q[4]) {
+  return std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
+}
+
+tr::RobotSample sample_from(const rise_msgs::RobotState& m) {
+  tr::RobotSample s;
+  s.time_s = m.sim_time_s;
+  for (std::size_t k = 0; k < 3; ++k) {
+    s.position_m[k] = m.position_m[k];
+    s.gripper_position_m[k] = m.gripper_position_m[k];
+  }
+  s.yaw_rad = yaw_of(m.orientation_wxyz);
+  s.damage = m.damage;
+  for (std::size_t i = 0; i < m.object_names.size() && i < m.object_positions_m.size(); ++i) {
+    const auto& p = m.object_positions_m[i];
+    if (p.size() == 3) s.objects.push_back({m.object_names[i], {p[0], p[1], p[2]}});
+  }
+  return s;
+}
+
+// Where a training stands, for TaskStatus.
+struct Progress {
+  std::string training;
+  std::string node;
+  int attempt = 1;
+  int tasks_done = 0;
+  int training_score = 0;
+};
+
+// One task's executor on LCM: feeds it, publishes what it fires and its
+// status, drives the scripted console on the sim's clock.
+class TaskRun {
+ public:
+  TaskRun(lcm::LCM& lcm, std::string id, tr::TaskDescription task, rise::sim::WorldDescription world,
+          std::optional<rise::trainer::ScriptedConsole> console, Progress progress, bool fresh_sim)
+      : lcm_(lcm),
+        id_(std::move(id)),
+        executor_(std::move(task), std::move(world)),
+        console_(std::move(console)),
+        progress_(std::move(progress)),
+        fresh_sim_(fresh_sim) {}
+
+  void on_state(const rise_msgs::RobotState& m) {
+    // A fresh simulator starts at 0 s: anything later is the previous one's.
+    if (!started_ && fresh_sim_ && m.sim_time_s > 0.5) return;
+    if (!started_) {
+      started_ = true;
+      t0_s_ = m.sim_time_s;
+      spdlog::info("{}: task {} started at sim time {:.3f} s", id_, executor_.task().name, m.sim_time_s);
+    }
+    last_state_ = std::chrono::steady_clock::now();
+    executor_.on_state(sample_from(m));
+    if (console_) {
+      console_->advance(m.sim_time_s - t0_s_);
+      if (!console_->silent()) {
+        const auto ps = console_->panel_state(id_, ++panel_seq_, wall_us());
+        lcm_.publish("rise/" + id_ + "/panel_state", &ps);
+      }
+    }
+    publish_fired();
+  }
+
+  void on_event(const rise_msgs::SimEvent& m) {
+    if (!started_) return;
+    executor_.on_sim_event({m.sim_time_s, m.kind, m.a, m.b, m.detail});
+    publish_fired();
+  }
+
+  void publish_status(bool force = false) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!force && now < next_status_) return;
+    next_status_ = now + std::chrono::milliseconds(500);
+    const auto& r = executor_.result();
+    rise_msgs::TaskStatus s;
+    s.utime = wall_us();
+    s.trainee_id = id_;
+    s.training = progress_.training;
+    s.node = progress_.node;
+    s.task = executor_.task().name;
+    s.attempt = progress_.attempt;
+    s.tasks_done = progress_.tasks_done + (r.finished ? 1 : 0);
+    s.state = r.finished ? "finished" : started_ ? "running" : "waiting";
+    s.task_time_s = r.time_s;
+    s.time_limit_s = r.time_limit_s;
+    s.score = r.score;
+    s.events_fired = static_cast<int32_t>(r.events.size());
+    s.success = r.success;
+    s.end_reason = r.end_reason;
+    s.training_score = progress_.training_score + (r.finished ? r.score : 0);
+    lcm_.publish("rise/" + id_ + "/task_status", &s);
+  }
+
+  bool started() const { return started_; }
+  bool finished() const { return executor_.finished(); }
+  void abort(const std::string& why) { executor_.abort(why); }
+  tr::TaskResult result() const { return executor_.result(); }
+  double seconds_since_state() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - last_state_).count();
+  }
+
+ private:
+  void publish_fired() {
+    for (const auto& f : executor_.take_fired()) {
+      rise_msgs::TaskEvent e;
+      e.utime = wall_us();
+      e.trainee_id = id_;
+      e.training = progress_.training;
+      e.task = executor_.task().name;
+      e.attempt = progress_.attempt;
+      e.task_time_s = f.time_s;
+      e.name = f.name;
+      e.kind = f.kind;
+      e.points = f.points;
+      e.score = f.score;
+      e.detail = f.detail;
+      lcm_.publish("rise/" + id_ + "/task_event", &e);
+      spdlog::info("{}: {:.2f} s {} {:+d} → {} ({})", id_, f.time_s, f.name, f.points, f.score, f.detail);
+    }
+    if (executor_.finished() && !announced_end_) {
+      announced_end_ = true;
+      publish_status(true);
+    }
+  }
+
+  lcm::LCM& lcm_;
+  std::string id_;
+  tr::TaskExecutor executor_;
+  std::optional<rise::trainer::ScriptedConsole> console_;
+  Progress progress_;
+  bool fresh_sim_;
+  bool started_ = false;
+  bool announced_end_ = false;
+  double t0_s_ = 0.0;
+  int64_t panel_seq_ = 0;
+  std::chrono::steady_clock::time_point last_state_ = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point next_status_{};
+};
+
+// Routes the trainee's sim channels to the task running now.
+struct Router {
+  TaskRun* run = nullptr;
+  void on_state(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::RobotState* m) {
+    if (run) run->on_state(*m);
+  }
+  void on_event(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::SimEvent* m) {
+    if (run) run->on_event(*m);
+  }
+};
+
+void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
+  // Events come in bursts (a track on step noses); states at 50 Hz.
+  lcm.subscribe("rise/" + id + "/robot_state", &Router::on_state, &router)->setQueueCapacity(500);
+  lcm.subscribe("rise/" + id + "/sim_event", &Router::on_event, &router)->setQueueCapacity(2000);
+}
+
+std::optional<rise::trainer::ScriptedConsole> console_for(const tr::TaskDescription& t, bool scripted) {
+  if (!scripted) return std::nullopt;
+  if (t.console_script.empty() || t.panel_file.empty())
+    throw std::runtime_error(t.file + ": --scripted-console needs the task's panel: and console_script:");
+  return rise::trainer::ScriptedConsole(t.panel_file, t.console_script);
+}
+
+std::string stem_of(int index, const std::string& node, int attempt) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, "%02d_%s_%d", index, node.c_str(), attempt);
+  return buf;
+}
+
+void write_task_report(const std::string& out_dir, const std::string& stem, const tr::TaskResult& r,
+                       const rise::sim::WorldDescription& world) {
+  tr::write_file_atomically((fs::path(out_dir) / (stem + ".json")).string(), tr::task_result_json(r));
+  tr::write_file_atomically((fs::path(out_dir) / (stem + ".html")).string(), tr::task_report_html(r, world));
+}
+
+void print_result(const std::string& id, const tr::TaskResult& r) {
+  std::printf("%s: task %s%s: score %d, %s, %.1f s, ended by %s\n", id.c_str(), r.task.c_str(),
+              r.node.empty() ? "" : (" (" + r.node + " attempt " + std::to_string(r.attempt) + ")").c_str(), r.score,
+              r.success ? "success" : "not achieved", r.time_s, r.end_reason.c_str());
+  std::fflush(stdout);
+}
+
+// ---- run-task ------------------------------------------------------------
+
+struct RunTaskOptions {
+  std::string task_file, id = "t1", lcm_url = "udpm://239.255.76.67:7667?ttl=0", out_dir = ".";
+  bool scripted_console = false;
+  double sim_timeout_s = 5.0;
+};
+
+int run_task(const RunTaskOptions& o) {
+  lcm::LCM lcm(o.lcm_url);
+  if (!lcm.good()) {
+    spdlog::error("cannot open LCM at {}", o.lcm_url);
+    return 2;
+  }
+  std::optional<TaskRun> run;
+  rise::sim::WorldDescription world;
+  try {
+    const auto task = tr::load_task_description(o.task_file);
+    world = rise::sim::load_world_description(task.world_file);
+    fs::create_directories(o.out_dir);
+    run.emplace(lcm, o.id, task, world, console_for(task, o.scripted_console), Progress{}, false);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  Router router{&*run};
+  subscribe(lcm, o.id, router);
+  spdlog::info("{}: waiting for rise-sim on rise/{}/robot_state", o.id, o.id);
+  while (!g_stop && !run->finished()) {
+    lcm.handleTimeout(50);
+    run->publish_status();
+    if (run->started() && run->seconds_since_state() > o.sim_timeout_s) run->abort("simulator lost");
+  }
+  if (!run->finished()) run->abort("interrupted");
+  run->publish_status(true);
+  auto r = run->result();
+  const std::string stem = "task_" + r.task;
+  try {
+    write_task_report(o.out_dir, stem, r, world);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  print_result(o.id, r);
+  std::printf("report: %s/%s.json, %s.html\n", o.out_dir.c_str(), stem.c_str(), stem.c_str());
+  return r.end_reason == "interrupted" ? 130 : 0;
+}
+
+// ---- train ----------------------------------------------------------------
+
+struct TrainOptions {
+  std::string training_file, id = "t1", lcm_url = "udpm://239.255.76.67:7667?ttl=0", out_dir;
+  bool resume = false, scripted_console = false, fast = false;
+  double sim_timeout_s = 5.0;
+  double ready_timeout_s = 20.0;
+};
+
+int train(const TrainOptions& o) {
+  tr::TrainingGraph graph;
+  try {
+    graph = tr::load_training_graph(o.training_file);
+    for (const auto& n : graph.nodes) {
+      const auto world = rise::sim::load_world_description(n.task->world_file);
+      tr::check_against_world(*n.task, world);
+    }
+    fs::create_directories(o.out_dir);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  const std::string journal = (fs::path(o.out_dir) / "journal.jsonl").string();
+  tr::TrainingWalker walker(graph);
+  tr::TrainingReport report{graph.name, graph.title, graph.file, o.id, {}, false, "", 0, {}};
+  bool already_finished = false;
+  try {
+    const auto entries = tr::read_journal(journal);
+    if (!entries.empty() && !o.resume) {
+      spdlog::error("{} exists: resume it with --resume, or use another --out", journal);
+      return 2;
+    }
+    for (const auto& e : entries) {
+      if (e.type == "training_started" && e.training != graph.name)
+        throw std::runtime_error(journal + ": journal of training '" + e.training + "', not '" + graph.name + "'");
+      if (e.type == "training_started" && e.trainee_id != o.id)
+        throw std::runtime_error(journal + ": journal of trainee '" + e.trainee_id + "': resume it with --id " +
+                                 e.trainee_id);
+      if (e.type == "training_finished") {
+        spdlog::info("{}: the training is already finished", journal);
+        already_finished = true;
+      }
+      if (e.type != "task_finished" || !e.result) continue;
+      const auto cur = walker.current();
+      if (!cur || cur->first != e.node || cur->second != e.attempt)
+        throw std::runtime_error(journal + ": task_finished " + e.node + " attempt " + std::to_string(e.attempt) +
+                                 " does not follow the graph (expected " +
+                                 (cur ? cur->first + " attempt " + std::to_string(cur->second) : "the end") + ")");
+      walker.record(*e.result);
+      report.task_report_files.push_back(stem_of(static_cast<int>(walker.visits().size()), e.node, e.attempt) + ".html");
+      spdlog::info("{}: resumed {} attempt {}: score {}", o.id, e.node, e.attempt, e.result->score);
+    }
+    if (entries.empty()) tr::append_journal(journal, {"training_started", graph.name, o.id, "", 0, std::nullopt, graph.file});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+
+  lcm::LCM lcm(o.lcm_url);
+  if (!lcm.good()) {
+    spdlog::error("cannot open LCM at {}", o.lcm_url);
+    return 2;
+  }
+  Router router;
+  subscribe(lcm, o.id, router);
+  const std::string bin = rise::app::executable_dir();
+  const auto write_training_report = [&] {
+    report.visits = walker.visits();
+    report.total_score = walker.total_score();
+    report.finished = walker.ended();
+    report.end_reason = walker.end_reason();
+    tr::write_file_atomically((fs::path(o.out_dir) / "training.json").string(), tr::training_report_json(report));
+    tr::write_file_atomically((fs::path(o.out_dir) / "training.html").string(), tr::training_report_html(report));
+  };
+
+  while (!g_stop && !walker.ended()) {
+    const auto [node_name, attempt] = *walker.current();
+    const auto* node = graph.node(node_name);
+    const auto& task = *node->task;
+    const int index = static_cast<int>(walker.visits().size()) + 1;
+    const std::string stem = stem_of(index, node_name, attempt);
+    rise::sim::WorldDescription world;
+    std::optional<TaskRun> run;
+    try {
+      world = rise::sim::load_world_description(task.world_file);
+      Progress p{graph.name, node_name, attempt, static_cast<int>(walker.visits().size()), walker.total_score()};
+      run.emplace(lcm, o.id, task, world, console_for(task, o.scripted_console), p, true);
+      tr::append_journal(journal, {"task_started", graph.name, o.id, node_name, attempt, std::nullopt, task.file});
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 2;
+    }
+    // The previous simulator's last messages must not reach this task.
+    router.run = nullptr;
+    while (lcm.handleTimeout(0) > 0) {
+    }
+    router.run = &*run;
+    std::string robot = task.robot_file;
+    if (task.start) {
+      char pose[96];
+      std::snprintf(pose, sizeof pose, "@%.4f,%.4f,%.4f", task.start->xy_m[0], task.start->xy_m[1],
+                    task.start->yaw_rad * 180.0 / M_PI);
+      robot += pose;
+    }
+    std::vector<std::string> argv{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url, "--robot", robot,
+                                  "--world", task.world_file};
+    if (o.fast) argv.push_back("--fast");
+    std::optional<rise::app::ChildProcess> sim;
+    try {
+      sim.emplace(argv, (fs::path(o.out_dir) / (stem + ".sim.log")).string());
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 2;
+    }
+    spdlog::info("{}: {} attempt {}: task {} on rise-sim pid {}", o.id, node_name, attempt, task.name, sim->pid());
+    const auto launched = std::chrono::steady_clock::now();
+    bool sim_died = false;
+    while (!g_stop && !run->finished()) {
+      lcm.handleTimeout(50);
+      run->publish_status();
+      if (!sim->running()) {
+        sim_died = true;
+        break;
+      }
+      const double since_launch = std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count();
+      if (!run->started() && since_launch > o.ready_timeout_s) {
+        spdlog::error("{}: rise-sim sent no RobotState within {:.0f} s (see {}.sim.log)", o.id, o.ready_timeout_s, stem);
+        sim->stop(2000);
+        return 1;
+      }
+      if (run->started() && run->seconds_since_state() > o.sim_timeout_s) {
+        sim_died = true;
+        break;
+      }
+    }
+    if (sim_died || g_stop) {
+      // The attempt did not finish: nothing of it goes into the results, so
+      // --resume runs it again.
+      sim->stop(1000);
+      run->abort(sim_died ? "simulator lost" : "interrupted");
+      run->publish_status(true);
+      try {
+        tr::append_journal(journal, {"task_aborted", graph.name, o.id, node_name, attempt, std::nullopt,
+                                     sim_died ? "simulator lost" : "interrupted"});
+      } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+      }
+      spdlog::error("{}: {} attempt {}: {}; the finished tasks are in {}: rerun with --resume", o.id, node_name,
+                    attempt, sim_died ? "the simulator died" : "interrupted", journal);
+      try {
+        write_training_report();
+      } catch (const std::exception& e) {
+        spdlog::error("{}", e.what());
+      }
+      return sim_died ? 3 : 130;
+    }
+    sim->stop(2000);
+    auto result = run->result();
+    result.node = node_name;
+    result.attempt = attempt;
+    try {
+      write_task_report(o.out_dir, stem, result, world);
+      tr::append_journal(journal, {"task_finished", graph.name, o.id, node_name, attempt, result, ""});
+      walker.record(result);
+      report.task_report_files.push_back(stem + ".html");
+      write_training_report();
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 2;
+    }
+    print_result(o.id, result);
+    std::printf("%s:   → %s\n", o.id.c_str(), walker.visits().back().transition.c_str());
+  }
+  router.run = nullptr;
+  if (g_stop) return 130;
+  try {
+    write_training_report();
+    if (!already_finished)
+      tr::append_journal(journal, {"training_finished", graph.name, o.id, "", 0, std::nullopt, walker.end_reason()});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  rise_msgs::TaskStatus s{};
+  s.utime = wall_us();
+  s.trainee_id = o.id;
+  s.training = graph.name;
+  s.tasks_done = static_cast<int32_t>(walker.visits().size());
+  s.state = "training_finished";
+  s.end_reason = walker.end_reason();
+  s.training_score = walker.total_score();
+  lcm.publish("rise/" + o.id + "/task_status", &s);
+  std::printf("%s: training %s finished (%s): %zu tasks, total score %d\nreport: %s/training.html, training.json\n",
+              o.id.c_str(), graph.name.c_str(), walker.end_reason().c_str(), walker.visits().size(),
+              walker.total_score(), o.out_dir.c_str());
+  return 0;
+}
+
+// ---- status ---------------------------------------------------------------
+
+int status(const std::string& lcm_url, double every_s, int count, int min_trainees) {
+  struct Latest {
+    std::map<std::string, rise_msgs::TaskStatus> by_trainee;
+    void on(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::TaskStatus* m) {
+      // The channel names the trainee; a message claiming another id is shown under the channel's.
+      static const std::regex re("rise/([^/]+)/task_status");
+      std::smatch match;
+      auto s = *m;
+      if (std::regex_match(channel, match, re)) s.trainee_id = match[1];
+      by_trainee[s.trainee_id] = s;
+    }
+  } latest;
+  lcm::LCM lcm(lcm_url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "rise-trainer status: cannot open LCM at %s\n", lcm_url.c_str());
+    return 2;
+  }
+  lcm.subscribe("rise/.*/task_status", &Latest::on, &latest)->setQueueCapacity(1000);
+  for (int shown = 0; (count <= 0 || shown < count) && !g_stop;) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(static_cast<int64_t>(every_s * 1e6));
+    while (std::chrono::steady_clock::now() < until && !g_stop) lcm.handleTimeout(50);
+    if (static_cast<int>(latest.by_trainee.size()) < min_trainees) continue;
+    std::printf("%-10s %-14s %-10s %-18s %3s %-17s %8s %6s %6s %6s  %s\n", "trainee", "training", "node", "task", "try",
+                "state", "time s", "limit", "score", "total", "ended by");
+    for (const auto& [id, s] : latest.by_trainee)
+      std::printf("%-10s %-14s %-10s %-18s %3d %-17s %8.1f %6.0f %6d %6d  %s\n", id.c_str(), s.training.c_str(),
+                  s.node.c_str(), s.task.c_str(), s.attempt, s.state.c_str(), s.task_time_s, s.time_limit_s, s.score,
+                  s.training_score, s.end_reason.c_str());
+    std::printf("\n");
+    std::fflush(stdout);
+    ++shown;
+  }
+  return 0;
+}
+
+int check(const std::string& file) {
+  try {
+    // A training file has a top-level `training:` key, a task file `task:`.
+    static const std::regex training_key("(^|\n)training:");
+    if (std::regex_search(rise::sim::read_text_file(file), training_key)) {
+      const auto g = tr::load_training_graph(file);
+      std::printf("%s: training %s, %zu nodes, %zu transitions: ok\n", file.c_str(), g.name.c_str(), g.nodes.size(),
+                  g.transitions.size());
+    } else {
+      const auto t = tr::load_task_description(file);
+      tr::check_against_world(t, rise::sim::load_world_description(t.world_file));
+      std::printf("%s: task %s, %zu events: ok\n", file.c_str(), t.name.c_str(), t.events.size());
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rise-trainer: tasks with scored events, trainings, the classroom view"};
+  app.require_subcommand(1);
+  std::string log_level = "info";
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+
+  RunTaskOptions rt;
+  CLI::App* r = app.add_subcommand("run-task", "run a task's executor beside a running rise-sim (over LCM)");
+  r->add_option("task", rt.task_file, "task file (YAML)")->required();
+  r->add_option("--id", rt.id, "trainee id in the channel names")->capture_default_str();
+  r->add_option("--lcm", rt.lcm_url, "LCM URL")->capture_default_str();
+  r->add_option("--out", rt.out_dir, "where the task report goes")->capture_default_str();
+  r->add_flag("--scripted-console", rt.scripted_console, "play the task's console_script as the panel");
+  r->add_option("--sim-timeout", rt.sim_timeout_s, "abort when no RobotState comes for S seconds")->capture_default_str();
+
+  TrainOptions to;
+  CLI::App* t = app.add_subcommand("train", "run a training: rise-sim per task, the executor, the graph, the journal");
+  t->add_option("training", to.training_file, "training file (YAML)")->required();
+  t->add_option("--id", to.id, "trainee id in the channel names")->capture_default_str();
+  t->add_option("--lcm", to.lcm_url, "LCM URL")->capture_default_str();
+  t->add_option("--out", to.out_dir, "reports and journal.jsonl go here")->required();
+  t->add_flag("--resume", to.resume, "continue the training in --out from its journal");
+  t->add_flag("--scripted-console", to.scripted_console, "play each task's console_script as the panel");
+  t->add_flag("--fast", to.fast, "run the simulators as fast as possible (rise-sim --fast)");
+  t->add_option("--sim-timeout", to.sim_timeout_s, "the simulator is lost when no RobotState comes for S seconds")
+      ->capture_default_str();
+
+  std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
+  double status_every_s = 1.0;
+  int status_count = 0, status_min = 0;
+  CLI::App* s = app.add_subcommand("status", "the instructor's view: every trainee's task status on rise/*/task_status");
+  s->add_option("--lcm", status_lcm, "LCM URL")->capture_default_str();
+  s->add_option("--every", status_every_s, "refresh period in seconds")->capture_default_str();
+  s->add_option("--count", status_count, "stop after N tables (0: until Ctrl-C)")->capture_default_str();
+  s->add_option("--trainees", status_min, "print only once at least N trainees were heard")->capture_default_str();
+
+  std::string check_file;
+  CLI::App* c = app.add_subcommand("check", "load and validate a training or task file");
+  c->add_option("file", check_file, "training or task file")->required();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(log_level));
+  spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  if (r->parsed()) return run_task(rt);
+  if (t->parsed()) return train(to);
+  if (s->parsed()) return status(status_lcm, status_every_s, status_count, status_min);
+  if (c->parsed()) return check(check_file);
+  return 1;
+}
