@@ -74,14 +74,17 @@ Eigen::Isometry3d gauss_newton(const Sums& s) {
 // cells are twice a radius that halves level by level, down to about the
 // point spacing. A query tries the finest level first (8 cells, exact within
 // its radius) and climbs only while it finds nothing, so a converged pair
-// costs one small lookup however large the first radius was. Levels above
-// the minimum pairing distance read a bounded, evenly spread sample of a
-// crowded cell: in the early, wide iterations a far point's partner only has
-// to point the right way; pairs within the minimum distance stay exact.
+// costs one small lookup however large the first radius was. Every level but
+// the finest reads a bounded, evenly spread sample of a crowded cell: a far
+// point's partner only has to point the right way, and pairs within the
+// finest radius stay exact. With exact_neighbours, only searches wider than
+// the minimum pairing distance sample: every pair the last iterations use
+// is then the exact nearest neighbour, as a k-d tree would give.
 class GridPyramid {
  public:
   GridPyramid(const std::vector<Eigen::Vector3f>& points, double max_radius_m, double exact_radius_m,
-              int max_points_per_cell) {
+              bool exact, int max_points_per_cell)
+      : exact_(exact) {
     constexpr int kMaxLevels = 8;
     std::vector<float> radii{static_cast<float>(max_radius_m)};
     auto top = std::make_unique<VoxelGrid>(points, 2.0f * radii[0], max_points_per_cell);
@@ -107,22 +110,25 @@ class GridPyramid {
     levels_.push_back({std::move(top), radii[0], cap(0)});
   }
 
-  /// `level` in: where to start (the level one below the last answer is a
-  /// good guess: pairs change little between iterations); out: where it
-  /// was found. Starting higher finds the same point, at more cost: what a
+  /// `level` in: where to start; out: the finest level whose radius holds
+  /// the answer, where the next iteration (pairs change little) should
+  /// start. Starting higher finds the same point, at more cost: what a
   /// level finds is the nearest within its whole radius.
   VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level) const {
     for (size_t l = std::min<size_t>(level, levels_.size() - 1); l < levels_.size(); ++l) {
       const Level& lv = levels_[l];
       const float r = std::min(lv.radius_m, radius_m);
-      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, r > exact_radius_m_ ? lv.stride_cap : 0u);
+      const bool sample = !exact_ || r > exact_radius_m_;
+      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, sample ? lv.stride_cap : 0u);
       if (nb.index != VoxelGrid::kNone) {
-        level = static_cast<uint8_t>(l);
+        size_t m = l;
+        while (m > 0 && levels_[m - 1].radius_m * levels_[m - 1].radius_m >= nb.distance2_m2) --m;
+        level = static_cast<uint8_t>(m);
         return nb;
       }
       if (r >= radius_m) break;
     }
-    level = static_cast<uint8_t>(levels_.size());
+    level = static_cast<uint8_t>(levels_.size() - 1);
     return {};
   }
   size_t levels() const { return levels_.size(); }
@@ -135,7 +141,8 @@ class GridPyramid {
     uint32_t stride_cap;
   };
   std::vector<Level> levels_;  // finest first
-  float exact_radius_m_ = 0.0f;  // searches up to this radius read every point
+  float exact_radius_m_ = 0.0f;  // exact_: searches up to this radius read every point
+  bool exact_ = false;
 };
 
 void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
@@ -175,7 +182,7 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
 
   const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
-                            settings.max_points_per_cell);
+                            settings.exact_neighbours, settings.max_points_per_cell);
 
   const auto& src = source.points;
   const auto& tn = target.normals;
@@ -195,12 +202,11 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
 
 #pragma omp parallel num_threads(threads)
     {
-      Sums& acc = partial[static_cast<size_t>(omp_get_thread_num())];
+      Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
 #pragma omp for schedule(static, 1024)
       for (std::ptrdiff_t i = 0; i < n; ++i) {
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
         uint8_t& level = hint[static_cast<size_t>(i)];
-        level = level > 0 ? static_cast<uint8_t>(level - 1) : 0;
         const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level);
         if (nb.index == VoxelGrid::kNone) continue;
         const Eigen::Vector3d pd = p.cast<double>();
@@ -224,6 +230,7 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
           acc.Spq += (w * pd) * qd.transpose();
         }
       }
+      partial[static_cast<size_t>(omp_get_thread_num())] = acc;
     }
     Sums s;
     for (const auto& p : partial) s.add(p);  // thread order: deterministic for a given thread count
