@@ -41,12 +41,12 @@ VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, i
     if (s.count < cap) ++s.count;
   }
   cell_count_ = first_seen.size();
-  // Queries probe this table at random: re-hash it to twice the cells (not
-  // twice the points) so that it stays in cache.
+  // Queries probe this table at random: re-hash it to fit the cells (load
+  // 0.4 .. 0.8; not twice the points) so that it stays in cache.
   {
     std::vector<Slot> counted;
     counted.swap(slots_);
-    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ * 2));
+    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ + cell_count_ / 4));
     slots_.assign(compact, Slot{});
     mask_ = compact - 1;
     shift_ = 64 - std::countr_zero(compact);
