@@ -205,6 +205,11 @@ void check_pcd_data(const std::string& path, std::string_view text, const PcdHea
       fail_byte(path, text.size(), "binary_compressed data truncated: " + std::to_string(compressed) +
                                        " bytes announced, " + std::to_string(have - 8) + " left");
     if (need > 0 && compressed == 0) fail_byte(path, at, "binary_compressed: empty data");
+    // LZF (PCL's codec) expands at most ~88x (3 bytes back-reference up to
+    // 264): a larger claim is a corrupt size word, not a reason to allocate.
+    if (raw > 100ull * compressed + 1024)
+      fail_byte(path, at + 4, "binary_compressed: " + std::to_string(raw) + " uncompressed bytes cannot come from " +
+                                  std::to_string(compressed));
   } else {
     // One point per line, each with every field's values.
     Lines lines{text.substr(std::min(at, text.size()))};

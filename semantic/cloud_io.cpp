@@ -7,6 +7,9 @@
 #include <pcl/console/print.h>
 #include <pcl/io/pcd_io.h>
 
+#include <unistd.h>
+
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -137,8 +140,9 @@ Cloud parse_cloud(const std::string& path, const std::string& contents) {
   const std::string ext = lower_extension(path);
   if (ext == ".pcd") {
     // PCL's reader reads from a file only: it gets a temporary copy.
+    static std::atomic<unsigned> serial{0};
     const auto tmp = std::filesystem::temp_directory_path() /
-                     ("rise_semantic_" + std::to_string(std::hash<std::string>{}(contents)) + ".pcd");
+                     ("rise_semantic_" + std::to_string(::getpid()) + "_" + std::to_string(serial++) + ".pcd");
     {
       std::ofstream out(tmp, std::ios::binary);
       out.write(contents.data(), static_cast<std::streamsize>(contents.size()));

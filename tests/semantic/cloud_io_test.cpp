@@ -231,6 +231,11 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFRUITS x y z\n"), Catch::Contains("t.pcd:2: unknown header key 'FRUITS'"));
     CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary_compressed\n" + std::string("\x10\x00\x00\x00\x18\x00\x00\x00", 8)),
                Catch::Contains("t.pcd: byte 140: binary_compressed data truncated: 16 bytes announced, 0 left"));
+    // 1.2 GB announced by a 4-byte LZF block: refused before PCL allocates.
+    const std::string huge = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100000000\nHEIGHT 1\n"
+                             "POINTS 100000000\nDATA binary_compressed\n";
+    CHECK_THAT(error_of("t.pcd", huge + std::string("\x04\x00\x00\x00\x00\x8c\x86\x47", 8) + "abcd"),
+               Catch::Contains("uncompressed bytes cannot come from 4"));
     // Found by the fuzzer: PCL's own header reader throws std::out_of_range here.
     CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\n" + std::string("\x44\x41\x54\x41\x00\x00\x00\x40\x00\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x00\x40\x00\x00\x40\xc0\x7f\x00\x00\x00\x00\x00\x00\x00\x00", 43)),
                Catch::Contains("t.pcd:10: DATA binary: PCL's PCDReader failed"));
