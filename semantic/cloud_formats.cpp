@@ -101,6 +101,7 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
     if (w.empty() || w[0].front() == '#') continue;
     const std::string key(w[0]);
     const size_t n = lines.number;
+    if (h.line_of.count(key)) fail_line(path, n, key + ": given twice (first on line " + std::to_string(h.line_of[key]) + ")");
     h.line_of[key] = n;
     const auto ints = [&](std::vector<int>& out) {
       out.clear();
@@ -113,6 +114,9 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
     if (key == "VERSION") {
     } else if (key == "FIELDS" || key == "COLUMNS") {
       h.fields.assign(w.begin() + 1, w.end());
+      for (const auto& f : h.fields)
+        if (!std::all_of(f.begin(), f.end(), [](unsigned char c) { return std::isalnum(c) || c == '_'; }))
+          fail_line(path, n, key + ": field name '" + f + "' is not [A-Za-z0-9_]+");
     } else if (key == "SIZE") {
       ints(h.sizes);
       for (int s : h.sizes)
@@ -134,7 +138,10 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
       h.height = number<uint64_t>(w[1], path, n, key);
     } else if (key == "VIEWPOINT") {
       if (w.size() != 8) fail_line(path, n, "VIEWPOINT: expected 7 numbers");
-      for (size_t i = 1; i < 8; ++i) (void)number<double>(w[i], path, n, key);
+      for (size_t i = 1; i < 8; ++i) {
+        h.viewpoint[i - 1] = number<double>(w[i], path, n, key);
+        if (!std::isfinite(h.viewpoint[i - 1])) fail_line(path, n, "VIEWPOINT: not finite");
+      }
     } else if (key == "POINTS") {
       if (w.size() != 2) fail_line(path, n, "POINTS: expected one number");
       h.points = number<uint64_t>(w[1], path, n, key);
@@ -238,6 +245,23 @@ PcdHeader check_pcd(const std::string& path, std::string_view text) {
   PcdHeader h = parse_pcd_header(path, text);
   check_pcd_data(path, text, h);
   return h;
+}
+
+std::string canonical_pcd_header(const PcdHeader& h) {
+  std::ostringstream o;
+  o.precision(17);
+  o << "VERSION 0.7\nFIELDS";
+  for (const auto& f : h.fields) o << ' ' << f;
+  o << "\nSIZE";
+  for (int v : h.sizes) o << ' ' << v;
+  o << "\nTYPE";
+  for (char t : h.types) o << ' ' << t;
+  o << "\nCOUNT";
+  for (int v : h.counts) o << ' ' << v;
+  o << "\nWIDTH " << h.width << "\nHEIGHT " << h.height << "\nVIEWPOINT";
+  for (double v : h.viewpoint) o << ' ' << v;
+  o << "\nPOINTS " << h.points << "\nDATA " << h.data << '\n';
+  return std::move(o).str();
 }
 
 // ---------------------------------------------------------------- PLY ----

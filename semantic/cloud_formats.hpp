@@ -30,7 +30,13 @@ struct PcdHeader {
   size_t data_offset = 0;  // first byte after the DATA line
   size_t data_line = 0;
   std::map<std::string, size_t> line_of;  // key -> its line
+  double viewpoint[7] = {0, 0, 0, 1, 0, 0, 0};  // tx ty tz qw qx qy qz
 };
+
+/// The header as a canonical PCD v0.7 text (one line per key, in order,
+/// ending with the DATA line): what PCL's reader is given instead of the
+/// file's own header, so that it only ever parses a header we checked.
+std::string canonical_pcd_header(const PcdHeader& h);
 
 /// Parses and checks a PCD header, then checks the data against it: binary
 /// sizes against the file's, binary_compressed's size words, ascii's value

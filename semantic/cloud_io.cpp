@@ -67,12 +67,32 @@ PcdRead read_pcd(const std::string& path, std::string_view text) {
   Eigen::Quaternionf orientation;
   int version = 0;
   pcl::PCDReader reader;
+  // PCL reads files only, and PCL 1.13's header parser throws or crashes on
+  // odd headers (found by tests/fuzz/pcd_fuzz.cpp: std::out_of_range, and a
+  // SIGSEGV on repeated FIELDS lines): it gets a temporary file of our
+  // canonical header and the file's data bytes.
+  static std::atomic<unsigned> serial{0};
+  const auto tmp = std::filesystem::temp_directory_path() /
+                   ("rise_semantic_" + std::to_string(::getpid()) + "_" + std::to_string(serial++) + ".pcd");
+  struct Remove {
+    std::filesystem::path p;
+    ~Remove() {
+      std::error_code ec;
+      std::filesystem::remove(p, ec);
+    }
+  } remove{tmp};
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    const std::string header = formats::canonical_pcd_header(h);
+    out.write(header.data(), static_cast<std::streamsize>(header.size()));
+    const std::string_view data = text.substr(std::min(h.data_offset, text.size()));
+    out.write(data.data(), static_cast<std::streamsize>(data.size()));
+    if (!out) throw std::runtime_error(path + ":0: cannot write the temporary copy " + tmp.string());
+  }
   int status = -1;
   try {
-    status = reader.read(path, blob, origin, orientation, version);
+    status = reader.read(tmp.string(), blob, origin, orientation, version);
   } catch (const std::exception& e) {
-    // Found by tests/fuzz/pcd_fuzz.cpp: PCL 1.13's readHeader throws
-    // std::out_of_range on some headers that pass our check.
     fail_line(path, h.data_line, "DATA " + h.data + ": PCL's PCDReader failed: " + e.what());
   }
   if (status < 0) fail_line(path, h.data_line, "DATA " + h.data + ": PCL's PCDReader refused the data");
@@ -138,27 +158,7 @@ Cloud read_cloud(const std::string& path) {
 
 Cloud parse_cloud(const std::string& path, const std::string& contents) {
   const std::string ext = lower_extension(path);
-  if (ext == ".pcd") {
-    // PCL's reader reads from a file only: it gets a temporary copy.
-    static std::atomic<unsigned> serial{0};
-    const auto tmp = std::filesystem::temp_directory_path() /
-                     ("rise_semantic_" + std::to_string(::getpid()) + "_" + std::to_string(serial++) + ".pcd");
-    {
-      std::ofstream out(tmp, std::ios::binary);
-      out.write(contents.data(), static_cast<std::streamsize>(contents.size()));
-    }
-    struct Remove {
-      std::filesystem::path p;
-      ~Remove() { std::error_code ec; std::filesystem::remove(p, ec); }
-    } remove{tmp};
-    try {
-      return read_pcd(tmp.string(), contents).cloud;
-    } catch (const std::runtime_error& e) {
-      std::string m = e.what();
-      if (m.rfind(tmp.string(), 0) == 0) m = path + m.substr(tmp.string().size());
-      throw std::runtime_error(m);
-    }
-  }
+  if (ext == ".pcd") return read_pcd(path, contents).cloud;
   if (ext == ".ply") return formats::parse_ply(path, contents);
   if (ext == ".xyz") return formats::parse_xyz(path, contents);
   if (ext == ".3d") return formats::parse_3d(path, contents);
