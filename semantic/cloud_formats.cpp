@@ -198,6 +198,18 @@ void check_pcd_data(const std::string& path, std::string_view text, const PcdHea
   const uint64_t need = point_bytes * h.points;
   const size_t at = h.data_offset;
   const size_t have = text.size() > at ? text.size() - at : 0;
+  if (h.data != "ascii") {
+    // PCL 1.13's header parser reads on past DATA while the next "line"
+    // starts with a header keyword, and then throws, allocates without
+    // bound or crashes (found by tests/fuzz/pcd_fuzz.cpp): such data is
+    // refused here, though a float's bytes spell a keyword only by chance.
+    static const char* keywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                     "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+    const std::string_view data = text.substr(std::min(at, text.size()));
+    for (const char* k : keywords)
+      if (data.starts_with(k))
+        fail_byte(path, at, "binary data begins with '" + std::string(k) + "', which PCL's reader takes for a header line");
+  }
   if (h.data == "binary") {
     if (need > have)
       fail_byte(path, text.size(), "binary data truncated: " + std::to_string(h.points) + " points need " +
