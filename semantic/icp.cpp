@@ -72,8 +72,9 @@ Eigen::Isometry3d gauss_newton(const Sums& s) {
 
 // Nearest neighbours at any radius up to the first iteration's: grids whose
 // cells are twice a radius that halves level by level, down to about the
-// point spacing. A query tries the finest level first (8 cells, exact within
-// its radius) and climbs only while it finds nothing, so a converged pair
+// point spacing. A query starts at the level its point needed last iteration
+// (the finest at first; 8 cells, exact within the level's radius) and climbs
+// only while it finds nothing, so a converged pair
 // costs one small lookup however large the first radius was. Every level but
 // the finest reads a bounded, evenly spread sample of a crowded cell: a far
 // point's partner only has to point the right way, and pairs within the
@@ -114,8 +115,8 @@ class GridPyramid {
   /// the answer, where the next iteration (pairs change little) should
   /// start. Starting higher finds the same point, at more cost: what a
   /// level finds is the nearest within its whole radius.
-  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level) const {
-    for (size_t l = std::min<size_t>(level, levels_.size() - 1); l < levels_.size(); ++l) {
+  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level, uint8_t widest) const {
+    for (size_t l = std::min<size_t>(level, widest); l < levels_.size(); ++l) {
       const Level& lv = levels_[l];
       const float r = std::min(lv.radius_m, radius_m);
       const bool sample = !exact_ || r > exact_radius_m_;
@@ -131,7 +132,13 @@ class GridPyramid {
     level = static_cast<uint8_t>(levels_.size() - 1);
     return {};
   }
-  size_t levels() const { return levels_.size(); }
+  /// The finest level whose radius covers `radius_m`: no search at that
+  /// radius needs to start above it.
+  uint8_t level_for(float radius_m) const {
+    size_t l = 0;
+    while (l + 1 < levels_.size() && levels_[l].radius_m < radius_m) ++l;
+    return static_cast<uint8_t>(l);
+  }
 
  private:
   static constexpr uint32_t kStrideCap = 32;
@@ -187,7 +194,13 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   const auto& src = source.points;
   const auto& tn = target.normals;
   const auto n = static_cast<std::ptrdiff_t>(src.size());
-  std::vector<Sums> partial(static_cast<size_t>(threads));
+  // Work in fixed chunks handed out dynamically (a thread the OS parks on a
+  // busy machine does not hold up the others), each summed into its own
+  // slot and the slots added in order: the same answer for any number of
+  // threads and any schedule. Allocated once, outside the iterations.
+  constexpr std::ptrdiff_t kChunk = 1024;
+  const std::ptrdiff_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<Sums> partial(static_cast<size_t>(chunks));
   std::vector<uint8_t> hint(src.size(), 0);  // per source point: the pyramid level to start at
 
   IcpResult result;
@@ -195,19 +208,17 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   for (int it = 0; it < settings.max_iterations; ++it) {
     const double radius = schedule[static_cast<size_t>(it)];
     const float rf = static_cast<float>(radius);
+    const uint8_t widest = pyramid.level_for(rf);
     const Eigen::Matrix3f R = T.linear().cast<float>();
     const Eigen::Vector3f t = T.translation().cast<float>();
     const double huber = settings.huber_m;
-    for (auto& p : partial) p = Sums{};
-
-#pragma omp parallel num_threads(threads)
-    {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (std::ptrdiff_t c = 0; c < chunks; ++c) {
       Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
-#pragma omp for schedule(static, 1024)
-      for (std::ptrdiff_t i = 0; i < n; ++i) {
+      for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
         uint8_t& level = hint[static_cast<size_t>(i)];
-        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level);
+        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level, widest);
         if (nb.index == VoxelGrid::kNone) continue;
         const Eigen::Vector3d pd = p.cast<double>();
         const Eigen::Vector3d qd = target.points[nb.index].cast<double>();
@@ -230,10 +241,10 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
           acc.Spq += (w * pd) * qd.transpose();
         }
       }
-      partial[static_cast<size_t>(omp_get_thread_num())] = acc;
+      partial[static_cast<size_t>(c)] = acc;
     }
     Sums s;
-    for (const auto& p : partial) s.add(p);  // thread order: deterministic for a given thread count
+    for (const auto& p : partial) s.add(p);
     result.iterations = it + 1;
     result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(n);
     result.rmse_m = s.pairs > 0 ? std::sqrt(s.squared_error / static_cast<double>(s.pairs)) : 0.0;
