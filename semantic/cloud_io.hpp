@@ -17,8 +17,9 @@ namespace rise::semantic {
 Cloud read_cloud(const std::string& path);
 
 /// Parses `contents` as the file `path` would be read (format from its
-/// extension; errors name `path`). A PCD goes through a temporary file,
-/// since PCL's reader reads only files.
+/// extension; errors name `path`). PCL's reader reads files only: a PCD's
+/// checked header (rewritten canonically) and data go through a temporary
+/// file, as they do for read_cloud.
 Cloud parse_cloud(const std::string& path, const std::string& contents);
 
 /// Reads a scan: the cloud, and the pose beside it if there is one — the

@@ -72,16 +72,20 @@ Eigen::Isometry3d gauss_newton(const Sums& s) {
 
 // Nearest neighbours at any radius up to the first iteration's: grids whose
 // cells are twice a radius that halves level by level, down to about the
-// point spacing. A query tries the finest level first (8 cells, exact within
-// its radius) and climbs only while it finds nothing, so a converged pair
-// costs one small lookup however large the first radius was. Levels above
-// the minimum pairing distance read a bounded, evenly spread sample of a
-// crowded cell: in the early, wide iterations a far point's partner only has
-// to point the right way; pairs within the minimum distance stay exact.
+// point spacing. A query starts at the level its point needed last iteration
+// (the finest at first; 8 cells, exact within the level's radius) and climbs
+// only while it finds nothing, so a converged pair
+// costs one small lookup however large the first radius was. Every level but
+// the finest reads a bounded, evenly spread sample of a crowded cell: a far
+// point's partner only has to point the right way, and pairs within the
+// finest radius stay exact. With exact_neighbours, only searches wider than
+// the minimum pairing distance sample: every pair the last iterations use
+// is then the exact nearest neighbour, as a k-d tree would give.
 class GridPyramid {
  public:
   GridPyramid(const std::vector<Eigen::Vector3f>& points, double max_radius_m, double exact_radius_m,
-              int max_points_per_cell) {
+              bool exact, int max_points_per_cell)
+      : exact_(exact) {
     constexpr int kMaxLevels = 8;
     std::vector<float> radii{static_cast<float>(max_radius_m)};
     auto top = std::make_unique<VoxelGrid>(points, 2.0f * radii[0], max_points_per_cell);
@@ -107,25 +111,34 @@ class GridPyramid {
     levels_.push_back({std::move(top), radii[0], cap(0)});
   }
 
-  /// `level` in: where to start (the level one below the last answer is a
-  /// good guess: pairs change little between iterations); out: where it
-  /// was found. Starting higher finds the same point, at more cost: what a
+  /// `level` in: where to start; out: the finest level whose radius holds
+  /// the answer, where the next iteration (pairs change little) should
+  /// start. Starting higher finds the same point, at more cost: what a
   /// level finds is the nearest within its whole radius.
-  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level) const {
-    for (size_t l = std::min<size_t>(level, levels_.size() - 1); l < levels_.size(); ++l) {
+  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level, uint8_t widest) const {
+    for (size_t l = std::min<size_t>(level, widest); l < levels_.size(); ++l) {
       const Level& lv = levels_[l];
       const float r = std::min(lv.radius_m, radius_m);
-      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, r > exact_radius_m_ ? lv.stride_cap : 0u);
+      const bool sample = !exact_ || r > exact_radius_m_;
+      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, sample ? lv.stride_cap : 0u);
       if (nb.index != VoxelGrid::kNone) {
-        level = static_cast<uint8_t>(l);
+        size_t m = l;
+        while (m > 0 && levels_[m - 1].radius_m * levels_[m - 1].radius_m >= nb.distance2_m2) --m;
+        level = static_cast<uint8_t>(m);
         return nb;
       }
       if (r >= radius_m) break;
     }
-    level = static_cast<uint8_t>(levels_.size());
+    level = static_cast<uint8_t>(levels_.size() - 1);
     return {};
   }
-  size_t levels() const { return levels_.size(); }
+  /// The finest level whose radius covers `radius_m`: no search at that
+  /// radius needs to start above it.
+  uint8_t level_for(float radius_m) const {
+    size_t l = 0;
+    while (l + 1 < levels_.size() && levels_[l].radius_m < radius_m) ++l;
+    return static_cast<uint8_t>(l);
+  }
 
  private:
   static constexpr uint32_t kStrideCap = 32;
@@ -135,7 +148,8 @@ class GridPyramid {
     uint32_t stride_cap;
   };
   std::vector<Level> levels_;  // finest first
-  float exact_radius_m_ = 0.0f;  // searches up to this radius read every point
+  float exact_radius_m_ = 0.0f;  // exact_: searches up to this radius read every point
+  bool exact_ = false;
 };
 
 void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
@@ -175,12 +189,18 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
 
   const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
-                            settings.max_points_per_cell);
+                            settings.exact_neighbours, settings.max_points_per_cell);
 
   const auto& src = source.points;
   const auto& tn = target.normals;
   const auto n = static_cast<std::ptrdiff_t>(src.size());
-  std::vector<Sums> partial(static_cast<size_t>(threads));
+  // Work in fixed chunks handed out dynamically (a thread the OS parks on a
+  // busy machine does not hold up the others), each summed into its own
+  // slot and the slots added in order: the same answer for any number of
+  // threads and any schedule. Allocated once, outside the iterations.
+  constexpr std::ptrdiff_t kChunk = 1024;
+  const std::ptrdiff_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<Sums> partial(static_cast<size_t>(chunks));
   std::vector<uint8_t> hint(src.size(), 0);  // per source point: the pyramid level to start at
 
   IcpResult result;
@@ -188,20 +208,17 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   for (int it = 0; it < settings.max_iterations; ++it) {
     const double radius = schedule[static_cast<size_t>(it)];
     const float rf = static_cast<float>(radius);
+    const uint8_t widest = pyramid.level_for(rf);
     const Eigen::Matrix3f R = T.linear().cast<float>();
     const Eigen::Vector3f t = T.translation().cast<float>();
     const double huber = settings.huber_m;
-    for (auto& p : partial) p = Sums{};
-
-#pragma omp parallel num_threads(threads)
-    {
-      Sums& acc = partial[static_cast<size_t>(omp_get_thread_num())];
-#pragma omp for schedule(static, 1024)
-      for (std::ptrdiff_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (std::ptrdiff_t c = 0; c < chunks; ++c) {
+      Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
+      for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
         uint8_t& level = hint[static_cast<size_t>(i)];
-        level = level > 0 ? static_cast<uint8_t>(level - 1) : 0;
-        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level);
+        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level, widest);
         if (nb.index == VoxelGrid::kNone) continue;
         const Eigen::Vector3d pd = p.cast<double>();
         const Eigen::Vector3d qd = target.points[nb.index].cast<double>();
@@ -224,9 +241,10 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
           acc.Spq += (w * pd) * qd.transpose();
         }
       }
+      partial[static_cast<size_t>(c)] = acc;
     }
     Sums s;
-    for (const auto& p : partial) s.add(p);  // thread order: deterministic for a given thread count
+    for (const auto& p : partial) s.add(p);
     result.iterations = it + 1;
     result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(n);
     result.rmse_m = s.pairs > 0 ? std::sqrt(s.squared_error / static_cast<double>(s.pairs)) : 0.0;

@@ -23,6 +23,12 @@ struct IcpSettings {
   double rotation_epsilon_rad = 1e-5;  ///< ... and turns less than these
   int threads = 0;                     ///< 0: OpenMP's default
   int max_points_per_cell = 0;         ///< grid cell lists capped at this many target points; 0: all
+  /// false: a far pair (beyond the finest grid level, about the point
+  /// spacing) is searched in a sample of at most 32 points per cell: much
+  /// faster early on, the same answer once converged. true: every pair
+  /// within min_correspondence_m is the exact nearest neighbour (PCL's and
+  /// Open3D's k-d tree answer, iteration by iteration).
+  bool exact_neighbours = false;
 };
 
 struct IcpResult {

@@ -30,31 +30,36 @@ VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, i
     return slots_[i];
   };
   const uint32_t cap = max_points_per_cell > 0 ? static_cast<uint32_t>(max_points_per_cell) : kNone;
+  std::vector<uint64_t> first_seen;  // cells in the order the input first reaches them
   for (const uint64_t key : keys) {
     if (key == kEmpty) continue;
     Slot& s = slot_of(key);
     if (s.key == kEmpty) {
       s.key = key;
-      ++cell_count_;
+      first_seen.push_back(key);
     }
     if (s.count < cap) ++s.count;
   }
-  // Queries probe this table at random: re-hash it to twice the cells (not
-  // twice the points) so that it stays in cache.
+  cell_count_ = first_seen.size();
+  // Queries probe this table at random: re-hash it to fit the cells (load
+  // 0.4 .. 0.8; not twice the points) so that it stays in cache.
   {
     std::vector<Slot> counted;
     counted.swap(slots_);
-    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ * 2));
+    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ + cell_count_ / 4));
     slots_.assign(compact, Slot{});
     mask_ = compact - 1;
     shift_ = 64 - std::countr_zero(compact);
     for (const Slot& c : counted)
       if (c.key != kEmpty) slot_of(c.key) = c;
   }
+  // Runs in first-seen order: a scan's points arrive sweep by sweep, so
+  // neighbouring cells, and the queries of neighbouring source points, stay
+  // close in memory.
   uint32_t offset = 0;
   offsets_.reserve(cell_count_ + 1);
-  for (Slot& s : slots_) {
-    if (s.key == kEmpty) continue;
+  for (const uint64_t key : first_seen) {
+    Slot& s = slot_of(key);
     offsets_.push_back(offset);
     s.begin = offset;
     offset += s.count;

@@ -70,10 +70,12 @@ class VoxelGrid {
            static_cast<uint64_t>(static_cast<uint32_t>(z + kCoordLimit + 1));
   }
   int32_t coord(float v) const {
-    const float c = std::floor(v * inv_cell_);
+    const float c = v * inv_cell_;
     if (!(c > -static_cast<float>(kCoordLimit))) return -kCoordLimit;  // also NaN
     if (c > static_cast<float>(kCoordLimit)) return kCoordLimit;
-    return static_cast<int32_t>(c);
+    // floor without a libm call (x86-64's baseline has no SSE4.1 round).
+    const int32_t i = static_cast<int32_t>(c);
+    return c < static_cast<float>(i) ? i - 1 : i;
   }
   const Slot* find(uint64_t key) const {
     size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);

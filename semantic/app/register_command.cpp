@@ -24,6 +24,7 @@ struct RegisterOptions {
   double min_dist_m = IcpSettings{}.min_correspondence_m;
   double huber_m = 0.0;
   int threads = 0;
+  bool exact = false;
 };
 
 // 16 numbers, row-major, the last row 0 0 0 1.
@@ -81,6 +82,7 @@ int run_register(const RegisterOptions& o) {
   s.min_correspondence_m = o.min_dist_m;
   s.huber_m = o.huber_m;
   s.threads = o.threads;
+  s.exact_neighbours = o.exact;
   if (s.metric == IcpMetric::PointToPlane && target.cloud.normals.size() != target.cloud.size()) {
     const auto tn = clock::now();
     estimate_normals(target.cloud, 10);
@@ -118,6 +120,7 @@ void add_register_command(CLI::App& app) {
   cmd->add_option("--min-dist", o->min_dist_m, "pairing distance it shrinks to, m")->check(CLI::PositiveNumber)->capture_default_str();
   cmd->add_option("--huber", o->huber_m, "Huber kernel width, m (0: none)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_flag("--exact", o->exact, "pair every point with its exact nearest neighbour (as PCL's and Open3D's k-d trees)");
   cmd->callback([o]() {
     if (o->min_dist_m > o->max_dist_m) throw CLI::ValidationError("--min-dist", "must not exceed --max-dist");
     try {

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
 
   CLI::App app{"rise-semantic: scans -> registered map -> walls, doors, floor, stairs -> a world file"};
   app.require_subcommand(1);
+  app.fallthrough();  // -q also after the subcommand
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "log warnings and errors only");
   app.parse_complete_callback([&quiet]() {

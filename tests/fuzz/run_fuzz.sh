@@ -3,7 +3,7 @@
 # inputs from a seed corpus this script writes itself (nothing binary is kept
 # in the repository).
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
-# TARGET is console_can, dbc or hid_descriptor; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d or pcd; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -13,6 +13,10 @@ case "$target" in
   console_modbus) sources=("$root"/firmware_protocol/console_{can,modbus}.cpp) ;;
   dbc) sources=("$root/firmware_protocol/dbc.cpp") ;;
   hid_descriptor) sources=("$root"/firmware_protocol/hid_{descriptor,report,text}.cpp) ;;
+  # The semantic readers: PLY/XYZ and 3DTK/sim poses without PCL; the PCD
+  # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
+  ply | scan3d) sources=("$root"/semantic/cloud{,_formats}.cpp) ;;
+  pcd) sources=("$root"/semantic/cloud{,_formats,_io}.cpp) ;;
   *) echo "run_fuzz.sh: unknown target $target" >&2; exit 2 ;;
 esac
 sources+=("$root/tests/fuzz/${target}_fuzz.cpp")
@@ -22,13 +26,21 @@ mkdir -p "$work"
 # Rebuild only when a source or header is newer than the binary.
 rebuild=0
 [ -x "$binary" ] || rebuild=1
-for f in "${sources[@]}" "$root"/firmware_protocol/*.hpp; do
+for f in "${sources[@]}" "$root"/firmware_protocol/*.hpp "$root"/semantic/*.hpp; do
   [ "$f" -nt "$binary" ] && rebuild=1
 done
 if [ $rebuild -eq 1 ]; then
   echo "run_fuzz.sh: compiling $binary"
+  flags=() libs=()
+  case "$target" in
+    ply | scan3d) flags=(-isystem /usr/include/eigen3) ;;
+    pcd)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/pcl-1.13)
+      libs=(-lpcl_io -lpcl_common -lboost_filesystem)
+      ;;
+  esac
   "$clangxx" -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-    -I"$root" "${sources[@]}" -o "$binary.tmp"
+    -I"$root" "${flags[@]}" "${sources[@]}" -o "$binary.tmp" "${libs[@]}"
   mv "$binary.tmp" "$binary"
 fi
 
@@ -73,6 +85,29 @@ case "$target" in
         printf "$(grep '^R:' "$f" | cut -d' ' -f3- | sed -E 's/([0-9a-fA-F]{2}) ?/\\x\1/g')" >"$corpus/$(basename "$f").bin"
       done
       find "$RISE_TEST_DATA/hid" -type f -size -20k -exec cp {} "$corpus/" \;
+    fi
+    ;;
+  ply)
+    printf 'ply\nformat ascii 1.0\ncomment seed\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty uchar red\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0 0 1 255\n1 0 0 0 0 1 0\n0 1 0 0 0 1 7\n3 0 1 2\n' >"$corpus/ascii.ply"
+    printf 'ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n\x00\x00\x80\x3f\x00\x00\x00\x40\x00\x00\x40\x40\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00\x00' >"$corpus/le.ply"
+    printf 'ply\nformat binary_big_endian 1.0\nelement face 1\nproperty list uchar int vertex_indices\nelement vertex 1\nproperty double x\nproperty double y\nproperty double z\nend_header\n\x01\x00\x00\x00\x00\x3f\xf0\x00\x00\x00\x00\x00\x00\x40\x00\x00\x00\x00\x00\x00\x00\x40\x08\x00\x00\x00\x00\x00\x00' >"$corpus/be.ply"
+    printf '1 2 3\n4 5 6\n# comment\n-1e3 0.5 nan\n' >"$corpus/points.xyz"
+    ;;
+  scan3d)
+    printf '360 x 225\n10.1 0 0\n-3.5 2e1 400\n' >"$corpus/header.3d"
+    printf -- '-3.10605 -7.50803 156.917\n1.35694 -0.852409 -0.56224\n' >"$corpus/scan.pose"
+    printf '1 0 0 0 0 1 0 0 0 0 1 0 -3.6 -9.1 156.8 1 2\n' >"$corpus/scan.frames"
+    printf '# rise-sim\ntime_s 1\nposition_m 0.25 0 0.3\norientation_wxyz 0.7071 0.7071 0 0\nmatrix_row_major 1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1\n' >"$corpus/sim.pose"
+    if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/pointclouds/3DTK-dat" ]; then
+      for f in "$RISE_TEST_DATA"/pointclouds/3DTK-dat/scan00{0,1}.{pose,frames}; do cp "$f" "$corpus/"; done
+      head -c 4000 "$RISE_TEST_DATA/pointclouds/3DTK-dat/scan000.3d" >"$corpus/scan000-head.3d"
+    fi
+    ;;
+  pcd)
+    printf 'VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA binary\n\x00\x00\x80\x3f\x00\x00\x00\x40\x00\x00\x40\x40\x00\x00\xc0\x7f\x00\x00\x00\x00\x00\x00\x00\x00' >"$corpus/binary.pcd"
+    printf 'VERSION .7\nFIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\nTYPE F F F F F F\nCOUNT 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3 0 0 1\nnan nan nan 0 0 1\n' >"$corpus/ascii.pcd"
+    if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/pointclouds/pcl" ]; then
+      find "$RISE_TEST_DATA/pointclouds/pcl" -name '*.pcd' -size -20k -exec cp {} "$corpus/" \;
     fi
     ;;
 esac

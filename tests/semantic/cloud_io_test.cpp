@@ -231,6 +231,21 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFRUITS x y z\n"), Catch::Contains("t.pcd:2: unknown header key 'FRUITS'"));
     CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary_compressed\n" + std::string("\x10\x00\x00\x00\x18\x00\x00\x00", 8)),
                Catch::Contains("t.pcd: byte 140: binary_compressed data truncated: 16 bytes announced, 0 left"));
+    // Found by the fuzzer (PCL's reader crashed on repeated keys): refused by our check.
+    CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFIELDS x y z\nFIELDS x y z normal_x\n"),
+               Catch::Contains("t.pcd:3: FIELDS: given twice (first on line 2)"));
+    CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFIELDS x y z\xfe\n"), Catch::Contains("t.pcd:2: FIELDS: field name"));
+    // Found by the fuzzer: PCL takes binary data that starts with a header keyword for the header.
+    CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\nCOLUMNS?" + std::string(16, '\0')),
+               Catch::Contains("t.pcd: byte 121: binary data begins with 'COLUMNS'"));
+    // 1.2 GB announced by a 4-byte LZF block: refused before PCL allocates.
+    const std::string huge = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100000000\nHEIGHT 1\n"
+                             "POINTS 100000000\nDATA binary_compressed\n";
+    CHECK_THAT(error_of("t.pcd", huge + std::string("\x04\x00\x00\x00\x00\x8c\x86\x47", 8) + "abcd"),
+               Catch::Contains("uncompressed bytes cannot come from 4"));
+    // Found by the fuzzer: PCL's own header reader throws std::out_of_range on this one.
+    CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\n" + std::string("\x44\x41\x54\x41\x00\x00\x00\x40\x00\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x00\x40\x00\x00\x40\xc0\x7f\x00\x00\x00\x00\x00\x00\x00\x00", 43)),
+               Catch::Contains("t.pcd: byte 121: binary data begins with 'DATA'"));
     CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 3\nHEIGHT 1\nPOINTS 2\nDATA ascii\n"),
                Catch::Contains("t.pcd:7: POINTS: 2 is not WIDTH x HEIGHT = 3"));
   }

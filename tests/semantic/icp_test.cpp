@@ -25,13 +25,16 @@ TEST_CASE("icp recovers a known 10 degree, 0.2 m motion of a synthetic room", "[
   s.min_correspondence_m = 0.1;
   const auto threads = GENERATE(1, 2);
   s.threads = threads;
+  const bool exact = GENERATE(false, true);
+  s.exact_neighbours = exact;
 
   SECTION("point to point") {
     s.metric = sem::IcpMetric::PointToPoint;
     const auto r = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
     CHECK(rotation_error_deg(r.T_target_source, T_true) < 0.02);
     CHECK(translation_error_m(r.T_target_source, T_true) < 0.001);
-    CHECK(r.inlier_ratio > 0.99);
+    // Sampled far cells leave a few pairs beyond the finest level unfound.
+    CHECK(r.inlier_ratio > (exact ? 0.99 : 0.95));
     CHECK(r.rmse_m < 0.04);  // two samplings ~5.5 cm apart: ~3 cm to the nearest point
   }
   SECTION("point to plane, with a Huber kernel") {
@@ -57,9 +60,10 @@ TEST_CASE("icp gives the same answer on one thread and on two", "[semantic]") {
   const auto one = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
   s.threads = 2;
   const auto two = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
+  // Fixed chunks summed in order: bit for bit the same, whatever the schedule.
   CHECK(one.iterations == two.iterations);
-  CHECK(rotation_error_deg(one.T_target_source, two.T_target_source) < 1e-4);
-  CHECK(translation_error_m(one.T_target_source, two.T_target_source) < 1e-6);
+  CHECK(one.T_target_source.matrix() == two.T_target_source.matrix());
+  CHECK(one.rmse_m == two.rmse_m);
 }
 
 TEST_CASE("icp refuses empty clouds, missing normals and bad settings", "[semantic]") {

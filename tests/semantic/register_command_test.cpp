@@ -43,7 +43,7 @@ TEST_CASE("rise-semantic register prints PCL's bunny transform, rmse and iterati
     WARN("skipped: RISE_TEST_DATA/pointclouds/pcl/bun0.pcd, bun4.pcd not found");
     return;
   }
-  const Run r = run("register " + bun0 + " " + bun4 + " --max-dist 0.05 --min-dist 0.05 --iterations 50 --threads 1");
+  const Run r = run("register " + bun0 + " " + bun4 + " --max-dist 0.05 --min-dist 0.05 --iterations 50 --threads 1 --exact");
   REQUIRE(r.status == 0);
   std::istringstream in(r.out);
   double T[4][4];
@@ -78,6 +78,12 @@ TEST_CASE("rise-semantic register refuses a bad initial guess and a bad file", "
   const auto bad = std::filesystem::temp_directory_path() / "rise_register_bad.ply";
   { FILE* f = std::fopen(bad.c_str(), "w"); std::fputs("ply\nformat ascii 1.0\nelement vertex 5\n", f); std::fclose(f); }
   CHECK(run("register " + bad.string() + " " + bun0).status != 0);
+  const auto init = std::filesystem::temp_directory_path() / "rise_register_init.txt";
+  { FILE* f = std::fopen(init.c_str(), "w"); std::fputs("1 0 0 0.01\n0 1 0 0\n0 0 1 0\n0 0 0 1\n", f); std::fclose(f); }
+  const Run from_file = run("register " + bun0 + " " + bun0 + " --init-file " + init.string() + " --exact");
+  CHECK(from_file.status == 0);
+  CHECK(from_file.out.find("converged true") != std::string::npos);
+  CHECK(run("register " + bun0 + " " + bun0 + " --init-file " + init.string() + " --init '1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1'").status != 0);
   // The identity guess given explicitly still aligns.
   const Run ok = run("register " + bun0 + " " + bun0 + " --init '1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1'");
   CHECK(ok.status == 0);
