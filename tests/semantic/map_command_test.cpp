@@ -168,7 +168,8 @@ const Mapped& mapped() {
     m.scans = write_scans(scans_dir);
     std::string cmd = kProgram + " map";
     for (const auto& f : m.scans.files) cmd += " " + f;
-    cmd += " -o " + m.out_dir.string() + " > " + (dir / "stdout.txt").string() + " 2> " +
+    // One ICP thread: on a busy machine OpenMP's spinning threads slow the match down many times.
+  cmd += " --threads 1 -o " + m.out_dir.string() + " > " + (dir / "stdout.txt").string() + " 2> " +
            (dir / "stderr.txt").string();
     m.rc = std::system(cmd.c_str());
     m.printed = slurp(dir / "stdout.txt");
