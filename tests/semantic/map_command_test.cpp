@@ -169,7 +169,7 @@ const Mapped& mapped() {
     std::string cmd = kProgram + " map";
     for (const auto& f : m.scans.files) cmd += " " + f;
     // One ICP thread: on a busy machine OpenMP's spinning threads slow the match down many times.
-  cmd += " --threads 1 -o " + m.out_dir.string() + " > " + (dir / "stdout.txt").string() + " 2> " +
+    cmd += " --threads 1 -o " + m.out_dir.string() + " > " + (dir / "stdout.txt").string() + " 2> " +
            (dir / "stderr.txt").string();
     m.rc = std::system(cmd.c_str());
     m.printed = slurp(dir / "stdout.txt");
