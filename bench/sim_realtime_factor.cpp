@@ -15,7 +15,7 @@
 //
 // Issue 5's "the same with a world generated from scans": the tracked robot
 // on the same script in the world the semantic engine makes of the
-// building (issue 6): the simulator's laser scans it from 8 stops (room A,
+// building (issue 6): the simulator's laser scans it from 10 stops (room A,
 // the doorway, the corridor, the foot of the stairs), the semantic
 // pipeline (6D SLAM, segmentation, world_yaml — what `rise-semantic map`
 // writes as world.yaml) turns the scans into a world file, loaded by the
@@ -105,7 +105,7 @@ Result run(const std::vector<std::string>& robot_files, const rise::sim::WorldDe
   return r;
 }
 
-// The building as the semantic engine sees it: scans from 8 stops (the
+// The building as the semantic engine sees it: scans from 10 stops (the
 // tracked robot's laser at 1° × 120 lines, sensor frame, true poses as the
 // guess), mapped, segmented and exported as a world file, read back.
 rise::sim::WorldDescription scan_generated_world(const std::string& root, double& generate_s) {
@@ -115,8 +115,9 @@ rise::sim::WorldDescription scan_generated_world(const std::string& root, double
   laser.resolution_rad = M_PI / 180.0;
   laser.rotating->steps = 120;
   rise::sim::LaserScanner scanner(laser, 3);
-  const double stops[][3] = {{0.0, 0.0, 0.0},    {-1.2, -1.6, 40.0}, {-2.3, 0.2, 80.0}, {-2.25, 1.9, 90.0},
-                             {-2.3, 3.6, 60.0},  {-2.6, 4.4, 0.0},   {-1.2, 4.2, -10.0}, {-0.5, 3.5, 20.0}};
+  const double stops[][3] = {{0.0, 0.0, 0.0},   {-1.2, -1.6, 40.0}, {-2.6, -2.0, 90.0}, {-2.3, 0.2, 80.0},
+                             {-2.25, 1.9, 90.0}, {-2.3, 3.6, 60.0},  {-2.6, 4.4, 0.0},   {-1.2, 4.2, -10.0},
+                             {-0.5, 3.5, 20.0},  {-0.8, 4.6, -5.0}};
   std::vector<rise::semantic::Scan> scans;
   for (const auto& st : stops) {
     auto w = rise::sim::load_world_description(root + "/sim/worlds/building.yaml");
@@ -130,7 +131,9 @@ rise::sim::WorldDescription scan_generated_world(const std::string& root, double
     s.T_world_scan = scan.T_world_sensor;
     scans.push_back(std::move(s));
   }
-  const rise::semantic::MapResult map = rise::semantic::build_map(std::move(scans));
+  rise::semantic::MapSettings settings;
+  settings.slam.icp.threads = 1;  // one core, as the simulator's runs
+  const rise::semantic::MapResult map = rise::semantic::build_map(std::move(scans), settings);
   rise::semantic::ExportSettings exports;
   exports.world_name = "scanned_building";
   const std::string yaml = rise::semantic::world_yaml(map.net, exports);
@@ -153,7 +156,7 @@ int main(int argc, char** argv) {
   const auto scan_world = scan_world_file.empty() ? scan_generated_world(root, generate_s)
                                                   : rise::sim::load_world_description(scan_world_file);
   if (scan_world_file.empty())
-    std::printf("scan-generated world: 8 scans of the building mapped by the semantic pipeline in %.2f s: "
+    std::printf("scan-generated world: 10 scans of the building mapped by the semantic pipeline in %.2f s: "
                 "%zu walls, %zu doors, %zu stairs, %zu props\n",
                 generate_s, scan_world.walls.size(), scan_world.doors.size(), scan_world.stairs.size(),
                 scan_world.props.size());
