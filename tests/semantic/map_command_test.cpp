@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -149,6 +150,14 @@ std::vector<Doorway> doorways(const rise::sim::WorldDescription& w) {
   return out;
 }
 
+struct RemovedAtExit {
+  fs::path dir;
+  ~RemovedAtExit() {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+};
+
 // The scans written, mapped by the program once per test program.
 struct Mapped {
   WrittenScans scans;
@@ -160,10 +169,12 @@ struct Mapped {
 const Mapped& mapped() {
   static const Mapped m = [] {
     Mapped m;
-    const fs::path dir = fs::temp_directory_path() / "rise_map_command_test";
+    // ctest runs each test case in its own process, maybe at once: a folder per process.
+    const fs::path dir = fs::temp_directory_path() / ("rise_map_command_test_" + std::to_string(getpid()));
     const fs::path scans_dir = dir / "scans";
     m.out_dir = dir / "out";
     fs::remove_all(dir);
+    static const RemovedAtExit cleanup{dir};
     fs::create_directories(scans_dir);
     m.scans = write_scans(scans_dir);
     std::string cmd = kProgram + " map";
@@ -278,7 +289,7 @@ TEST_CASE("the tracked robot climbs the stairs rise-semantic map found to their 
 }
 
 TEST_CASE("rise-semantic map refuses a missing scan and bad flags with exit code 2", "[semantic]") {
-  const fs::path dir = fs::temp_directory_path() / "rise_map_command_test_bad";
+  const fs::path dir = fs::temp_directory_path() / ("rise_map_command_test_bad_" + std::to_string(getpid()));
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string err = (dir / "stderr.txt").string();
