@@ -214,6 +214,10 @@ TEST_CASE("rise-semantic map recovers the poses of drifting simulated scans with
     CHECK(fs::file_size(m.out_dir / f) > 100);
   CHECK(m.printed.find("8 scans") != std::string::npos);
   CHECK(m.printed.find("timings: read") != std::string::npos);
+  CHECK(m.log.find("sequential icp: 7/7") != std::string::npos);  // the progress bar, one line per stage off a terminal
+  const auto world = rise::sim::load_world_description((m.out_dir / "world.yaml").string());
+  CHECK(m.printed.find(std::to_string(world.walls.size()) + " walls, ") != std::string::npos);
+  CHECK(m.printed.find(std::to_string(world.stairs.size()) + " stairs, ") != std::string::npos);
 
   const auto poses = read_poses(m.out_dir / "poses.txt");
   REQUIRE(poses.size() == m.scans.truth.size());
