@@ -13,7 +13,17 @@
 // sim time. Prints sim time, wall time, the factor, the events the run
 // produced and ODE's diagnostic count.
 //
-// Usage: bench_sim_realtime_factor [sim_seconds=60]
+// Issue 5's "the same with a world generated from scans": the tracked robot
+// on the same script in the world the semantic engine makes of the
+// building (issue 6): the simulator's laser scans it from 10 stops (room A,
+// the doorway, the corridor, the foot of the stairs), the semantic
+// pipeline (6D SLAM, segmentation, world_yaml — what `rise-semantic map`
+// writes as world.yaml) turns the scans into a world file, loaded by the
+// simulator's own reader; or the world file given as the second argument.
+// Its robot start is the exporter's (in front of the first door found,
+// facing it), so the script pushes through that door too.
+//
+// Usage: bench_sim_realtime_factor [sim_seconds=60] [scan_world.yaml]
 
 #include <chrono>
 #include <cmath>
@@ -24,6 +34,8 @@
 #include <utility>
 #include <vector>
 
+#include "semantic/map_pipeline.hpp"
+#include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
 
 namespace {
@@ -93,6 +105,42 @@ Result run(const std::vector<std::string>& robot_files, const rise::sim::WorldDe
   return r;
 }
 
+// The building as the semantic engine sees it: scans from 10 stops (the
+// tracked robot's laser at 1° × 120 lines, sensor frame, true poses as the
+// guess), mapped, segmented and exported as a world file, read back.
+rise::sim::WorldDescription scan_generated_world(const std::string& root, double& generate_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto robot = rise::sim::load_robot_description(root + "/sim/robots/tracked_eod.yaml");
+  rise::sim::LaserDescription laser = *robot.sensors.laser;
+  laser.resolution_rad = M_PI / 180.0;
+  laser.rotating->steps = 120;
+  rise::sim::LaserScanner scanner(laser, 3);
+  const double stops[][3] = {{0.0, 0.0, 0.0},   {-1.2, -1.6, 40.0}, {-2.6, -2.0, 90.0}, {-2.3, 0.2, 80.0},
+                             {-2.25, 1.9, 90.0}, {-2.3, 3.6, 60.0},  {-2.6, 4.4, 0.0},   {-1.2, 4.2, -10.0},
+                             {-0.5, 3.5, 20.0},  {-0.8, 4.6, -5.0}};
+  std::vector<rise::semantic::Scan> scans;
+  for (const auto& st : stops) {
+    auto w = rise::sim::load_world_description(root + "/sim/worlds/building.yaml");
+    w.robot_start_m = {st[0], st[1]};
+    w.robot_start_yaw_rad = st[2] * M_PI / 180.0;
+    rise::sim::Simulation sim(robot, w);
+    const rise::sim::LaserScan scan = scanner.scan(sim);
+    rise::semantic::Scan s;
+    s.name = "stop" + std::to_string(scans.size());
+    s.cloud.points = scan.points_sensor;
+    s.T_world_scan = scan.T_world_sensor;
+    scans.push_back(std::move(s));
+  }
+  rise::semantic::MapSettings settings;
+  settings.slam.icp.threads = 1;  // one core, as the simulator's runs
+  const rise::semantic::MapResult map = rise::semantic::build_map(std::move(scans), settings);
+  rise::semantic::ExportSettings exports;
+  exports.world_name = "scanned_building";
+  const std::string yaml = rise::semantic::world_yaml(map.net, exports);
+  generate_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return rise::sim::parse_world_description(yaml, "scanned_building.yaml");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -103,15 +151,33 @@ int main(int argc, char** argv) {
   }
   const std::string root = RISE_SOURCE_DIR;
   const auto world = rise::sim::load_world_description(root + "/sim/worlds/building.yaml");
+  double generate_s = 0.0;
+  const std::string scan_world_file = argc > 2 ? argv[2] : "";
+  const auto scan_world = scan_world_file.empty() ? scan_generated_world(root, generate_s)
+                                                  : rise::sim::load_world_description(scan_world_file);
+  if (scan_world_file.empty())
+    std::printf("scan-generated world: 10 scans of the building mapped by the semantic pipeline in %.2f s: "
+                "%zu walls, %zu doors, %zu stairs, %zu props\n",
+                generate_s, scan_world.walls.size(), scan_world.doors.size(), scan_world.stairs.size(),
+                scan_world.props.size());
+  else
+    std::printf("scan-generated world: %s\n", scan_world_file.c_str());
   std::printf("sim real-time factor, building world, 1 ms step, one core, %.0f s simulated per robot\n", sim_seconds);
   std::printf("%-14s %10s %10s %10s %12s %8s %14s\n", "robot", "sim_s", "wall_s", "RTF", "steps/s", "events",
               "end_from_start_m");
   const std::string tracked = root + "/sim/robots/tracked_eod.yaml", skid4 = root + "/sim/robots/skid4.yaml";
-  const std::pair<const char*, std::vector<std::string>> runs[] = {
-      {"tracked_eod", {tracked}}, {"skid4", {skid4}}, {"tracked+skid4", {tracked, skid4}}};
-  for (const auto& [label, files] : runs) {
+  struct Run {
+    const char* label;
+    std::vector<std::string> files;
+    const rise::sim::WorldDescription* world;
+  };
+  const Run runs[] = {{"tracked_eod", {tracked}, &world},
+                      {"skid4", {skid4}, &world},
+                      {"tracked+skid4", {tracked, skid4}, &world},
+                      {"tracked@scans", {tracked}, &scan_world}};
+  for (const auto& [label, files, w] : runs) {
     const int64_t ode_before = rise::sim::ode_messages();
-    const Result r = run(files, world, sim_seconds);
+    const Result r = run(files, *w, sim_seconds);
     std::printf("%-14s %10.1f %10.3f %9.1fx %12.0f %8zu %14.2f\n", label, r.sim_s, r.wall_s, r.sim_s / r.wall_s,
                 r.sim_s / rise::sim::Simulation::kStepS / r.wall_s, r.events, r.travelled_m);
     std::printf("%-14s", "");

@@ -27,6 +27,8 @@ void check_settings(const SlamSettings& s) {
   if (s.loop_min_inlier_ratio < 0 || s.loop_min_inlier_ratio > 1) bad("loop_min_inlier_ratio must be in 0..1");
   if (!(s.information_sigma_min_m > 0)) bad("information_sigma_min_m must be > 0");
   if (s.relaxation_rounds < 1) bad("relaxation_rounds must be >= 1");
+  if (!(s.refine_correspondence_m >= 0)) bad("refine_correspondence_m must be >= 0");
+  if (s.source_voxel_m < 0) bad("source_voxel_m must be >= 0");
   if (s.icp.metric == IcpMetric::PointToPlane && s.normals_k < 3) bad("normals_k must be >= 3 for point-to-plane");
 }
 
@@ -91,15 +93,21 @@ class Pipeline {
   // becomes scan i's pose; later rounds match from the relaxed poses and
   // leave them as they are (the match only renews the edge: re-chaining
   // would pile the drift up again).
-  std::vector<IcpResult> sequential(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isometry3d>& odometry,
+  std::vector<IcpResult> sequential(const std::vector<Cloud>& clouds, const std::vector<Cloud>& sources,
+                                    const std::vector<Eigen::Isometry3d>& odometry,
                                     std::vector<Eigen::Isometry3d>& T_world_scan, bool chain) const {
     const std::size_t n = clouds.size();
     std::vector<IcpResult> results(n);
+    IcpSettings icp_settings = s_.icp;
+    if (!chain && s_.refine_correspondence_m > 0) {
+      icp_settings.max_correspondence_m =
+          std::min(s_.icp.max_correspondence_m, std::max(s_.refine_correspondence_m, s_.icp.min_correspondence_m));
+    }
     report(0, n - 1, "sequential icp");
     for (std::size_t i = 1; i < n; ++i) {
       const Eigen::Isometry3d guess =
           chain ? T_world_scan[i - 1] * odometry[i - 1].inverse() * odometry[i] : T_world_scan[i];
-      results[i] = icp(clouds[i], local_map(clouds, T_world_scan, i, guess.translation(), s_), guess, s_.icp);
+      results[i] = icp(sources[i], local_map(clouds, T_world_scan, i, guess.translation(), s_), guess, icp_settings);
       if (chain) T_world_scan[i] = results[i].T_target_source;
       report(i, n - 1, "sequential icp");
     }
@@ -108,7 +116,8 @@ class Pipeline {
 
   // Pairs far apart in the sequence whose centres are close, nearest first,
   // matched pairwise; kept when the match is good.
-  std::vector<SlamLoop> loops(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isometry3d>& T_world_scan,
+  std::vector<SlamLoop> loops(const std::vector<Cloud>& clouds, const std::vector<Cloud>& sources,
+                              const std::vector<Eigen::Isometry3d>& T_world_scan,
                               int& candidates) const {
     const std::size_t n = clouds.size();
     const auto separation = static_cast<std::size_t>(s_.loop_min_separation);
@@ -129,7 +138,7 @@ class Pipeline {
     for (std::size_t k = 0; k < pairs.size(); ++k) {
       const auto [i, j] = pairs[k];
       const IcpResult r =
-          icp(clouds[j], neighbourhood(clouds, T_world_scan, i), T_world_scan[i].inverse() * T_world_scan[j], s_.icp);
+          icp(sources[j], neighbourhood(clouds, T_world_scan, i), T_world_scan[i].inverse() * T_world_scan[j], s_.icp);
       if (r.rmse_m <= s_.loop_max_rmse_m && r.inlier_ratio >= s_.loop_min_inlier_ratio) {
         found.push_back({i, j, r.T_target_source, r.rmse_m, r.inlier_ratio});
       }
@@ -138,19 +147,19 @@ class Pipeline {
     return found;
   }
 
-  PoseGraph graph(const std::vector<Cloud>& clouds, const std::vector<Eigen::Isometry3d>& T_world_scan,
+  PoseGraph graph(const std::vector<Cloud>& sources, const std::vector<Eigen::Isometry3d>& T_world_scan,
                   const std::vector<IcpResult>& sequential, const std::vector<SlamLoop>& loops) const {
     PoseGraph g;
     g.T_world_node = T_world_scan;
-    for (std::size_t i = 1; i < clouds.size(); ++i) {
+    for (std::size_t i = 1; i < sources.size(); ++i) {
       const IcpResult& r = sequential[i];
       g.edges.push_back({i - 1, i, T_world_scan[i - 1].inverse() * r.T_target_source,
-                         match_information(clouds[i].points, std::max(r.rmse_m, s_.information_sigma_min_m),
+                         match_information(sources[i].points, std::max(r.rmse_m, s_.information_sigma_min_m),
                                            std::max(r.inlier_ratio, 1e-3))});
     }
     for (const SlamLoop& l : loops) {
       g.edges.push_back({l.from, l.to, l.T_from_to,
-                         match_information(clouds[l.to].points, std::max(l.rmse_m, s_.information_sigma_min_m),
+                         match_information(sources[l.to].points, std::max(l.rmse_m, s_.information_sigma_min_m),
                                            std::max(l.inlier_ratio, 1e-3))});
     }
     return g;
@@ -202,23 +211,27 @@ SlamResult slam(std::vector<Scan> scans, const SlamSettings& settings, const Sla
 
   auto t = Clock::now();
   std::vector<Cloud> clouds(n);
+  std::vector<Cloud> sources;  // what is matched onto the others: thinner than the targets, or the same
+  if (settings.source_voxel_m > settings.scan_voxel_m) sources.resize(n);
   pipeline.report(0, n, "preprocess");
   for (std::size_t i = 0; i < n; ++i) {
     clouds[i] = settings.scan_voxel_m > 0 ? voxel_filter(scans[i].cloud, settings.scan_voxel_m) : scans[i].cloud;
     if (settings.icp.metric == IcpMetric::PointToPlane) estimate_normals(clouds[i], settings.normals_k);
+    if (settings.source_voxel_m > settings.scan_voxel_m) sources[i] = voxel_filter(clouds[i], settings.source_voxel_m);
     pipeline.report(i + 1, n, "preprocess");
   }
+  if (sources.empty()) sources = clouds;
   result.timings.preprocess_s = seconds_since(t);
 
   std::vector<Eigen::Isometry3d> T_world_scan(n, odometry[0]);
   for (int round = 0; round < settings.relaxation_rounds; ++round) {
     t = Clock::now();
-    result.sequential = pipeline.sequential(clouds, odometry, T_world_scan, round == 0);
+    result.sequential = pipeline.sequential(clouds, sources, odometry, T_world_scan, round == 0);
     if (round == 0) result.T_world_scan_sequential = T_world_scan;
     result.timings.sequential_s += seconds_since(t);
 
     t = Clock::now();
-    result.loops = pipeline.loops(clouds, T_world_scan, result.loop_candidates);
+    result.loops = pipeline.loops(clouds, sources, T_world_scan, result.loop_candidates);
     result.timings.loops_s += seconds_since(t);
     if (result.loops.empty()) {  // a chain is its own optimum: nothing (more) to relax
       if (round == 0) result.relaxation = {T_world_scan, 0, 0.0, 0.0, true};
@@ -227,7 +240,7 @@ SlamResult slam(std::vector<Scan> scans, const SlamSettings& settings, const Sla
 
     t = Clock::now();
     pipeline.report(0, 1, "relaxation");
-    result.relaxation = relax(pipeline.graph(clouds, T_world_scan, result.sequential, result.loops), settings.graph);
+    result.relaxation = relax(pipeline.graph(sources, T_world_scan, result.sequential, result.loops), settings.graph);
     T_world_scan = result.relaxation.T_world_node;
     pipeline.report(1, 1, "relaxation");
     result.timings.relaxation_s += seconds_since(t);

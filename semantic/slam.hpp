@@ -33,6 +33,11 @@ struct SlamSettings {
     return s;
   }();
   double scan_voxel_m = 0.05;       ///< each scan is voxel-filtered to this for matching; 0: not
+  /// The scan being matched (ICP's source) is thinned further to this; what
+  /// it is matched onto keeps scan_voxel_m. Fewer queries per iteration;
+  /// a plane is pinned by far fewer points than a dense scan holds.
+  /// ≤ scan_voxel_m: the source as filtered to scan_voxel_m.
+  double source_voxel_m = 0.1;
   int normals_k = 10;               ///< neighbours per normal (point-to-plane ICP only)
   int map_scans = 3;                ///< scan i is matched onto this many earlier scans, merged ...
   SlamTarget target = SlamTarget::LastScans;  ///< ... chosen so
@@ -43,6 +48,11 @@ struct SlamSettings {
   double loop_min_inlier_ratio = 0.4;  ///< ... and at least this share of points paired
   double information_sigma_min_m = 0.005;  ///< floor of the rmse used to weigh an edge
   int relaxation_rounds = 2;        ///< match the edges again from the relaxed poses, relax again
+  /// Those later rounds' sequential matches start pairing at this distance
+  /// (not icp.max_correspondence_m): relaxed poses are off by centimetres,
+  /// not by the odometry's drift, and a narrow start converges in a few
+  /// iterations. 0: as the first round.
+  double refine_correspondence_m = 0.1;
   PoseGraphSettings graph;
   double map_voxel_m = 0.05;        ///< the merged map's voxel filter; 0: not filtered
 };

@@ -6,6 +6,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "semantic/app/map_command.hpp"
 #include "semantic/app/register_command.hpp"
 #include "semantic/app/segment_command.hpp"
 
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
 
   rise::semantic::add_register_command(app);
   rise::semantic::add_segment_command(app);
+  rise::semantic::add_map_command(app);
 
   CLI11_PARSE(app, argc, argv);
   return 0;

@@ -13,31 +13,13 @@
 #include "semantic/slam.hpp"
 #include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
+#include "tests/semantic/scan_sequence.hpp"
 
 using namespace rise::semantic;
+using namespace rise::semantic::testing;
 
 namespace {
-const std::string kTracked = std::string(RISE_SOURCE_DIR) + "/sim/robots/tracked_eod.yaml";
-const std::string kBuilding = std::string(RISE_SOURCE_DIR) + "/sim/worlds/building.yaml";
 constexpr double kDeg = M_PI / 180.0;
-
-Eigen::Isometry3d pose(double x, double y, double z, double yaw_rad, double pitch_rad = 0.0, double roll_rad = 0.0) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = (Eigen::AngleAxisd(yaw_rad, Eigen::Vector3d::UnitZ()) *
-                Eigen::AngleAxisd(pitch_rad, Eigen::Vector3d::UnitY()) *
-                Eigen::AngleAxisd(roll_rad, Eigen::Vector3d::UnitX()))
-                   .toRotationMatrix();
-  T.translation() = Eigen::Vector3d(x, y, z);
-  return T;
-}
-
-double translation_error_m(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return (a.translation() - b.translation()).norm();
-}
-
-double rotation_error_rad(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle();
-}
 
 // A loop of 8 sensor poses through room A of the example building, 0.6 m
 // above the floor, tilting a little as a robot on a rough floor would, and
@@ -89,54 +71,6 @@ std::vector<Cloud> scan_building(const std::vector<Eigen::Isometry3d>& T_world_s
   return clouds;
 }
 
-// Odometry that drifts: each true step of the base turned by an extra 2°
-// of yaw and stretched 3 %, chained from the true first pose; of the
-// sensor, `T_base_sensor` on the base.
-std::vector<Eigen::Isometry3d> drifting_odometry(
-    const std::vector<Eigen::Isometry3d>& truth, const Eigen::Isometry3d& T_base_sensor = Eigen::Isometry3d::Identity()) {
-  const Eigen::Isometry3d T_sensor_base = T_base_sensor.inverse();
-  std::vector<Eigen::Isometry3d> odometry{truth[0] * T_sensor_base};  // of the base
-  for (std::size_t i = 1; i < truth.size(); ++i) {
-    Eigen::Isometry3d step = (truth[i - 1] * T_sensor_base).inverse() * (truth[i] * T_sensor_base);
-    step.translation() *= 1.03;
-    odometry.push_back(odometry.back() * step * pose(0, 0, 0, 2.0 * kDeg));
-  }
-  for (auto& T : odometry) T = T * T_base_sensor;
-  return odometry;
-}
-
-// The robot file's own laser (a SICK-like line scanner turned about its y
-// axis, σ 1 cm), coarsened to 2° beams × 60 lines (5 460 rays), scanning
-// from the robot standing at each (x, y, yaw) stop in the building: the
-// simulator builds the robot there, as it stands before its first step.
-struct LaserScans {
-  std::vector<Cloud> clouds;
-  std::vector<Eigen::Isometry3d> T_world_sensor;  ///< the truth
-  Eigen::Isometry3d T_base_sensor = Eigen::Isometry3d::Identity();
-};
-
-LaserScans laser_scans(const std::vector<Eigen::Vector3d>& stops_xy_yaw, uint64_t seed) {
-  const auto robot = rise::sim::load_robot_description(kTracked);
-  REQUIRE(robot.sensors.laser.has_value());
-  rise::sim::LaserDescription laser = *robot.sensors.laser;
-  laser.resolution_rad = 2.0 * kDeg;
-  laser.rotating->steps = 60;
-  rise::sim::LaserScanner scanner(laser, seed);
-  LaserScans out;
-  for (const auto& stop : stops_xy_yaw) {
-    auto world = rise::sim::load_world_description(kBuilding);
-    world.robot_start_m = {stop.x(), stop.y()};
-    world.robot_start_yaw_rad = stop.z();
-    rise::sim::Simulation sim(robot, world);
-    const rise::sim::LaserScan scan = scanner.scan(sim);
-    Cloud c;
-    c.points = scan.points_sensor;
-    out.clouds.push_back(std::move(c));
-    out.T_world_sensor.push_back(scan.T_world_sensor);
-    out.T_base_sensor = sim.T_world_base().inverse() * scan.T_world_sensor;
-  }
-  return out;
-}
 
 std::string data_dir(const std::string& relative) {
   const char* root = std::getenv("RISE_TEST_DATA");
@@ -145,19 +79,6 @@ std::string data_dir(const std::string& relative) {
   return std::filesystem::exists(p) ? p.string() : std::string{};
 }
 
-struct Errors {
-  double max_t_m = 0, max_r_rad = 0, sum_t_m = 0;
-};
-
-Errors errors(const std::vector<Eigen::Isometry3d>& got, const std::vector<Eigen::Isometry3d>& truth) {
-  Errors e;
-  for (std::size_t i = 0; i < truth.size(); ++i) {
-    e.max_t_m = std::max(e.max_t_m, translation_error_m(got[i], truth[i]));
-    e.max_r_rad = std::max(e.max_r_rad, rotation_error_rad(got[i], truth[i]));
-    e.sum_t_m += translation_error_m(got[i], truth[i]);
-  }
-  return e;
-}
 }  // namespace
 
 TEST_CASE("slam recovers a loop through the simulated building within 2 cm and 0.5 deg per scan", "[semantic]") {
