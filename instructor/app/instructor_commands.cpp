@@ -24,7 +24,7 @@
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/TrainingControl.hpp"
-#include "sim/yaml_reader.hpp"
+#include "sim/training/task_description.hpp"
 
 namespace rise::instructor {
 namespace {
@@ -320,9 +320,9 @@ void add_scenario_command(CLI::App& app) {
     try {
       if (file.empty() && !o->task.empty()) {
         // The task file's `scenario:` (resolved against the task's folder).
-        const YAML::Node task = YAML::LoadFile(o->task);
-        if (!task["scenario"]) throw std::runtime_error(o->task + ":0: scenario: the task names no scenario");
-        file = (fs::path(o->task).parent_path() / task["scenario"].as<std::string>()).string();
+        const auto task = sim::training::load_task_description(o->task);
+        if (task.scenario_file.empty()) throw std::runtime_error(o->task + ":1: scenario: the task names no scenario");
+        file = task.scenario_file;
       }
       if (file.empty()) throw std::runtime_error("give a scenario FILE or --task TASK.yaml");
     } catch (const std::exception& e) {
