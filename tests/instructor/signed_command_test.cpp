@@ -18,6 +18,7 @@
 
 #include "app/child_process.hpp"
 #include "panels/command_auth.hpp"
+#include "sim/training/report.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -192,8 +193,55 @@ TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wr
     CHECK(nokey.wait_for(20000) == 2);
     CHECK_THAT(read_file(out2), Catch::Contains("missing.key"));
   }
+  SECTION("rise-instructor lists the trainee and runs a scenario against it") {
+    const std::string out = (keys.dir / "list.out").string();
+    rise::app::ChildProcess list({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "list", "--lcm", kLcm,
+                                  "--wait", "1.5"},
+                                 out);
+    CHECK(list.wait_for(20000) == 0);
+    CHECK_THAT(read_file(out), Catch::Contains(id) && Catch::Contains("f1: stuck_at drive_y"));
+    const std::string file = (keys.dir / "s.yaml").string();
+    std::ofstream(file) << "scenario: s\nseed: 2\nfaults:\n"
+                           "  - {id: sc, kind: stuck_at, target: drive_x, value: 0.3, at: 0.2, duration: 1.0}\n";
+    const std::string out2 = (keys.dir / "scenario.out").string();
+    rise::app::ChildProcess run({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "scenario", file, "--lcm",
+                                 kLcm, "--instructor-key", keys.key_file, "--trainee", id},
+                                out2);
+    CHECK(station.panel_shows("sc: stuck_at drive_x"));
+    CHECK(run.wait_for(20000) == 0);
+    CHECK_THAT(read_file(out2), Catch::Contains("scenario s on " + id + ": 1 commands"));
+    CHECK(station.panel_clear_of("sc:"));
+  }
   hild.stop();
   CHECK_THAT(read_file(log), Catch::Contains("fault 'f1' from 'test': stuck_at drive_y"));
+}
+
+TEST_CASE("rise-instructor report prints the newest task report of a trainee", "[instructor]") {
+  KeyDir keys("rise-fault-report-");
+  const fs::path dir = keys.dir / "reports" / "t9";
+  fs::create_directories(dir);
+  rise::sim::training::TaskResult r;
+  r.task = "approach_object";
+  r.score = 17;
+  r.success = true;
+  r.finished = true;
+  r.end_reason = "event object_touched";
+  rise::sim::training::write_file_atomically((dir / "01_approach_1.json").string(), rise::sim::training::task_result_json(r));
+  const std::string out = (keys.dir / "report.out").string();
+  rise::app::ChildProcess report({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t9",
+                                  "--reports-dir", (keys.dir / "reports").string()},
+                                 out);
+  CHECK(report.wait_for(20000) == 0);
+  const std::string text = read_file(out);
+  CHECK_THAT(text, Catch::Contains("01_approach_1.json"));
+  CHECK_THAT(text, Catch::Contains("\"approach_object\""));
+  CHECK_THAT(text, Catch::Contains("score        17"));
+  const std::string out2 = (keys.dir / "report2.out").string();
+  rise::app::ChildProcess none({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t8",
+                                "--reports-dir", (keys.dir / "empty").string()},
+                               out2);
+  CHECK(none.wait_for(20000) == 1);
+  CHECK_THAT(read_file(out2), Catch::Contains("no report"));
 }
 
 TEST_CASE("a station without the instructor key rejects every fault command", "[instructor]") {
@@ -257,6 +305,12 @@ TEST_CASE("rise-sim applies a signed motor failure until its end and rejects for
   rise::panels::sign(restart, keys.key);
   station.send(restart);
   CHECK(station.event("training_restarted", "task"));
+  const std::string out = (keys.dir / "task.out").string();
+  rise::app::ChildProcess stop({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "task", "stop", "--lcm", kLcm,
+                                "--instructor-key", keys.key_file, "--trainee", id, "--confirm", "10"},
+                               out);
+  CHECK(stop.wait_for(20000) == 0);
+  CHECK_THAT(read_file(out), Catch::Contains("task stop on " + id + ": training_stopped"));
   sim.stop();
   CHECK_THAT(read_file(log), Catch::Contains("rejected command on rise/" + id + "/fault_command"));
 }
