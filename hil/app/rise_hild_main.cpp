@@ -182,6 +182,21 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  // Wire faults sit right on the transport, under the recorder: a
+  // recording holds what the daemon read, so `verify` replays a faulted
+  // session as it was.
+  std::vector<rise::io::WireFaultSet*> wires(transports.size(), nullptr);
+  for (std::size_t i = 0; i < transports.size(); ++i) {
+    if (transports[i].can) {
+      auto faulty = std::make_unique<rise::io::FaultyCanBus>(std::move(transports[i].can));
+      wires[i] = faulty.get();
+      transports[i].can = std::move(faulty);
+    } else if (transports[i].modbus) {
+      auto faulty = std::make_unique<rise::io::FaultyModbusLink>(std::move(transports[i].modbus));
+      wires[i] = faulty.get();
+      transports[i].modbus = std::move(faulty);
+    }
+  }
   std::unique_ptr<rise::hil::SessionRecorder> recorder;
   if (!record_dir.empty()) {
     try {
@@ -201,20 +216,6 @@ int main(int argc, char** argv) {
     spdlog::info("recording into {}", record_dir);
   }
 
-  // Wire faults sit under everything, recording included: a recording
-  // shows what the daemon read.
-  std::vector<rise::io::WireFaultSet*> wires(transports.size(), nullptr);
-  for (std::size_t i = 0; i < transports.size(); ++i) {
-    if (transports[i].can) {
-      auto faulty = std::make_unique<rise::io::FaultyCanBus>(std::move(transports[i].can));
-      wires[i] = faulty.get();
-      transports[i].can = std::move(faulty);
-    } else if (transports[i].modbus) {
-      auto faulty = std::make_unique<rise::io::FaultyModbusLink>(std::move(transports[i].modbus));
-      wires[i] = faulty.get();
-      transports[i].modbus = std::move(faulty);
-    }
-  }
   std::optional<rise::panels::CommandVerifier> verifier;
   if (const std::string key_path = rise::panels::instructor_key_path(instructor_key_file); !key_path.empty()) {
     try {

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   rise::instructor::add_scenario_command(app);
   rise::instructor::add_task_command(app);
   rise::instructor::add_report_command(app);
+  // The web console (issue 8, parts 5-6) adds `serve` here: add_serve_command(app)
+  // from instructor/app/serve_command.hpp, listed in instructor/CMakeLists.txt.
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

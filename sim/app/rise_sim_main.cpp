@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <set>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -582,10 +583,17 @@ int main(int argc, char** argv) {
     if (c.action == "clear") {
       const std::size_t n = sim->clear_fault(robot, c.fault_id);
       spdlog::info("fault clear '{}' from '{}': {} cleared", c.fault_id, c.issuer, n);
-      if (n == 0 && !c.fault_id.empty()) tell(robot, "fault_refused", c.issuer, c.fault_id, "no such fault");
-      return;
+      return;  // a fault of the daemon's has the same id space: no refusal for an id not here
     }
     const auto kind = rise::sim::parse_sim_fault_kind(c.kind);
+    // The daemon's kinds (input, wire, transport) come on the same channel: rise-hild applies them.
+    static const std::set<std::string> daemon_kinds = {
+        "stuck_at", "offset", "drift", "noise", "out_of_range", "intermittent", "disconnect", "can_drop",
+        "can_delay", "can_corrupt", "can_bus_off", "modbus_exception", "modbus_timeout", "lcm_loss", "lcm_latency"};
+    if (!kind && daemon_kinds.count(c.kind) && c.action == "inject") {
+      spdlog::debug("fault '{}' ({}) is rise-hild's", c.fault_id, c.kind);
+      return;
+    }
     std::string error;
     if (c.action != "inject") error = "action '" + c.action + "': expected inject or clear";
     else if (!kind) error = "'" + c.kind + "' is not a sim fault";

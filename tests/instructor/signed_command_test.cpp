@@ -294,6 +294,16 @@ TEST_CASE("rise-sim applies a signed motor failure until its end and rejects for
   station.send(signed_with(command(id, "inject", "m4", "motor_failure", "middle"), keys.key));
   const auto refused = station.event("fault_refused", "not left or right");
   CHECK(refused);
+  // A daemon kind on the same channel is rise-hild's: rise-sim neither applies nor refuses it.
+  station.send(signed_with(command(id, "inject", "d1", "stuck_at", "drive_y"), keys.key));
+  station.send(signed_with(command(id, "inject", "m5", "motor_weakness", "right", 0.2), keys.key));
+  REQUIRE(station.wait_until([&] {
+    for (const auto& e : station.events_)
+      if (e.kind == "fault_injected" && e.b == "m5") return true;
+    return false;
+  }, 10000));
+  for (const auto& e : station.events_) CHECK(e.b != "d1");
+  station.events_.clear();
 
   rise_msgs::TrainingControl restart{};
   restart.issuer = "test";
