@@ -324,3 +324,44 @@ TEST_CASE("rise-sim applies a signed motor failure until its end and rejects for
   sim.stop();
   CHECK_THAT(read_file(log), Catch::Contains("rejected command on rise/" + id + "/fault_command"));
 }
+
+TEST_CASE("a signed CAN drop over LCM makes the live daemon fail safe on the stale console and recover on the clear",
+          "[instructor]") {
+  const std::string id = "fw" + std::to_string(::getpid());
+  KeyDir keys("rise-fault-wire-");
+  INFO("logs in " << keys.dir);
+  const std::string script = (keys.dir / "hold.txt").string();
+  std::ofstream(script) << "0.0 mode drive\n0.0 speed fast\n0.1 deadman pressed\n0.2 drive_y 0.5\n";
+  const std::string bus = "127.0.0.1:" + std::to_string(31000 + ::getpid() % 20000) + "/can0";
+  Station station(id);
+  REQUIRE(station.good());
+  rise::app::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id, "--source",
+                                "socketcand://" + bus, "--instructor-key", keys.key_file},
+                               (keys.dir / "rise-hild.log").string());
+  rise::app::ChildProcess panel({std::string(RISE_BINARY_DIR) + "/bin/rise-panel", "emulate", "--can",
+                                 "socketcand+listen://" + bus, "--script", script, "--hold", "--start-on-feedback"},
+                                (keys.dir / "rise-panel.log").string());
+  const auto healthy = [&] { return station.panel_ && !station.panel_->failsafe && station.panel_->deadman; };
+  REQUIRE(station.wait_until(healthy, 20000));
+
+  station.send(signed_with(command(id, "inject", "cut", "can_drop", "console"), keys.key));
+  station.panel_.reset();
+  REQUIRE(station.wait_until([&] {
+    return station.panel_ && station.panel_->failsafe && station.panel_->failsafe_reason.find("stale") != std::string::npos;
+  }, 10000));
+  CHECK(station.panel_shows("cut: can_drop console"));
+
+  station.send(signed_with(command(id, "inject", "flip", "can_corrupt", "console"), keys.key));
+  station.send(signed_with(command(id, "clear", "cut", "", ""), keys.key));
+  station.panel_.reset();
+  REQUIRE(station.wait_until([&] {
+    return station.panel_ && station.panel_->num_sources == 1 && station.panel_->sources[0].crc_errors > 10;
+  }, 10000));
+  CHECK(station.panel_->failsafe);
+  station.send(signed_with(command(id, "clear", "", "", ""), keys.key));
+  station.panel_.reset();
+  CHECK(station.wait_until(healthy, 10000));
+  CHECK(station.panel_->active_faults.empty());
+  panel.stop();
+  hild.stop();
+}
