@@ -138,7 +138,6 @@ std::string FaultInjector::inject(const FaultSpec& spec, int64_t now_us) {
 }
 
 std::size_t FaultInjector::clear(const std::string& id, int64_t now_us) {
-  (void)now_us;
   std::size_t n = bridge_.clear_input_faults(id);
   for (io::WireFaultSet* w : wires_)
     if (w) n += w->clear(id, now_us);

@@ -3,8 +3,8 @@
 // A fault scenario: which faults the instructor station injects into one
 // trainee's session, when, for how long, with seeded randomness, so that a
 // scenario run twice with one seed against the same session replays the
-// same faults at the same moments (instructor/README in ../README.md
-// "Faults, scenarios and signed commands").
+// same faults at the same moments (README.md "Faults, scenarios and signed
+// commands").
 //
 //   scenario: corridor-trouble
 //   seed: 7                       # default seed; rise-instructor --seed overrides
