@@ -31,6 +31,7 @@ packages=(
   libhidapi-dev libusb-1.0-0-dev udev
   libpcl-dev libopencv-dev libceres-dev libopen3d-dev
   libjsoncpp-dev chromium
+  libssl-dev
 )
 
 setup() {
