@@ -2,12 +2,12 @@
 # (cpp-httplib from Debian's libcpp-httplib-dev; the pages are built from npm
 # packages at set-up into instructor/web/dist, see run.sh).
 find_package(PkgConfig REQUIRED)
-pkg_check_modules(RISE_HTTPLIB REQUIRED IMPORTED_TARGET cpp-httplib)
+pkg_check_modules(RISE_HTTPLIB REQUIRED IMPORTED_TARGET GLOBAL cpp-httplib)
 find_package(jsoncpp REQUIRED)
 add_library(rise_instructor_web web_server.cpp virtual_panel.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
-target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::lcmtypes
+target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::lcmtypes rise::command_auth
   PRIVATE rise::sim PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
 
 # rise-instructor serve

@@ -5,6 +5,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <poll.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -19,7 +20,9 @@
 
 #include "hil/panel_state_message.hpp"
 #include "instructor/virtual_panel.hpp"
+#include "panels/command_auth.hpp"
 #include "panels/panel_definition.hpp"
+#include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimControl.hpp"
@@ -276,6 +279,25 @@ bool valid_id(const std::string& id) {
 
 }  // namespace
 
+const std::vector<FaultPreset>& default_fault_presets() {
+  // Input faults act on the rise console's controls, wire faults on its
+  // source "console", transport faults on panel_state, physics and sensor
+  // faults on the robot (rise-sim).
+  static const std::vector<FaultPreset> presets = {
+      {"stick-stuck", "drive stick stuck at 0.6", "stuck_at", "drive_y", 0.6, 0.0, 0.0},
+      {"stick-drift", "drive stick drifts right", "drift", "drive_x", 0.0, 0.2, 0.0},
+      {"stick-noise", "drive stick noise", "noise", "drive_y", 0.1, 0.0, 0.0},
+      {"deadman-intermittent", "dead-man intermittent", "intermittent", "deadman", 0.5, 0.1, 0.0},
+      {"can-drop", "CAN frames dropped (50 %)", "can_drop", "console", 0.5, 0.0, 0.0},
+      {"can-bus-off", "CAN bus-off", "can_bus_off", "console", 0.0, 0.0, 5.0},
+      {"lcm-loss", "PanelState loss (30 %)", "lcm_loss", "panel_state", 0.3, 0.0, 0.0},
+      {"left-motor", "left motor failure", "motor_failure", "left", 0.0, 0.0, 0.0},
+      {"track-slip", "track slip", "track_slip", "left", 0.5, 0.0, 0.0},
+      {"camera-blackout", "camera blackout", "camera_blackout", "", 0.0, 0.0, 10.0},
+  };
+  return presets;
+}
+
 struct WebServer::Impl {
   WebServerSettings settings;
   sim::WorldDescription world;
@@ -304,6 +326,7 @@ struct WebServer::Impl {
   std::mutex virtual_mutex;
   std::map<std::string, std::unique_ptr<VirtualPanel>> virtual_panels;
   int64_t sim_control_seq = 0;
+  std::optional<panels::InstructorKey> key;
 
   explicit Impl(WebServerSettings s) : settings(std::move(s)), lcm(settings.lcm_url) {
     if (settings.token.empty()) throw std::runtime_error("a token is required (--token or --token-file)");
@@ -315,6 +338,7 @@ struct WebServer::Impl {
     panel = panels::load_panel_definition(settings.panel_file);
     (void)virtual_definition(panel, settings.virtual_timeout_ms);  // fails here, not on the first page
     if (settings.push_hz < 20.0) throw std::runtime_error("push_hz must be at least 20");
+    if (!settings.instructor_key_file.empty()) key = panels::load_instructor_key(settings.instructor_key_file);
   }
 
   void store(const std::string& channel, const std::string& trainee, const std::string& kind, Json::Value value,
@@ -493,6 +517,57 @@ struct WebServer::Impl {
     reply_json(res, v);
   }
 
+  // Inject or clear one fault: a FaultCommand signed with the instructor key
+  // on rise/<trainee>/fault_command. The body names a preset ("fault") or
+  // gives the fields (kind, target, value, rate, duration_s, seed).
+  void handle_fault(const httplib::Request& req, httplib::Response& res, const std::string& action) {
+    if (!key) return reply_error(res, 503, "no instructor key (rise-instructor serve --instructor-key FILE)");
+    std::string error;
+    const auto body = parse_body(req, &error);
+    if (!body || !body->isObject()) return reply_error(res, 400, error.empty() ? "body: not a JSON object" : error);
+    const std::string id = (*body).get("trainee", "").asString();
+    if (!valid_id(id)) return reply_error(res, 400, "trainee '" + id + "': letters, digits, _ . - only");
+    rise_msgs::FaultCommand c{};
+    c.utime = 0;
+    c.nonce = 0;
+    c.issuer = "instructor";
+    c.trainee_id = id;
+    c.action = action;
+    const std::string name = (*body).get("fault", "").asString();
+    c.fault_id = name == "*" ? "" : name;
+    if (action == "inject") {
+      const auto& presets = default_fault_presets();
+      const auto it = std::find_if(presets.begin(), presets.end(), [&](const FaultPreset& p) { return p.id == name; });
+      if (it != presets.end()) {
+        c.kind = it->kind;
+        c.target = it->target;
+        c.value = it->value;
+        c.rate = it->rate;
+        c.duration_s = it->duration_s;
+      } else if ((*body).isMember("kind")) {
+        c.kind = (*body)["kind"].asString();
+        c.target = (*body).get("target", "").asString();
+        c.value = (*body).get("value", 0.0).asDouble();
+        c.rate = (*body).get("rate", 0.0).asDouble();
+        c.duration_s = (*body).get("duration_s", 0.0).asDouble();
+      } else {
+        return reply_error(res, 400, "fault '" + name + "': no such preset, and no kind given");
+      }
+      if (c.fault_id.empty()) return reply_error(res, 400, "fault: a name is required to inject");
+      c.seed = (*body).get("seed", 1).asInt64();
+    }
+    panels::sign(c, *key);
+    lcm.publish(hil::channel(id, "fault_command"), &c);
+    Json::Value v;
+    v["published"] = hil::channel(id, "fault_command");
+    v["action"] = action;
+    v["fault_id"] = c.fault_id;
+    v["kind"] = c.kind;
+    v["target"] = c.target;
+    v["nonce"] = Json::Int64(c.nonce);
+    reply_json(res, v);
+  }
+
   // One SSE stream: the channels that changed since the client's last push,
   // and the new events, at most push_hz times a second, at least every second.
   void handle_stream(const httplib::Request&, httplib::Response& res) {
@@ -581,6 +656,27 @@ struct WebServer::Impl {
       if (it == virtual_panels.end()) return reply_error(res, 404, "no virtual panel '" + std::string(req.matches[1]) + "'");
       it->second->disconnect(monotonic_us());
       res.status = 204;
+    });
+    http.Get("/api/faults", [this](const httplib::Request&, httplib::Response& res) {
+      Json::Value v;
+      v["signed"] = key.has_value();
+      Json::Value list(Json::arrayValue);
+      for (const auto& p : default_fault_presets()) {
+        Json::Value f;
+        f["name"] = p.id;
+        f["label"] = p.label;
+        f["kind"] = p.kind;
+        f["target"] = p.target;
+        list.append(f);
+      }
+      v["faults"] = list;
+      reply_json(res, v);
+    });
+    http.Post("/api/fault/inject", [this](const httplib::Request& req, httplib::Response& res) {
+      handle_fault(req, res, "inject");
+    });
+    http.Post("/api/fault/clear", [this](const httplib::Request& req, httplib::Response& res) {
+      handle_fault(req, res, "clear");
     });
     http.Post(R"(/api/sim/([^/]+)/(pause|resume|step|reset))",
               [this](const httplib::Request& req, httplib::Response& res) { handle_sim_control(req, res); });

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace rise::instructor {
 
@@ -24,8 +25,24 @@ struct WebServerSettings {
   std::string reports_dir;          ///< "" → no reports
   std::string panel_file;           ///< the console definition the virtual panel copies
   uint32_t virtual_timeout_ms = 200;  ///< a virtual panel without an update for this long fails safe
-  double push_hz = 30.0;            ///< SSE push rate (≥ 20)
+  double push_hz = 50.0;            ///< SSE push rate (≥ 20)
+  std::string instructor_key_file;  ///< "" → fault buttons answer 503 (panels/command_auth.hpp)
 };
+
+/// One fault button of the console: a FaultCommand's fields (hil/input_fault.hpp,
+/// hil/fault_injector.hpp, the sim's physics faults).
+struct FaultPreset {
+  std::string id;      ///< the fault instance's name (FaultCommand.fault_id)
+  std::string label;
+  std::string kind;
+  std::string target;
+  double value = 0.0;
+  double rate = 0.0;
+  double duration_s = 0.0;  ///< 0 = until cleared
+};
+
+/// The console's fault buttons for the reference console and robots.
+const std::vector<FaultPreset>& default_fault_presets();
 
 class WebServer {
  public:

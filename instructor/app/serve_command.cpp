@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "instructor/web_server.hpp"
+#include "panels/command_auth.hpp"
 #include "panels/data_path.hpp"
 
 namespace rise::instructor {
@@ -24,7 +25,8 @@ struct ServeOptions {
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
-  double push_hz = 30.0;
+  double push_hz = 50.0;
+  std::string instructor_key;
 };
 
 std::binary_semaphore g_stop{0};
@@ -59,6 +61,8 @@ int serve(const ServeOptions& o) {
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
+  s.instructor_key_file = panels::instructor_key_path(o.instructor_key);
+  if (s.instructor_key_file.empty()) spdlog::warn("no instructor key: the fault buttons are off (--instructor-key FILE)");
 
   WebServer server(s);
   server.start();
@@ -90,6 +94,8 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")
       ->capture_default_str();
   cmd->add_option("--push-hz", o->push_hz, "SSE push rate (>= 20)")->capture_default_str();
+  cmd->add_option("--instructor-key", o->instructor_key,
+                  "key file that signs FaultCommands (default: env RISE_INSTRUCTOR_KEY)");
   cmd->callback([o] { std::exit(serve(*o)); });
 }
 

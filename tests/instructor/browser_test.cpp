@@ -1,0 +1,195 @@
+// The pages in headless Chromium (Debian's chromium, driven by playwright-core
+// from instructor/web) against `rise-instructor serve` and `rise-sim` as
+// separate processes over LCM: the console shows the robot moving and its
+// fault button publishes a signed FaultCommand; the virtual panel page drives
+// the robot, and closing it stops the robot.
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "app/child_process.hpp"
+#include "panels/command_auth.hpp"
+#include "web_peer.hpp"
+
+namespace fs = std::filesystem;
+using namespace rise::instructor_test;
+using rise::app::ChildProcess;
+
+namespace {
+const std::string kSource = RISE_SOURCE_DIR;
+const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
+const std::string kWeb = kSource + "/instructor/web";
+
+/// Why the browser checks cannot run here, or "".
+std::string missing_browser() {
+  if (!fs::exists("/usr/bin/node")) return "node is not installed (/usr/bin/node)";
+  const char* chromium = std::getenv("RISE_CHROMIUM");
+  if (!fs::exists(chromium ? chromium : "/usr/bin/chromium")) return "chromium is not installed (/usr/bin/chromium)";
+  if (!fs::exists(kWeb + "/node_modules/playwright-core")) return "playwright-core is not installed (npm ci in instructor/web)";
+  return "";
+}
+
+/// The RESULT line a check printed.
+Json::Value read_result(const std::string& log) {
+  std::ifstream in(log);
+  std::string line;
+  Json::Value result;
+  while (std::getline(in, line))
+    if (line.rfind("RESULT ", 0) == 0) result = parse_json(line.substr(7));
+  return result;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// rise-sim and rise-instructor serve for one trainee, in a scratch folder.
+struct Stations {
+  std::string id = "web" + std::to_string(::getpid());
+  std::string token = "browser-" + std::to_string(::getpid());
+  fs::path dir;
+  int port = free_port();
+  ChildProcess sim, server;
+
+  Stations() {
+    char tmpl[] = "/tmp/rise-browser-test-XXXXXX";
+    dir = ::mkdtemp(tmpl);
+    rise::panels::write_new_instructor_key((dir / "instructor.key").string());
+    sim = ChildProcess({kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100"},
+                       (dir / "sim.log").string());
+    server = ChildProcess({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token",
+                           token, "--lcm", kLcm, "--world", kSource + "/sim/worlds/yard.yaml", "--instructor-key",
+                           (dir / "instructor.key").string(), "--reports-dir", dir.string()},
+                          (dir / "server.log").string());
+  }
+  ~Stations() {
+    server.stop();
+    sim.stop();
+    fs::remove_all(dir);
+  }
+  /// Waits for the server to answer with the token and the sim to publish.
+  bool ready(TraineePeer& peer) {
+    httplib::Client http("127.0.0.1", port);
+    http.set_connection_timeout(0, 200'000);
+    bool up = false;
+    return peer.wait_until(
+        [&] { return up && !peer.robot.empty(); }, 20000, [&] {
+          if (!up) {
+            auto r = http.Get("/api/world", {{"X-Rise-Token", token}});
+            up = r && r->status == 200;
+          }
+        });
+  }
+  std::string base() const { return "http://127.0.0.1:" + std::to_string(port); }
+  std::string out_dir() const {
+    const std::string d = std::string(RISE_BINARY_DIR) + "/instructor_screens";
+    fs::create_directories(d);
+    return d;
+  }
+};
+
+/// How many non-black pixels a PNG screenshot has is not checked here: the
+/// page measures its canvases itself (variance, robot colour); the file must
+/// exist and be a PNG of some size.
+bool is_png(const std::string& path) {
+  const std::string s = read_file(path);
+  return s.size() > 2000 && s.compare(1, 3, "PNG") == 0;
+}
+}  // namespace
+
+TEST_CASE("the console shows the robot moving, draws map and 3D view, and its fault button publishes", "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st;
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/console_check.cjs", st.base(), st.token, st.id,
+                     st.out_dir(), kWeb},
+                    (st.dir / "console_check.log").string());
+  // The scripted console drives while the page watches.
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] { peer.publish_driving_panel(0.5f); });
+  if (!finished) node.stop();
+  const auto result = read_result((st.dir / "console_check.log").string());
+  INFO(read_file((st.dir / "console_check.log").string()));
+  REQUIRE(finished);
+  REQUIRE(result.isObject());
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["no_token_status"].asInt() == 401);
+  CHECK(result["wrong_token_status"].asInt() == 401);
+  CHECK(result["status"].asInt() == 200);
+  const double dx = result["later"][0].asDouble() - result["first"][0].asDouble();
+  const double dy = result["later"][1].asDouble() - result["first"][1].asDouble();
+  CHECK(std::hypot(dx, dy) > 0.5);
+  // Pushed at >= 20 Hz while the robot publishes at 50 Hz.
+  CHECK(result["pushes_per_s"].asInt() >= 20);
+  const auto& stats = result["stats"];
+  CHECK(stats["map"]["variance"].asDouble() > 50.0);
+  CHECK(stats["map"]["robot_pixels"].asInt() > 20);
+  CHECK(stats["view3d"]["variance"].asDouble() > 50.0);
+  CHECK(stats["view3d"]["robot_pixels"].asInt() > 200);
+  CHECK(is_png(st.out_dir() + "/instructor_console.png"));
+  CHECK(is_png(st.out_dir() + "/instructor_view3d.png"));
+  CHECK(result["page_errors"].size() == 0);
+  // The click published one signed FaultCommand for this trainee.
+  CHECK(result["fault_result"].asString().find("published") != std::string::npos);
+  REQUIRE(peer.wait_until([&] { return !peer.faults.empty(); }, 5000));
+  CHECK(peer.faults[0].kind == "stuck_at");
+  CHECK(peer.faults[0].trainee_id == st.id);
+  rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key((st.dir / "instructor.key").string()));
+  CHECK(verifier.check(peer.faults[0], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+}
+
+TEST_CASE("the virtual panel page drives the robot and closing it stops the robot", "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st;
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  const auto start = peer.robot.back();
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/panel_check.cjs", st.base(), st.token, st.id,
+                     st.out_dir(), kWeb},
+                    (st.dir / "panel_check.log").string());
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000);
+  if (!finished) node.stop();
+  const auto result = read_result((st.dir / "panel_check.log").string());
+  INFO(read_file((st.dir / "panel_check.log").string()));
+  REQUIRE(finished);
+  REQUIRE(result.isObject());
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["status"].asInt() == 200);
+  CHECK(result["sticks"].asInt() == 2);
+  CHECK(result["buttons"].asInt() >= 4);
+  CHECK(result["closed"].asBool());
+  // The page's PanelState drove rise-sim: the robot moved on LCM.
+  double moved = 0.0;
+  for (const auto& r : peer.robot) moved = std::max(moved, distance_xy(r, start));
+  CHECK(moved > 0.5);
+  bool drove = false;
+  for (const auto& p : peer.panels) drove |= !p.failsafe && p.deadman && p.axes[1].value > 0.9f;
+  CHECK(drove);
+  // Closed with the keys held: the server publishes the safe state, the robot stops.
+  const std::size_t at_close = peer.panels.size();
+  REQUIRE(peer.wait_until([&] { return peer.panels.size() > at_close && peer.panels.back().failsafe; }, 5000));
+  const auto& safe = peer.panels.back();
+  CHECK_FALSE(safe.deadman);
+  for (const auto& a : safe.axes) CHECK(a.value == 0.0f);
+  CHECK((safe.sources[0].stale || !safe.sources[0].connected));
+  REQUIRE(peer.wait_until(
+      [&] {
+        const auto& r = peer.robot.back();
+        return !r.motors_enabled && std::abs(r.linear_velocity_mps[0]) < 0.02;
+      },
+      5000));
+}

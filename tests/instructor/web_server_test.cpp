@@ -1,0 +1,233 @@
+// rise::instructor::WebServer in this process, over real LCM and HTTP on
+// loopback: the token, the world geometry, the SSE stream of LCM traffic,
+// signed fault commands and the virtual panel's PanelState.
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "instructor/web_server.hpp"
+#include "panels/command_auth.hpp"
+#include "web_peer.hpp"
+
+namespace fs = std::filesystem;
+using namespace rise::instructor_test;
+
+namespace {
+struct ServerFixture {
+  fs::path dir;
+  rise::instructor::WebServerSettings settings;
+  std::string id = "web" + std::to_string(::getpid());
+
+  ServerFixture() {
+    char tmpl[] = "/tmp/rise-web-test-XXXXXX";
+    dir = ::mkdtemp(tmpl);
+    fs::create_directories(dir / "www");
+    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
+    fs::create_directories(dir / "reports" / "run1");
+    std::ofstream(dir / "reports" / "run1" / "training.html") << "<html>report</html>";
+    rise::panels::write_new_instructor_key((dir / "instructor.key").string());
+    settings.port = 0;
+    settings.token = "tok-" + id;
+    settings.web_dir = (dir / "www").string();
+    settings.world_file = std::string(RISE_SOURCE_DIR) + "/sim/worlds/building.yaml";
+    settings.reports_dir = (dir / "reports").string();
+    settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
+    settings.instructor_key_file = (dir / "instructor.key").string();
+  }
+  ~ServerFixture() { fs::remove_all(dir); }
+  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
+};
+}  // namespace
+
+TEST_CASE("the web server answers only requests that carry its token", "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  httplib::Client http("127.0.0.1", server.port());
+  SECTION("no token, a wrong one, or one of another length: 401") {
+    auto r = http.Get("/api/world");
+    REQUIRE(r);
+    CHECK(r->status == 401);
+    CHECK(http.Get("/?token=tok-wrong")->status == 401);
+    CHECK(http.Get("/api/world", {{"X-Rise-Token", f.settings.token + "x"}})->status == 401);
+    CHECK(http.Get("/index.html")->status == 401);
+  }
+  SECTION("the token as query, header, bearer or the cookie the query set") {
+    auto r = http.Get("/?token=" + f.settings.token);
+    REQUIRE(r);
+    CHECK(r->status == 200);
+    CHECK(r->body.find("console") != std::string::npos);
+    const std::string cookie = r->get_header_value("Set-Cookie");
+    CHECK(cookie.find("HttpOnly") != std::string::npos);
+    CHECK(http.Get("/index.html", {{"Cookie", cookie.substr(0, cookie.find(';'))}})->status == 200);
+    CHECK(http.Get("/api/world", f.auth())->status == 200);
+    CHECK(http.Get("/api/world", {{"Authorization", "Bearer " + f.settings.token}})->status == 200);
+  }
+  SECTION("the world geometry comes from the world file") {
+    const auto world = parse_json(http.Get("/api/world", f.auth())->body);
+    CHECK(world["name"].asString() == "building");
+    std::map<std::string, int> kinds;
+    for (const auto& b : world["boxes"]) kinds[b["kind"].asString()]++;
+    CHECK(kinds["wall"] > 4);
+    CHECK(kinds["door"] >= 1);
+    CHECK(kinds["stairs"] > 1);
+    CHECK(world["regions"].size() >= 1);
+    CHECK(world["objects"].size() >= 1);
+  }
+  SECTION("reports are listed and served; nothing outside the folder") {
+    const auto list = parse_json(http.Get("/api/reports", f.auth())->body);
+    REQUIRE(list.size() == 1);
+    CHECK(list[0]["url"].asString() == "/reports/run1/training.html");
+    CHECK(http.Get("/reports/run1/training.html", f.auth())->body == "<html>report</html>");
+    CHECK(http.Get("/reports/../instructor.key", f.auth())->status != 200);
+  }
+  server.stop();
+}
+
+TEST_CASE("the web server streams the latest LCM messages of every trainee over SSE", "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  TraineePeer peer(f.id);
+  REQUIRE(peer.good());
+  std::atomic<bool> seen{false};
+  std::atomic<int> pushes{0};
+  std::string first_robot;
+  std::thread reader([&] {
+    httplib::Client http("127.0.0.1", server.port());
+    http.set_read_timeout(10, 0);
+    std::string buffer;
+    http.Get("/api/stream", f.auth(), [&](const char* data, size_t n) {
+      buffer.append(data, n);
+      for (std::size_t end; (end = buffer.find("\n\n")) != std::string::npos; buffer.erase(0, end + 2)) {
+        pushes++;
+        const auto u = parse_json(buffer.substr(6, end - 6));
+        const auto& c = u["channels"]["rise/" + f.id + "/robot_state"];
+        if (!c.isNull() && first_robot.empty()) {
+          first_robot = c["value"]["robot_id"].asString() + " " + std::to_string(c["value"]["position"][0].asDouble());
+          seen = true;
+        }
+      }
+      return !seen;
+    });
+  });
+  rise_msgs::RobotState r{};
+  r.robot_id = f.id;
+  r.position_m[0] = 1.25;
+  r.orientation_wxyz[0] = 1.0;
+  // Publish until the stream has carried it (the subscriber may join late).
+  const bool ok = peer.wait_until([&] { return seen.load(); }, 10000,
+                                  [&] { peer.lcm().publish("rise/" + f.id + "/robot_state", &r); });
+  reader.join();
+  REQUIRE(ok);
+  CHECK(first_robot == f.id + " 1.250000");
+  const auto trainees = parse_json(httplib::Client("127.0.0.1", server.port()).Get("/api/trainees", f.auth())->body);
+  bool listed = false;
+  for (const auto& t : trainees) listed |= t["id"].asString() == f.id && t["robot_state"]["position"][0].asDouble() == 1.25;
+  CHECK(listed);
+  server.stop();
+}
+
+TEST_CASE("a fault button publishes a FaultCommand signed with the instructor key", "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  TraineePeer peer(f.id);
+  httplib::Client http("127.0.0.1", server.port());
+  rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key(f.settings.instructor_key_file));
+  SECTION("a preset is injected, then cleared") {
+    auto r = http.Post("/api/fault/inject", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"stick-stuck"})",
+                       "application/json");
+    REQUIRE(r);
+    CHECK(r->status == 200);
+    REQUIRE(peer.wait_until([&] { return peer.faults.size() == 1; }, 5000));
+    const auto& c = peer.faults[0];
+    CHECK(c.action == "inject");
+    CHECK(c.kind == "stuck_at");
+    CHECK(c.target == "drive_y");
+    CHECK(c.value == Approx(0.6));
+    CHECK(c.trainee_id == f.id);
+    CHECK(c.signature_len == 32);
+    CHECK(verifier.check(c, rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+    CHECK(verifier.check(c, rise::panels::wall_clock_us()) == rise::panels::Verdict::Replayed);
+    REQUIRE(http.Post("/api/fault/clear", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"*"})", "application/json")
+                ->status == 200);
+    REQUIRE(peer.wait_until([&] { return peer.faults.size() == 2; }, 5000));
+    CHECK(peer.faults[1].action == "clear");
+    CHECK(peer.faults[1].fault_id.empty());
+    CHECK(verifier.check(peer.faults[1], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+  }
+  SECTION("an unknown preset without a kind, or a bad trainee id, is refused") {
+    auto r = http.Post("/api/fault/inject", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"nope"})",
+                       "application/json");
+    CHECK(r->status == 400);
+    CHECK(r->body.find("no such preset") != std::string::npos);
+    CHECK(http.Post("/api/fault/inject", f.auth(), R"({"trainee":"a/b","fault":"stick-stuck"})", "application/json")
+              ->status == 400);
+    CHECK(http.Post("/api/fault/inject", f.auth(), "{not json", "application/json")->status == 400);
+  }
+  server.stop();
+}
+
+TEST_CASE("without an instructor key the fault buttons are refused", "[instructor]") {
+  ServerFixture f;
+  f.settings.instructor_key_file.clear();
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  httplib::Client http("127.0.0.1", server.port());
+  auto r = http.Post("/api/fault/inject", f.auth(), R"({"trainee":"t1","fault":"stick-stuck"})", "application/json");
+  CHECK(r->status == 503);
+  server.stop();
+}
+
+TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe when the page stops", "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  TraineePeer peer(f.id);
+  httplib::Client http("127.0.0.1", server.port());
+  const std::string body =
+      R"({"axes":{"drive_y":0.8},"buttons":{"deadman":true,"estop":false},"switches":{"mode":"drive","speed":"fast"}})";
+  SECTION("bad input is refused with what is wrong") {
+    auto r = http.Post("/api/virtual/" + f.id, f.auth(), R"({"axes":{"warp":1}})", "application/json");
+    CHECK(r->status == 400);
+    CHECK(r->body.find("axis 'warp'") != std::string::npos);
+  }
+  SECTION("a page sending, then stopping") {
+    const auto driving = [&] {
+      return !peer.panels.empty() && !peer.panels.back().failsafe && peer.panels.back().deadman;
+    };
+    const bool drove = peer.wait_until(driving, 5000,
+                            [&] { REQUIRE(http.Post("/api/virtual/" + f.id, f.auth(), body, "application/json")->status == 204); });
+    INFO("last: " << (peer.panels.empty() ? std::string("none") : peer.panels.back().failsafe_reason));
+    REQUIRE(drove);
+    const auto& on = peer.panels.back();
+    CHECK(on.sources[0].connected);
+    REQUIRE(on.axes.size() >= 2);
+    CHECK(on.axes[1].name == "drive_y");
+    CHECK(on.axes[1].value == Approx((0.8 - 0.05) / 0.95).margin(1e-3));
+    const std::size_t last_driving = peer.panels.size() - 1;
+    // No more updates: the next states turn failsafe by the timeout, at the safe values.
+    REQUIRE(peer.wait_until([&] { return peer.panels.back().failsafe; }, 5000));
+    const auto& off = peer.panels.back();
+    CHECK_FALSE(off.deadman);
+    CHECK(off.axes[1].value == 0.0f);
+    CHECK(off.sources[0].stale);
+    CHECK(off.failsafe_reason.find("virtual: stale") != std::string::npos);
+    // Published at the panel's rate all along: the states in between came every ~10 ms.
+    const auto gap_us = off.utime - peer.panels[last_driving].utime;
+    INFO("failsafe " << gap_us / 1000 << " ms after the last driving state");
+    CHECK(peer.panels.size() - last_driving > 5);
+    SECTION("the page's goodbye disconnects the source") {
+      REQUIRE(http.Post("/api/virtual/" + f.id, f.auth(), body, "application/json")->status == 204);
+      REQUIRE(http.Post("/api/virtual/" + f.id + "/close", f.auth(), "", "text/plain")->status == 204);
+      peer.panels.clear();
+      REQUIRE(peer.wait_until([&] { return !peer.panels.empty() && !peer.panels.back().sources[0].connected; }, 5000));
+      CHECK(peer.panels.back().failsafe);
+    }
+  }
+  server.stop();
+}
