@@ -92,6 +92,28 @@ PanelSnapshot Bridge::snapshot() const {
   return mapper_.evaluate(monotonic_us());
 }
 
+std::string Bridge::inject_input_fault(InputFault fault) {
+  std::string error;
+  {
+    std::lock_guard lock(mutex_);
+    error = mapper_.inject_input_fault(std::move(fault));
+    changed_ = true;
+  }
+  wake_.notify_all();
+  return error;
+}
+
+std::size_t Bridge::clear_input_faults(const std::string& id) {
+  std::size_t n;
+  {
+    std::lock_guard lock(mutex_);
+    n = mapper_.clear_input_faults(id, monotonic_us());
+    changed_ = true;
+  }
+  wake_.notify_all();
+  return n;
+}
+
 std::vector<std::string> Bridge::take_notes() {
   std::lock_guard lock(mutex_);
   return std::exchange(notes_, {});

@@ -71,6 +71,10 @@ class Bridge {
   /// cannot show), each once. The program logs them; allocates.
   std::vector<std::string> take_notes();
   const panels::PanelDefinition& definition() const { return mapper_.definition(); }
+  /// Thread-safe: PanelMapper::inject_input_fault, published at once.
+  std::string inject_input_fault(InputFault fault);
+  /// Thread-safe: PanelMapper::clear_input_faults at now, published at once.
+  std::size_t clear_input_faults(const std::string& id);
 
  private:
   void source_loop(std::size_t source);

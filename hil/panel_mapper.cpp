@@ -490,6 +490,15 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
             }
             unit = fp::axis_to_unit(raw);
           }
+          if (!input_faults_.empty()) {
+            const FaultEffect effect = apply_axis_faults(input_faults_, i, now_us, unit);
+            if (effect == FaultEffect::Lost || effect == FaultEffect::OutOfRange) {
+              set_safe(c, v);
+              append_reason(reasons, c.name + (effect == FaultEffect::Lost ? ": disconnected (fault)"
+                                                                           : ": out of range (fault)"));
+              break;
+            }
+          }
           const AxisShaping shaping{c.deadband, c.expo, c.scale, c.invert};
           const float x = shape_axis(unit, shaping);
           ControlFilter& f = filters_[i];
@@ -500,7 +509,12 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
         }
         case ControlKind::Button: {
           const int b = binding_of_control_[i];
-          const bool raw = b >= 0 ? s.dbc[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
+          bool raw = b >= 0 ? s.dbc[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
+          if (!input_faults_.empty() && apply_button_faults(input_faults_, i, now_us, raw) == FaultEffect::Lost) {
+            set_safe(c, v);
+            append_reason(reasons, c.name + ": disconnected (fault)");
+            break;
+          }
           ControlFilter& f = filters_[i];
           // After a loss the button restarts "not activated": a latched
           // toggle never survives the source going away.
@@ -523,7 +537,17 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
               append_reason(reasons, c.name + ": position not available");
               break;
             }
-            v.position = *f.last_position;
+            uint8_t position = *f.last_position;
+            if (!input_faults_.empty()) {
+              const FaultEffect effect = apply_switch_faults(input_faults_, i, now_us, position);
+              if (effect == FaultEffect::Lost || effect == FaultEffect::OutOfRange || position >= c.positions.size()) {
+                set_safe(c, v);
+                append_reason(reasons, c.name + (effect == FaultEffect::Lost ? ": disconnected (fault)"
+                                                                             : ": out of range (fault)"));
+                break;
+              }
+            }
+            v.position = position;
             break;
           }
           uint8_t position = s.switches[c.signal.index];
@@ -537,6 +561,12 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
               append_reason(reasons, c.name + ": position " + std::to_string(std::lround(value)) + " unknown");
               break;
             }
+          }
+          if (!input_faults_.empty() &&
+              apply_switch_faults(input_faults_, i, now_us, position) == FaultEffect::Lost) {
+            set_safe(c, v);
+            append_reason(reasons, c.name + ": disconnected (fault)");
+            break;
           }
           if (position >= c.positions.size()) {
             set_safe(c, v);
@@ -557,6 +587,9 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
   }
   if (estop) append_reason(reasons, "e-stop pressed");
 
+  for (const InputFault& f : input_faults_)
+    if (f.active(now_us))
+      snap.active_faults.push_back(f.id + ": " + to_string(f.kind) + " " + definition_.controls[f.control].name);
   snap.failsafe = !reasons.empty();
   snap.failsafe_reason = std::move(reasons);
   snap.deadman = deadman_index && snap.controls[*deadman_index].pressed;
@@ -578,6 +611,25 @@ PanelSnapshot PanelMapper::preview(int64_t now_us) const {
   PanelSnapshot snap = evaluate(now_us);
   filters_ = saved;
   return snap;
+}
+
+std::string PanelMapper::inject_input_fault(InputFault fault) {
+  if (fault.control >= definition_.controls.size()) return "no control #" + std::to_string(fault.control);
+  const auto& c = definition_.controls[fault.control];
+  const bool any = fault.kind == InputFaultKind::StuckAt || fault.kind == InputFaultKind::Intermittent ||
+                   fault.kind == InputFaultKind::Disconnect;
+  const bool ok = c.kind == ControlKind::Axis ||
+                  any || (c.kind == ControlKind::Switch && fault.kind == InputFaultKind::OutOfRange);
+  if (!ok) return std::string(to_string(fault.kind)) + " does not apply to " + c.name + " (not an axis)";
+  std::erase_if(input_faults_, [&](const InputFault& f) { return f.id == fault.id; });
+  input_faults_.push_back(std::move(fault));
+  return {};
+}
+
+std::size_t PanelMapper::clear_input_faults(const std::string& id, int64_t now_us) {
+  const std::size_t named = std::erase_if(input_faults_, [&](const InputFault& f) { return id.empty() || f.id == id; });
+  std::erase_if(input_faults_, [&](const InputFault& f) { return f.end_us != 0 && f.end_us <= now_us; });
+  return named;
 }
 
 }  // namespace rise::hil

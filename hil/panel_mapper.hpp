@@ -14,6 +14,7 @@
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/control_transforms.hpp"
+#include "hil/input_fault.hpp"
 #include "hil/io/can_error.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "hil/modbus_poll.hpp"
@@ -57,6 +58,7 @@ struct PanelSnapshot {
   bool deadman = false;
   std::vector<ControlValue> controls;  ///< same order as PanelDefinition::controls
   std::vector<SourceStatus> sources;   ///< same order as PanelDefinition::sources
+  std::vector<std::string> active_faults;  ///< input faults in effect: "<id>: <kind> <control>"
 };
 
 /// Holds the latest decoded state of every source. Not thread-safe: the
@@ -137,6 +139,17 @@ class PanelMapper {
 
   const panels::PanelDefinition& definition() const { return definition_; }
 
+  /// Adds an input fault (hil/input_fault.hpp), applied between decode and
+  /// the transforms from its start_us to its end_us. A fault with the same
+  /// id replaces it. Returns an empty string, or why it was refused (a kind
+  /// the control cannot take, a control index out of range). Allocates: not
+  /// for the cyclic path.
+  std::string inject_input_fault(InputFault fault);
+  /// Removes the input fault `id` ("" = every one) and those that ended
+  /// before now_us; returns how many of the named were removed.
+  std::size_t clear_input_faults(const std::string& id, int64_t now_us);
+  const std::vector<InputFault>& input_faults() const { return input_faults_; }
+
  private:
   // One bound signal of a dbc source.
   struct DbcBinding {
@@ -191,7 +204,8 @@ class PanelMapper {
     std::optional<uint8_t> last_position;
   };
   mutable std::vector<ControlFilter> filters_;
-  std::vector<int> binding_of_control_;  // index into the source's dbc bindings, -1 if none
+  std::vector<int> binding_of_control_;
+  std::vector<InputFault> input_faults_;  // injection order  // index into the source's dbc bindings, -1 if none
 
   bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);
 };

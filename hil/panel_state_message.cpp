@@ -82,7 +82,8 @@ rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
   m.num_buttons = static_cast<int16_t>(m.buttons.size());
   m.num_switches = static_cast<int16_t>(m.switches.size());
   m.num_sources = static_cast<int16_t>(m.sources.size());
-  m.num_faults = 0;
+  m.active_faults = snapshot.active_faults;
+  m.num_faults = static_cast<int16_t>(m.active_faults.size());
   return m;
 }
 

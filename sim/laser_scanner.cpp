@@ -32,11 +32,23 @@ LaserScan LaserScanner::scan(const Simulation& sim, std::size_t robot) {
   s.points_world.reserve(directions_sensor_.size());
   const Eigen::Vector3d origin = s.T_world_sensor.translation();
   const Eigen::Matrix3d R = s.T_world_sensor.linear();
+  // Sensor faults (sim_fault.hpp): drawn per ray from the fault's seed and
+  // the scan's time, so a replayed scenario scans the same.
+  std::vector<PhysicsFault> noise, dropout;
+  for (auto& f : sim.faults(robot)) {
+    if (f.kind == SimFaultKind::ScannerNoise) noise.push_back(f);
+    if (f.kind == SimFaultKind::ScannerDropout) dropout.push_back(f);
+  }
+  const auto base = static_cast<uint64_t>(std::llround(s.time_s * 1000.0)) * directions_sensor_.size();
   for (std::size_t i = 0; i < directions_sensor_.size(); ++i) {
     const Eigen::Vector3d& dir = directions_sensor_[i];
     double r = sim.cast_ray_m(origin, R * dir, d_.max_range_m, robot);
     if (!std::isfinite(r)) continue;
     if (d_.noise_m > 0.0) r += d_.noise_m * normal_(rng_);
+    bool lost = false;
+    for (const auto& f : dropout) lost = lost || fault_uniform(f.seed, base + i) < (f.value > 0.0 ? f.value : 1.0);
+    if (lost) continue;
+    for (const auto& f : noise) r += (f.value > 0.0 ? f.value : 0.05) * fault_normal(f.seed, base + i);
     if (r < d_.min_range_m || r > d_.max_range_m) continue;
     s.ranges_m[i] = static_cast<float>(r);
     const Eigen::Vector3d p = r * dir;

@@ -143,6 +143,8 @@ const char* to_string(SimEventKind kind) {
     case SimEventKind::ObjectMoved: return "object_moved";
     case SimEventKind::StairsClimbed: return "stairs_climbed";
     case SimEventKind::TippedOver: return "tipped_over";
+    case SimEventKind::FaultInjected: return "fault_injected";
+    case SimEventKind::FaultCleared: return "fault_cleared";
   }
   return "unknown";
 }
@@ -205,6 +207,7 @@ struct Simulation::Impl {
     double damage = 0.0;  // added to the robot's damage when it breaks
     int robot = -1;       // the robot whose joint it is; -1: a door's hinge
     bool broken() const { return joint == nullptr; }
+    double nominal_break_load_nm = -1.0;  // before a weak_joint fault; -1: never weakened
   };
   struct DoorBody {
     const Door* desc = nullptr;
@@ -250,6 +253,9 @@ struct Simulation::Impl {
     std::optional<Imu> imu;
     bool button_cues = false;              // the robot file has `on: button` cues
     std::set<std::string> buttons_down;    // their buttons held in the last step
+    std::vector<PhysicsFault> faults;      // injection order
+    std::array<double, 2> drive_factor{1.0, 1.0};  // left, right: motor_failure 0, motor_weakness value
+    std::array<double, 2> grip_factor{1.0, 1.0};   // track_slip
   };
   // Robot part (a) against a world entity or another robot's part (b).
   struct Touch {
@@ -575,7 +581,8 @@ struct Simulation::Impl {
       dBodySetMass(wheels[i], &wm);
       dBodySetPosition(wheels[i], xs[i], ys[i], w.radius_m);
       dBodySetRotation(wheels[i], R);
-      dGeomSetBody(add_part(dCreateCylinder(space, w.radius_m, w.width_m), GeomKind::Wheel, r, index, kWheelNames[i]),
+      dGeomSetBody(add_part(dCreateCylinder(space, w.radius_m, w.width_m), GeomKind::Wheel, r, index, kWheelNames[i],
+                               static_cast<int>(i % 2)),
                    wheels[i]);
       r.bodies.push_back(wheels[i]);
       hinges[i] = dJointCreateHinge(world, nullptr);
@@ -827,7 +834,8 @@ struct Simulation::Impl {
       if (ia->kind == GeomKind::Wheel) {
         // Tyre friction is anisotropic: rolling direction along the chassis' x.
         const double mu =
-            on_ground ? std::min(owner->desc.wheels.friction, world_desc.ground_friction) : kObstacleFriction;
+            (on_ground ? std::min(owner->desc.wheels.friction, world_desc.ground_friction) : kObstacleFriction) *
+            owner->grip_factor[static_cast<std::size_t>(ia->side)];
         s.mu = mu;
         s.mode |= dContactMu2 | dContactFDir1;
         s.mu2 = mu * kLateralFrictionRatio;
@@ -844,7 +852,8 @@ struct Simulation::Impl {
         const double along = forward[0] * nrm[0] + forward[1] * nrm[1] + forward[2] * nrm[2];
         double f[3] = {forward[0] - along * nrm[0], forward[1] - along * nrm[1], forward[2] - along * nrm[2]};
         const double len = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-        const double mu_ground = on_ground ? world_desc.ground_friction : 1.0;
+        const double mu_ground =
+            (on_ground ? world_desc.ground_friction : 1.0) * owner->grip_factor[static_cast<std::size_t>(ia->side)];
         s.mu = owner->desc.tracks.friction * mu_ground;
         if (len > 0.2) {  // a face square to the track (a wall ahead) gets plain friction
           s.mode |= dContactMu2 | dContactFDir1 | dContactMotion1;
@@ -876,7 +885,7 @@ struct Simulation::Impl {
         right *= t.max_speed_mps / peak;
       }
       if (!command.enabled) left = right = 0.0;  // brake: stopped belts hold the ground
-      r.track_speed_mps = {left, right};
+      r.track_speed_mps = {left * r.drive_factor[0], right * r.drive_factor[1]};
     } else {
       const auto& w = robot.wheels;
       double left = (command.linear_mps - command.angular_radps * w.track_m / 2) / w.radius_m;
@@ -887,6 +896,8 @@ struct Simulation::Impl {
         right *= w.max_speed_radps / peak;
       }
       if (!command.enabled) left = right = 0.0;  // brake: the motors hold the wheels
+      left *= r.drive_factor[0];
+      right *= r.drive_factor[1];
       for (std::size_t i = 0; i < 4; ++i) dJointSetHingeParam(r.hinges[i], dParamVel, (i % 2 == 0) ? left : right);
     }
     if (!r.arm_joints.empty()) {
@@ -1060,7 +1071,100 @@ struct Simulation::Impl {
     }
   }
 
+  // Which drive side a fault target names: 0 left, 1 right.
+  static std::optional<std::size_t> side_of(const std::string& target) {
+    if (target == "left" || target == "track_left" || target == "wheel_fl" || target == "wheel_rl") return 0;
+    if (target == "right" || target == "track_right" || target == "wheel_fr" || target == "wheel_rr") return 1;
+    return std::nullopt;
+  }
+  static double value_or(const PhysicsFault& f, double fallback) { return f.value > 0.0 ? f.value : fallback; }
+
+  Breakable* find_breakable(std::size_t robot, const std::string& name) {
+    for (auto& b : breakables)
+      if (b.name == name && (b.robot == static_cast<int>(robot) || b.robot < 0)) return &b;
+    return nullptr;
+  }
+
+  // Drive and grip factors and break loads from every robot's faults.
+  void apply_fault_effects() {
+    for (auto& b : breakables)
+      if (b.nominal_break_load_nm >= 0.0) b.break_load_nm = b.nominal_break_load_nm;
+    for (std::size_t i = 0; i < robots.size(); ++i) {
+      Robot& r = *robots[i];
+      r.drive_factor = {1.0, 1.0};
+      r.grip_factor = {1.0, 1.0};
+      for (const PhysicsFault& f : r.faults) {
+        const auto side = side_of(f.target);
+        switch (f.kind) {
+          case SimFaultKind::MotorFailure: r.drive_factor[*side] = 0.0; break;
+          case SimFaultKind::MotorWeakness: r.drive_factor[*side] *= std::clamp(value_or(f, 0.5), 0.0, 1.0); break;
+          case SimFaultKind::TrackSlip: r.grip_factor[*side] *= std::clamp(value_or(f, 0.2), 0.0, 1.0); break;
+          case SimFaultKind::WeakJoint:
+            if (Breakable* b = find_breakable(i, f.target)) {
+              if (b->nominal_break_load_nm < 0.0) b->nominal_break_load_nm = b->break_load_nm;
+              b->break_load_nm *= std::clamp(value_or(f, 0.3), 0.0, 1.0);
+            }
+            break;
+          default: break;  // sensor faults: read by the sensors
+        }
+      }
+    }
+  }
+
+  std::string set_fault(std::size_t robot, PhysicsFault f) {
+    if (robot >= robots.size()) return "no robot #" + std::to_string(robot);
+    Robot& r = *robots[robot];
+    if (f.id.empty()) return "a fault needs an id";
+    switch (f.kind) {
+      case SimFaultKind::MotorFailure:
+      case SimFaultKind::MotorWeakness:
+      case SimFaultKind::TrackSlip:
+        if (!side_of(f.target)) return std::string(to_string(f.kind)) + ": target '" + f.target + "' is not left or right";
+        break;
+      case SimFaultKind::WeakJoint:
+        if (!find_breakable(robot, f.target)) return "weak_joint: robot '" + r.id + "' has no joint '" + f.target + "'";
+        break;
+      case SimFaultKind::CameraBlackout: {
+        bool found = f.target.empty();
+        for (const auto& c : r.desc.sensors.cameras) found = found || c.name == f.target;
+        if (!found) return "camera_blackout: robot '" + r.id + "' has no camera '" + f.target + "'";
+        break;
+      }
+      case SimFaultKind::ScannerNoise:
+      case SimFaultKind::ScannerDropout:
+        if (!f.target.empty() && f.target != "laser") return std::string(to_string(f.kind)) + ": target is laser";
+        break;
+    }
+    f.start_s = time_s();
+    f.end_s = f.duration_s > 0.0 ? f.start_s + f.duration_s : 0.0;
+    std::erase_if(r.faults, [&](const PhysicsFault& g) { return g.id == f.id; });
+    emit(SimEventKind::FaultInjected, r.id, f.id, std::string(to_string(f.kind)) + " " + f.target);
+    r.faults.push_back(std::move(f));
+    apply_fault_effects();
+    return {};
+  }
+
+  std::size_t clear_fault(std::size_t robot, const std::string& id, const char* why) {
+    if (robot >= robots.size()) return 0;
+    Robot& r = *robots[robot];
+    std::size_t n = 0;
+    for (auto it = r.faults.begin(); it != r.faults.end();) {
+      const bool ended = std::string_view(why) == "ended";
+      if (ended ? (it->end_s > 0.0 && time_s() >= it->end_s - 1e-9) : (id.empty() || it->id == id)) {
+        emit(SimEventKind::FaultCleared, r.id, it->id, std::string(to_string(it->kind)) + " " + it->target + ": " + why);
+        it = r.faults.erase(it);
+        ++n;
+      } else {
+        ++it;
+      }
+    }
+    if (n > 0) apply_fault_effects();
+    return n;
+  }
+
   void step() {
+    for (std::size_t i = 0; i < robots.size(); ++i)
+      if (!robots[i]->faults.empty()) clear_fault(i, {}, "ended");
     for (auto& r : robots) {
       apply_command(*r);
       r->touching.clear();
@@ -1191,6 +1295,30 @@ std::optional<Eigen::Isometry3d> Simulation::T_world_camera(const std::string& c
   return std::nullopt;
 }
 
+std::string Simulation::set_fault(std::size_t robot, PhysicsFault fault) {
+  try {
+    return impl_->set_fault(robot, std::move(fault));
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+}
+
+std::size_t Simulation::clear_fault(std::size_t robot, const std::string& id) {
+  return impl_->clear_fault(robot, id, "cleared");
+}
+
+std::vector<PhysicsFault> Simulation::faults(std::size_t robot) const {
+  if (robot >= impl_->robots.size()) return {};
+  return impl_->robots[robot]->faults;
+}
+
+bool Simulation::camera_blacked_out(const std::string& camera, std::size_t robot) const {
+  if (robot >= impl_->robots.size()) return false;
+  for (const auto& f : impl_->robots[robot]->faults)
+    if (f.kind == SimFaultKind::CameraBlackout && (f.target.empty() || f.target == camera)) return true;
+  return false;
+}
+
 double Simulation::cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
                               double max_range_m, std::size_t own_robot) const {
   return impl_->cast_ray_m(origin_world, direction_world, max_range_m, own_robot);
@@ -1202,6 +1330,7 @@ RobotSnapshot Simulation::snapshot(std::size_t robot) const {
   const Impl::Robot& s = *impl_->robots.at(robot);
   RobotSnapshot r;
   r.time_s = time_s();
+  for (const auto& f : s.faults) r.active_faults.push_back(f.id + ": " + to_string(f.kind) + " " + f.target);
   const dReal* p = dBodyGetPosition(s.chassis);
   const dReal* q = dBodyGetQuaternion(s.chassis);
   r.position_m = {p[0], p[1], p[2]};

@@ -20,6 +20,7 @@
 #include "sim/imu.hpp"
 #include "sim/odometry.hpp"
 #include "sim/robot_description.hpp"
+#include "sim/sim_fault.hpp"
 #include "sim/world_description.hpp"
 
 namespace rise::sim {
@@ -64,6 +65,8 @@ enum class SimEventKind {
   StairsClimbed,     ///< a = robot id, b = stairs; base above the landing, on it
   TippedOver,        ///< a = robot id; base z axis > 60° from vertical
   CollisionContinues,  ///< a = robot part, b = entity; each full second a collision lasts, detail "N s"
+  FaultInjected,  ///< a = robot id, b = fault id; detail "<kind> <target>"
+  FaultCleared,   ///< a = robot id, b = fault id; detail "<kind> <target>: cleared | ended"
 };
 /// Stable snake_case name, e.g. "door_opened" (also the LCM `kind`).
 const char* to_string(SimEventKind kind);
@@ -110,6 +113,7 @@ struct RobotSnapshot {
   OdometryReading odometry;  ///< from the tracks' belt speeds or the wheels' rates, with the robot file's noise
   ImuReading imu;            ///< the last step's sample
   std::vector<SoundCue> sounds;  ///< the robot file's continuous cues, in file order
+  std::vector<std::string> active_faults;  ///< "<id>: <kind> <target>" (sim_fault.hpp)
 
   double yaw_rad() const;
   double speed_mps() const;
@@ -205,6 +209,20 @@ class Simulation {
   /// max_range_m. ODE ray casting (dCreateRay + dCollide), the laser
   /// scanner's primitive. Safe in the cyclic path: no allocation, never
   /// throws. It reuses one ray geom: not from two threads at once.
+  /// Applies a physics or sensor fault (sim/sim_fault.hpp) to robot
+  /// `robot` from now for its duration_s; one with the same id replaces it.
+  /// Records a FaultInjected event. Returns "" or why it was refused (an
+  /// unknown robot, target or a kind the robot cannot take). Never throws.
+  std::string set_fault(std::size_t robot, PhysicsFault fault);
+  /// Clears robot `robot`'s fault `id` ("" = every one), each with a
+  /// FaultCleared event; returns how many. Faults also end by themselves at
+  /// their end_s, in step(). Never throws.
+  std::size_t clear_fault(std::size_t robot, const std::string& id);
+  /// Robot `robot`'s faults in effect (empty for an index out of range).
+  std::vector<PhysicsFault> faults(std::size_t robot) const;
+  /// True while a camera_blackout fault covers robot `robot`'s camera `camera`.
+  bool camera_blacked_out(const std::string& camera, std::size_t robot = 0) const;
+
   double cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
                     double max_range_m, std::size_t own_robot = 0) const;
 

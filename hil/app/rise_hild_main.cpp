@@ -8,12 +8,18 @@
 
 #include <csignal>
 #include <chrono>
+#include <functional>
 #include <iostream>
+#include <mutex>
+#include <optional>
 #include <poll.h>
 
 #include "hil/app/inspect_commands.hpp"
 #include "hil/app/verify_command.hpp"
 #include "hil/bridge.hpp"
+#include "hil/fault_injector.hpp"
+#include "panels/command_auth.hpp"
+#include "rise_msgs/FaultCommand.hpp"
 #include "hil/io/replay_modbus_link.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
@@ -55,6 +61,14 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--status-every", status_every_s, "log a status line every S seconds (0: on change only)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  std::string instructor_key_file;
+  app.add_option("--instructor-key", instructor_key_file,
+                 "instructor key file (hex, mode 0600; default env RISE_INSTRUCTOR_KEY): verifies signed "
+                 "FaultCommands on rise/<id>/fault_command; without it every command is rejected")
+      ->type_name("FILE");
+  double command_window_s = 5.0;
+  app.add_option("--command-window", command_window_s, "largest accepted |command time - now| (s)")
+      ->capture_default_str();
   std::string record_dir;
   app.add_option("--record", record_dir,
                  "record the session into DIR (created): <source>.log (CAN, candump -l), <source>.modbus.log "
@@ -187,6 +201,33 @@ int main(int argc, char** argv) {
     spdlog::info("recording into {}", record_dir);
   }
 
+  // Wire faults sit under everything, recording included: a recording
+  // shows what the daemon read.
+  std::vector<rise::io::WireFaultSet*> wires(transports.size(), nullptr);
+  for (std::size_t i = 0; i < transports.size(); ++i) {
+    if (transports[i].can) {
+      auto faulty = std::make_unique<rise::io::FaultyCanBus>(std::move(transports[i].can));
+      wires[i] = faulty.get();
+      transports[i].can = std::move(faulty);
+    } else if (transports[i].modbus) {
+      auto faulty = std::make_unique<rise::io::FaultyModbusLink>(std::move(transports[i].modbus));
+      wires[i] = faulty.get();
+      transports[i].modbus = std::move(faulty);
+    }
+  }
+  std::optional<rise::panels::CommandVerifier> verifier;
+  if (const std::string key_path = rise::panels::instructor_key_path(instructor_key_file); !key_path.empty()) {
+    try {
+      verifier.emplace(rise::panels::load_instructor_key(key_path), static_cast<int64_t>(command_window_s * 1e6));
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 2;
+    }
+    spdlog::info("instructor commands verified with {}", key_path);
+  } else {
+    spdlog::info("no instructor key: fault commands are rejected");
+  }
+
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
     spdlog::error("cannot open LCM at {}", lcm_url);
@@ -197,10 +238,26 @@ int main(int argc, char** argv) {
 
   int64_t seq = 0;
   std::string last_reason = "-";
+  rise::hil::TransportFaults transport_faults;
+  rise::hil::FaultInjector* injector = nullptr;  // set once the bridge exists
+  // A rejected command shows in PanelState for 10 s, beside the faults.
+  std::mutex rejected_mutex;
+  std::string rejected_note;
+  int64_t rejected_until_us = 0;
   auto publish = [&](const rise::hil::PanelSnapshot& snap) {
-    const auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), source_urls);
-    lcm.publish(state_channel, &msg);
-    if (recorder) recorder->record_message(state_channel, msg);
+    auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), source_urls);
+    if (injector)
+      for (auto& f : injector->active(snap.time_us)) msg.active_faults.push_back(std::move(f));
+    {
+      std::lock_guard lock(rejected_mutex);
+      if (snap.time_us < rejected_until_us) msg.active_faults.push_back(rejected_note);
+    }
+    msg.num_faults = static_cast<int16_t>(msg.active_faults.size());
+    // Transport faults act on the wire message: the recording keeps what was sent.
+    for (const auto& out : transport_faults.pass(msg, snap.time_us)) {
+      lcm.publish(state_channel, &out);
+      if (recorder) recorder->record_message(state_channel, out);
+    }
     // Log when the reason changes, not every time an age in it grows.
     std::string reason_kind = snap.failsafe_reason;
     std::erase_if(reason_kind, [](char c) { return c >= '0' && c <= '9'; });
@@ -211,6 +268,46 @@ int main(int argc, char** argv) {
     }
   };
   rise::hil::Bridge bridge(definition, std::move(transports), publish);
+  rise::hil::FaultInjector fault_injector(bridge, wires, &transport_faults);
+
+  // Signed FaultCommands (panels/command_auth.hpp): verified, then applied
+  // to the daemon's layers; sim kinds are rise-sim's and ignored here.
+  const std::string fault_channel = rise::hil::channel(id, "fault_command");
+  int64_t rejected = 0;
+  struct FaultHandler {
+    std::function<void(const rise_msgs::FaultCommand&)> on_command;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::FaultCommand* m) { on_command(*m); }
+  } fault_handler{[&](const rise_msgs::FaultCommand& c) {
+    const int64_t now = rise::hil::monotonic_us();
+    std::string why;
+    if (!verifier) why = "no instructor key on this station";
+    else if (const auto v = verifier->check(c, wall_us()); v != rise::panels::Verdict::Accepted) why = rise::panels::to_string(v);
+    else if (c.trainee_id != id) why = "meant for trainee '" + c.trainee_id + "'";
+    if (!why.empty()) {
+      ++rejected;
+      spdlog::warn("rejected command on {} from '{}': {} ({} rejected so far)", fault_channel, c.issuer, why, rejected);
+      std::lock_guard lock(rejected_mutex);
+      rejected_note = "command_rejected: " + why + " from '" + c.issuer + "' (" + std::to_string(rejected) + " rejected)";
+      rejected_until_us = now + 10'000'000;
+      return;
+    }
+    if (c.action == "clear") {
+      const std::size_t n = fault_injector.clear(c.fault_id, now);
+      spdlog::info("fault clear '{}' from '{}': {} cleared", c.fault_id.empty() ? "*" : c.fault_id, c.issuer, n);
+      return;
+    }
+    const auto layer = rise::hil::fault_layer(c.kind);
+    if (layer == rise::hil::FaultLayer::Physics || layer == rise::hil::FaultLayer::Sensor) return;  // rise-sim's
+    rise::hil::FaultSpec spec{c.fault_id, c.kind, c.target, c.value, c.rate, c.duration_s, static_cast<uint64_t>(c.seed)};
+    const std::string error = c.action == "inject" ? fault_injector.inject(spec, now) : "action '" + c.action + "'";
+    if (error.empty())
+      spdlog::info("fault '{}' from '{}': {} {} value {} rate {} for {} s", c.fault_id, c.issuer, c.kind, c.target,
+                   c.value, c.rate, c.duration_s);
+    else
+      spdlog::warn("fault '{}' from '{}' refused: {}", c.fault_id, c.issuer, error);
+  }};
+  injector = &fault_injector;
+  lcm.subscribe(fault_channel, &FaultHandler::on, &fault_handler)->setQueueCapacity(64);
 
   struct FeedbackHandler {
     rise::hil::Bridge* bridge;
@@ -234,6 +331,7 @@ int main(int argc, char** argv) {
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     if (::poll(&pfd, 1, 50) > 0) lcm.handle();
     for (const std::string& note : bridge.take_notes()) spdlog::warn("{}", note);
+
     // A full disk costs records, not the session: said once, then at each status line.
     if (recorder && write_errors_reported == 0 && recorder->counts().write_errors > 0) {
       write_errors_reported = recorder->counts().write_errors;

@@ -31,6 +31,9 @@
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimControl.hpp"
+#include "rise_msgs/FaultCommand.hpp"
+#include "rise_msgs/TrainingControl.hpp"
+#include "panels/command_auth.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
 #include "sim/laser_scanner.hpp"
@@ -89,6 +92,20 @@ struct ControlListener {
   std::size_t robot = 0;
   void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::SimControl* m) {
     pending->emplace_back(robot, *m);
+  }
+};
+
+// Signed instructor commands (panels/command_auth.hpp) of every robot's
+// channels, in arrival order, verified and applied between steps.
+struct InstructorListener {
+  std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>>* faults = nullptr;
+  std::vector<std::pair<std::size_t, rise_msgs::TrainingControl>>* training = nullptr;
+  std::size_t robot = 0;
+  void on_fault(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::FaultCommand* m) {
+    faults->emplace_back(robot, *m);
+  }
+  void on_training(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::TrainingControl* m) {
+    training->emplace_back(robot, *m);
   }
 };
 
@@ -165,6 +182,8 @@ rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::s
   m.num_contacts = static_cast<int16_t>(m.contacts.size());
   for (int i = 0; i < 3; ++i) m.gripper_position_m[i] = s.gripper_position_m[static_cast<std::size_t>(i)];
   m.num_objects = 0;
+  m.active_faults = s.active_faults;
+  m.num_faults = static_cast<int16_t>(m.active_faults.size());
   return m;
 }
 
@@ -224,8 +243,10 @@ struct Station {
   std::string id;  // channel id: rise/<id>/...
   rise::sim::RobotSpec spec;
   std::string panel_channel, state_channel, feedback_channel, event_channel, control_channel, sound_channel;
+  std::string fault_channel, training_channel;
   PanelListener panel;
   ControlListener control;
+  InstructorListener instructor;
   std::string last_reason = "-";
 };
 }  // namespace
@@ -259,6 +280,14 @@ int main(int argc, char** argv) {
   app.add_option("--panel-timeout-ms", panel_timeout_ms, "stop the robot when no PanelState arrives for this long")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
+  std::string instructor_key_file;
+  app.add_option("--instructor-key", instructor_key_file,
+                 "instructor key file (hex, mode 0600; default env RISE_INSTRUCTOR_KEY): verifies signed "
+                 "FaultCommand / TrainingControl; without it every such command is rejected")
+      ->type_name("FILE");
+  double command_window_s = 5.0;
+  app.add_option("--command-window", command_window_s, "largest accepted |command time - now| (s)")
+      ->capture_default_str();
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
   app.add_option("--scan-dir", scan_dir, "write the first robot's laser scan (scan_NNNN.pcd + .pose) here at start");
   app.add_option("--scan-every", scan_every_s, "and every S seconds of sim time (0: only at start)")
@@ -299,12 +328,27 @@ int main(int argc, char** argv) {
     return out;
   };
 
+  std::optional<rise::panels::CommandVerifier> verifier;
+  if (const std::string key_path = rise::panels::instructor_key_path(instructor_key_file); !key_path.empty()) {
+    try {
+      verifier.emplace(rise::panels::load_instructor_key(key_path),
+                       static_cast<int64_t>(command_window_s * 1e6));
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      return 2;
+    }
+    spdlog::info("instructor commands verified with {}", key_path);
+  } else {
+    spdlog::info("no instructor key: fault and training commands are rejected");
+  }
   lcm::LCM lcm(lcm_url);
   if (!lcm.good()) {
     spdlog::error("cannot open LCM at {}", lcm_url);
     return 2;
   }
   std::vector<std::pair<std::size_t, rise_msgs::SimControl>> pending_control;
+  std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>> pending_faults;
+  std::vector<std::pair<std::size_t, rise_msgs::TrainingControl>> pending_training;
   for (std::size_t i = 0; i < stations.size(); ++i) {
     Station& st = *stations[i];
     const std::string prefix = "rise/" + st.id + "/";
@@ -320,6 +364,13 @@ int main(int argc, char** argv) {
     st.control.pending = &pending_control;
     st.control.robot = i;
     lcm.subscribe(st.control_channel, &ControlListener::on, &st.control)->setQueueCapacity(64);
+    st.fault_channel = prefix + "fault_command";
+    st.training_channel = prefix + "training_control";
+    st.instructor.faults = &pending_faults;
+    st.instructor.training = &pending_training;
+    st.instructor.robot = i;
+    lcm.subscribe(st.fault_channel, &InstructorListener::on_fault, &st.instructor)->setQueueCapacity(64);
+    lcm.subscribe(st.training_channel, &InstructorListener::on_training, &st.instructor)->setQueueCapacity(64);
   }
   const rise::sim::RobotDescription& first_robot = stations.front()->spec.description;
 
@@ -496,12 +547,92 @@ int main(int argc, char** argv) {
     paced_steps = 0;
   };
 
+  // A SimEvent on the robot's sim_event channel, logged.
+  const auto tell = [&](std::size_t robot, const std::string& kind, const std::string& a, const std::string& b,
+                        const std::string& detail) {
+    const Station& st = *stations[robot];
+    rise_msgs::SimEvent msg;
+    msg.utime = wall_us();
+    msg.sim_time_s = sim->time_s();
+    msg.robot_id = st.spec.id;
+    msg.kind = kind;
+    msg.a = a;
+    msg.b = b;
+    msg.detail = detail;
+    lcm.publish(st.event_channel, &msg);
+  };
+  int64_t rejected = 0;
+  // Verifies one signed command: true to apply it; else it is reported as a
+  // command_rejected SimEvent (a = issuer, b = channel, detail = why, and
+  // the count so far) and logged.
+  const auto admit = [&](std::size_t robot, const auto& c, const std::string& channel) {
+    std::string why;
+    if (!verifier) why = "no instructor key on this station";
+    else if (const auto v = verifier->check(c, wall_us()); v != rise::panels::Verdict::Accepted) why = rise::panels::to_string(v);
+    else if (c.trainee_id != stations[robot]->id) why = "meant for trainee '" + c.trainee_id + "'";
+    if (why.empty()) return true;
+    ++rejected;
+    spdlog::warn("rejected command on {} from '{}': {} ({} rejected so far)", channel, c.issuer, why, rejected);
+    tell(robot, "command_rejected", c.issuer, channel, why + " (" + std::to_string(rejected) + " rejected)");
+    return false;
+  };
+  const auto apply_fault = [&](std::size_t robot, const rise_msgs::FaultCommand& c) {
+    const Station& st = *stations[robot];
+    if (!admit(robot, c, st.fault_channel)) return;
+    if (c.action == "clear") {
+      const std::size_t n = sim->clear_fault(robot, c.fault_id);
+      spdlog::info("fault clear '{}' from '{}': {} cleared", c.fault_id, c.issuer, n);
+      if (n == 0 && !c.fault_id.empty()) tell(robot, "fault_refused", c.issuer, c.fault_id, "no such fault");
+      return;
+    }
+    const auto kind = rise::sim::parse_sim_fault_kind(c.kind);
+    std::string error;
+    if (c.action != "inject") error = "action '" + c.action + "': expected inject or clear";
+    else if (!kind) error = "'" + c.kind + "' is not a sim fault";
+    else {
+      rise::sim::PhysicsFault f;
+      f.id = c.fault_id;
+      f.kind = *kind;
+      f.target = c.target;
+      f.value = c.value;
+      f.seed = static_cast<uint64_t>(c.seed);
+      f.duration_s = c.duration_s;
+      error = sim->set_fault(robot, f);
+    }
+    if (!error.empty()) {
+      spdlog::warn("fault '{}' from '{}' refused: {}", c.fault_id, c.issuer, error);
+      tell(robot, "fault_refused", c.issuer, c.fault_id, error);
+    }
+  };
+  const auto apply_training = [&](std::size_t robot, const rise_msgs::TrainingControl& c) {
+    const Station& st = *stations[robot];
+    if (!admit(robot, c, st.training_channel)) return;
+    rise_msgs::SimControl sc{};
+    sc.issuer = c.issuer;
+    sc.steps = 0;
+    if (c.command == "start") sc.command = "resume";
+    else if (c.command == "stop") sc.command = "pause";
+    else if (c.command == "restart") sc.command = "reset";
+    else {
+      tell(robot, "command_rejected", c.issuer, st.training_channel, "command '" + c.command + "': expected start, stop or restart");
+      return;
+    }
+    apply(robot, sc);
+    if (c.command == "restart") paused = false;
+    tell(robot, c.command == "start" ? "training_started" : c.command == "stop" ? "training_stopped" : "training_restarted",
+         c.issuer, c.task, "task " + (c.task.empty() ? std::string("-") : c.task));
+  };
+
   while (!g_stop && (duration_s <= 0 || sim->time_s() < duration_s)) {
     // Take every waiting LCM message without blocking the physics.
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     while (::poll(&pfd, 1, 0) > 0) lcm.handle();
     for (const auto& [robot, c] : pending_control) apply(robot, c);
     pending_control.clear();
+    for (const auto& [robot, c] : pending_faults) apply_fault(robot, c);
+    pending_faults.clear();
+    for (const auto& [robot, c] : pending_training) apply_training(robot, c);
+    pending_training.clear();
 
     if (paused) {
       // No stepping; RobotState still goes out, with the same sim time.
