@@ -1,11 +1,13 @@
 // The pages in headless Chromium (Debian's chromium, driven by playwright-core
 // from instructor/web) against `rise-instructor serve` and `rise-sim` as
-// separate processes over LCM: the console shows the robot moving and its
-// fault button publishes a signed FaultCommand; the virtual panel page drives
-// the robot, and closing it stops the robot.
+// separate processes over LCM: the console shows the robot moving while the
+// console emulator drives it through rise-hild, and its fault button injects
+// a signed fault that rise-hild applies and reports in PanelState; the
+// virtual panel page drives the robot, and closing it stops the robot.
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -55,14 +57,28 @@ struct Stations {
   std::string token = "browser-" + std::to_string(::getpid());
   fs::path dir;
   int port = free_port();
-  ChildProcess sim, server;
+  ChildProcess sim, server, hild, emulator;
 
-  Stations() {
+  /// `emulated`: the console emulator → rise-hild drive the robot too.
+  explicit Stations(bool emulated) {
     char tmpl[] = "/tmp/rise-browser-test-XXXXXX";
     dir = ::mkdtemp(tmpl);
     rise::panels::write_new_instructor_key((dir / "instructor.key").string());
-    sim = ChildProcess({kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100"},
+    const std::string key = (dir / "instructor.key").string();
+    sim = ChildProcess({kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100", "--instructor-key", key},
                        (dir / "sim.log").string());
+    if (emulated) {
+      // Forward at half stick, dead-man held, for as long as the test runs.
+      std::ofstream(dir / "drive.txt") << "0.0 mode drive\n0.0 speed medium\n0.2 deadman pressed\n0.5 drive_y 0.5\n";
+      const std::string bus = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
+      const std::string panel = kSource + "/panels/definitions/rise_console.yaml";
+      emulator = ChildProcess({kBin + "/rise-panel", "emulate", "--panel", panel, "--can", "socketcand+listen://" + bus,
+                               "--script", (dir / "drive.txt").string(), "--hold"},
+                              (dir / "emulator.log").string());
+      hild = ChildProcess({kBin + "/rise-hild", "--panel", panel, "--can", "socketcand://" + bus, "--id", id, "--lcm",
+                           kLcm, "--instructor-key", key},
+                          (dir / "hild.log").string());
+    }
     server = ChildProcess({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token",
                            token, "--lcm", kLcm, "--world", kSource + "/sim/worlds/yard.yaml", "--instructor-key",
                            (dir / "instructor.key").string(), "--reports-dir", dir.string()},
@@ -70,6 +86,8 @@ struct Stations {
   }
   ~Stations() {
     server.stop();
+    hild.stop();
+    emulator.stop();
     sim.stop();
     fs::remove_all(dir);
   }
@@ -103,20 +121,20 @@ bool is_png(const std::string& path) {
 }
 }  // namespace
 
-TEST_CASE("the console shows the robot moving, draws map and 3D view, and its fault button publishes", "[instructor]") {
+TEST_CASE("the console shows the robot moving while the emulator drives, and a click injects a fault", "[instructor]") {
   if (const auto why = missing_browser(); !why.empty()) {
     WARN("skipped: " << why);
     return;
   }
-  Stations st;
+  Stations st(true);
   TraineePeer peer(st.id);
   REQUIRE(peer.good());
   REQUIRE(st.ready(peer));
   ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/console_check.cjs", st.base(), st.token, st.id,
                      st.out_dir(), kWeb},
                     (st.dir / "console_check.log").string());
-  // The scripted console drives while the page watches.
-  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] { peer.publish_driving_panel(0.5f); });
+  // The emulated console drives while the page watches.
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000);
   if (!finished) node.stop();
   const auto result = read_result((st.dir / "console_check.log").string());
   INFO(read_file((st.dir / "console_check.log").string()));
@@ -146,6 +164,13 @@ TEST_CASE("the console shows the robot moving, draws map and 3D view, and its fa
   CHECK(peer.faults[0].trainee_id == st.id);
   rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key((st.dir / "instructor.key").string()));
   CHECK(verifier.check(peer.faults[0], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+  // rise-hild took it: the fault is in PanelState.active_faults over LCM, and on the page.
+  const auto has_fault = [](const rise_msgs::PanelState& p) {
+    return std::any_of(p.active_faults.begin(), p.active_faults.end(),
+                       [](const std::string& f) { return f.rfind("stick-stuck: stuck_at drive_y", 0) == 0; });
+  };
+  CHECK(std::any_of(peer.daemon_panels.begin(), peer.daemon_panels.end(), has_fault));
+  CHECK(result["page_faults"].asString().find("stick-stuck: stuck_at drive_y") != std::string::npos);
 }
 
 TEST_CASE("the virtual panel page drives the robot and closing it stops the robot", "[instructor]") {
@@ -153,7 +178,7 @@ TEST_CASE("the virtual panel page drives the robot and closing it stops the robo
     WARN("skipped: " << why);
     return;
   }
-  Stations st;
+  Stations st(false);
   TraineePeer peer(st.id);
   REQUIRE(peer.good());
   REQUIRE(st.ready(peer));

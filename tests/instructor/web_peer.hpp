@@ -46,40 +46,21 @@ class TraineePeer {
     return true;
   }
 
-  /// A scripted console: dead-man held, drive mode, slow, the stick forward.
-  void publish_driving_panel(float forward) {
-    rise_msgs::PanelState p;
-    p.utime = 0;
-    p.panel_id = "scripted";
-    p.trainee_id = id_;
-    p.seq = ++seq_;
-    p.failsafe = false;
-    p.deadman = true;
-    p.axes = {{"drive_y", forward}, {"drive_x", 0.0f}};
-    p.num_axes = 2;
-    p.buttons = {{"estop", false}, {"deadman", true}};
-    p.num_buttons = 2;
-    p.switches = {{"mode", 0, "drive"}, {"speed", 1, "medium"}};
-    p.num_switches = 2;
-    p.num_sources = 0;
-    p.num_faults = 0;
-    lcm_.publish("rise/" + id_ + "/panel_state", &p);
-  }
-
   std::vector<rise_msgs::RobotState> robot;
   std::vector<rise_msgs::PanelState> panels;  ///< only those with a "virtual" source
+  std::vector<rise_msgs::PanelState> daemon_panels;  ///< those of rise-hild (other sources)
   std::vector<rise_msgs::FaultCommand> faults;
 
  private:
   void on_robot(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::RobotState* m) { robot.push_back(*m); }
   void on_panel(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelState* m) {
     if (!m->sources.empty() && m->sources[0].name == "virtual") panels.push_back(*m);
+    else if (!m->sources.empty()) daemon_panels.push_back(*m);
   }
   void on_fault(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::FaultCommand* m) { faults.push_back(*m); }
 
   std::string id_;
   lcm::LCM lcm_;
-  int64_t seq_ = 0;
 };
 
 inline double distance_xy(const rise_msgs::RobotState& a, const rise_msgs::RobotState& b) {

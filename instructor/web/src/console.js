@@ -8,6 +8,7 @@ const state = {
   selected: '',
   events: [],
   pushes: 0,
+  dirty: true,
 };
 const colourHex = '#' + ROBOT_COLOUR.toString(16).padStart(6, '0');
 
@@ -113,7 +114,7 @@ function setup3d() {
 function buildScene() {
   const ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200), new THREE.MeshLambertMaterial({ color: 0x5b6b4a }));
   view.scene.add(ground);
-  const grid = new THREE.GridHelper(100, 100, 0x333333, 0x444444); grid.rotation.x = Math.PI / 2; grid.position.z = 0.002;
+  const grid = new THREE.GridHelper(100, 100, 0x333333, 0x444444); grid.rotation.x = Math.PI / 2; grid.position.z = 0.01;
   view.scene.add(grid);
   const colours = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x8d8d8d, prop: 0x9775fa };
   for (const b of state.world.boxes) {
@@ -267,6 +268,7 @@ async function loadReports() {
 // ---- the live stream -----------------------------------------------------
 function onUpdate(u) {
   state.pushes++;
+  state.dirty = true;
   for (const c of Object.values(u.channels)) {
     const t = trainee(c.trainee);
     t[c.kind] = c.value;
@@ -281,7 +283,12 @@ function onUpdate(u) {
   renderPanels(); renderTraining(); renderRobotLine();
 }
 
-function frame() { drawMap(); render3d(); requestAnimationFrame(frame); }
+// Drawn only when something new arrived: software WebGL (a machine without a
+// GPU) would otherwise take the CPU the trainee stations need.
+function frame() {
+  if (state.dirty) { state.dirty = false; drawMap(); render3d(); }
+  requestAnimationFrame(frame);
+}
 
 // Pixel statistics of a canvas for the browser tests: the variance of the
 // luminance, and how many pixels carry the robot's colour.
@@ -302,7 +309,7 @@ window.riseConsole = { state, stats: () => ({ map: canvasStats(document.getEleme
                                               view3d: canvasStats(document.getElementById('view3d')) }) };
 
 async function main() {
-  document.getElementById('trainee').addEventListener('change', (e) => { state.selected = e.target.value; updatePanelLink(); });
+  document.getElementById('trainee').addEventListener('change', (e) => { state.selected = e.target.value; state.dirty = true; updatePanelLink(); });
   updatePanelLink();
   state.world = await getJson('/api/world');
   setup3d(); buildScene();

@@ -44,6 +44,13 @@ run(async () => {
     await page.click('button[data-fault="stick-stuck"]');
     await page.waitForFunction(() => /inject stick-stuck: /.test(document.getElementById('fault-result').textContent), null, { timeout: 10000 });
     result.fault_result = await page.textContent('#fault-result');
+    // rise-hild applies it and says so in PanelState.active_faults: the panels table shows it.
+    await page.waitForFunction((id) => {
+      const row = document.querySelector('#panels tr[data-trainee="' + id + '"] .faults');
+      return row && row.textContent.includes('stick-stuck');
+    }, id, { timeout: 15000 });
+    result.page_faults = await page.textContent('#panels tr[data-trainee="' + id + '"] .faults');
+    await page.screenshot({ path: path.join(outDir, 'instructor_console_fault.png') });
     result.page_errors = consoleErrors;
   } finally {
     await browser.close();
