@@ -1,5 +1,9 @@
 #include "instructor/web_server.hpp"
 
+// Eigen before httplib: httplib pulls in <resolv.h>, whose `_res` macro
+// breaks Eigen's parameters of that name.
+#include "sim/robot_description.hpp"
+
 #include <httplib.h>
 #include <json/json.h>
 #include <lcm/lcm-cpp.hpp>
@@ -150,6 +154,25 @@ Json::Value world_json(const sim::WorldDescription& w) {
   start.append(w.robot_start_yaw_rad);
   out["robot_start"] = start;
   return out;
+}
+
+// What the 3D view draws of the robot: its chassis box and its camera
+// mounts (base frame, x forward, z up; rpy in radians).
+Json::Value robot_json(const sim::RobotDescription& r) {
+  Json::Value v;
+  v["name"] = r.name;
+  v["file"] = r.file;
+  v["chassis_size"] = xyz(r.chassis.size_m.data());
+  Json::Value cameras(Json::arrayValue);
+  for (const auto& c : r.sensors.cameras) {
+    Json::Value cv;
+    cv["name"] = c.name;
+    cv["position"] = xyz(c.mount.position_m.data());
+    cv["rpy"] = xyz(c.mount.rpy_rad.data());
+    cameras.append(cv);
+  }
+  v["cameras"] = cameras;
+  return v;
 }
 
 Json::Value panel_json(const rise_msgs::PanelState& m) {
@@ -334,7 +357,9 @@ struct WebServer::Impl {
     if (!fs::is_regular_file(fs::path(settings.web_dir) / "index.html"))
       throw std::runtime_error(settings.web_dir + ": no index.html (build the pages: npm ci && npm run build in instructor/web)");
     world = settings.world_file.empty() ? sim::default_world() : sim::load_world_description(settings.world_file);
-    world_text = to_text(world_json(world));
+    Json::Value w = world_json(world);
+    if (!settings.robot_file.empty()) w["robot"] = robot_json(sim::load_robot_description(settings.robot_file));
+    world_text = to_text(w);
     panel = panels::load_panel_definition(settings.panel_file);
     (void)virtual_definition(panel, settings.virtual_timeout_ms);  // fails here, not on the first page
     if (settings.push_hz < 20.0) throw std::runtime_error("push_hz must be at least 20");

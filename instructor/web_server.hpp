@@ -21,6 +21,7 @@ struct WebServerSettings {
   std::string token;                ///< every request must carry it (non-empty)
   std::string web_dir;              ///< the built pages (instructor/web/dist)
   std::string world_file;           ///< "" → the built-in yard
+  std::string robot_file;           ///< the robot file the 3D view takes chassis and cameras from; "" → none
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string reports_dir;          ///< "" → no reports
   std::string panel_file;           ///< the console definition the virtual panel copies

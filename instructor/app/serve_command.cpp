@@ -20,6 +20,7 @@ struct ServeOptions {
   std::string token;
   std::string token_file;
   std::string world;
+  std::string robot = "sim/robots/skid4.yaml";
   std::string lcm = "udpm://239.255.76.67:7667?ttl=0";
   std::string reports_dir;
   std::string web_dir;
@@ -56,6 +57,7 @@ int serve(const ServeOptions& o) {
   if (s.token.empty()) throw std::runtime_error("a token is required: --token T or --token-file F");
   s.web_dir = o.web_dir.empty() ? std::string(RISE_WEB_DIST_DIR) : o.web_dir;
   s.world_file = o.world.empty() ? "" : panels::find_data_file(o.world);
+  s.robot_file = o.robot.empty() ? "" : panels::find_data_file(o.robot);
   s.lcm_url = o.lcm;
   s.reports_dir = o.reports_dir;
   s.panel_file = panels::find_data_file(o.panel);
@@ -87,6 +89,8 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--token", o->token, "the token every request must carry (?token=, Bearer, X-Rise-Token)");
   cmd->add_option("--token-file", o->token_file, "read the token from the first line of this file");
   cmd->add_option("--world", o->world, "world file the map and 3D view draw (default: the built-in yard)");
+  cmd->add_option("--robot", o->robot, "robot file the 3D view takes the chassis and the onboard camera from (\"\": none)")
+      ->capture_default_str();
   cmd->add_option("--lcm", o->lcm, "LCM URL")->capture_default_str();
   cmd->add_option("--reports-dir", o->reports_dir, "training reports to list and serve (rise-trainer --out)");
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist of the source tree)");

@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <thread>
@@ -33,6 +34,7 @@ struct ServerFixture {
     settings.token = "tok-" + id;
     settings.web_dir = (dir / "www").string();
     settings.world_file = std::string(RISE_SOURCE_DIR) + "/sim/worlds/building.yaml";
+    settings.robot_file = std::string(RISE_SOURCE_DIR) + "/sim/robots/skid4.yaml";
     settings.reports_dir = (dir / "reports").string();
     settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
     settings.instructor_key_file = (dir / "instructor.key").string();
@@ -76,6 +78,12 @@ TEST_CASE("the web server answers only requests that carry its token", "[instruc
     CHECK(kinds["stairs"] > 1);
     CHECK(world["regions"].size() >= 1);
     CHECK(world["objects"].size() >= 1);
+    // The robot file's chassis and its camera mount (skid4: "front", 0.41 m ahead, 10° down).
+    CHECK(world["robot"]["chassis_size"].size() == 3);
+    REQUIRE(world["robot"]["cameras"].size() == 1);
+    CHECK(world["robot"]["cameras"][0]["name"].asString() == "front");
+    CHECK(world["robot"]["cameras"][0]["position"][0].asDouble() == Approx(0.41));
+    CHECK(world["robot"]["cameras"][0]["rpy"][1].asDouble() == Approx(10.0 * M_PI / 180.0));
   }
   SECTION("reports are listed and served; nothing outside the folder") {
     const auto list = parse_json(http.Get("/api/reports", f.auth())->body);

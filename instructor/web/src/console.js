@@ -138,21 +138,25 @@ function buildScene() {
 function robotMesh(id) {
   if (!view.robots.has(id)) {
     const g = new THREE.Group();
+    const size = (state.world.robot && state.world.robot.chassis_size) || [0.8, 0.5, 0.25];
     // Unlit: its colour reaches the screen as it is (the tests look for it).
-    const body = new THREE.Mesh(new THREE.BoxGeometry(0.8, 0.6, 0.35), new THREE.MeshBasicMaterial({ color: ROBOT_COLOUR }));
-    body.position.z = 0.0;
+    const body = new THREE.Mesh(new THREE.BoxGeometry(...size), new THREE.MeshBasicMaterial({ color: ROBOT_COLOUR }));
     g.add(body);
-    const nose = new THREE.Mesh(new THREE.BoxGeometry(0.15, 0.3, 0.1), new THREE.MeshLambertMaterial({ color: 0x222222 }));
-    nose.position.set(0.35, 0, 0.22); g.add(nose);
+    const nose = new THREE.Mesh(new THREE.BoxGeometry(0.15, size[1] / 2, 0.08), new THREE.MeshLambertMaterial({ color: 0x222222 }));
+    nose.position.set(size[0] / 2 - 0.08, 0, size[2] / 2 + 0.04); g.add(nose);
     view.scene.add(g); view.robots.set(id, g);
   }
   return view.robots.get(id);
 }
 
-// The onboard camera: 0.30 m ahead of the base, 0.50 m above it, looking
-// along the base's x axis pitched 10° down (DESIGN: a chase/onboard camera
-// computed from RobotState's base pose).
-const ONBOARD = { ahead_m: 0.30, up_m: 0.50, pitch_rad: 10 * Math.PI / 180 };
+// The onboard camera: the robot file's first camera mount (`sensors.cameras`,
+// base frame, x forward, z up, rpy; e.g. skid4's "front" 0.41 m ahead, 10°
+// down), or without a robot file 0.30 m ahead and 0.50 m above the base,
+// 10° down; placed from RobotState's base pose.
+function onboardMount() {
+  const c = state.world.robot && state.world.robot.cameras && state.world.robot.cameras[0];
+  return c ? { name: c.name, position: c.position, rpy: c.rpy } : { name: 'onboard', position: [0.30, 0, 0.50], rpy: [0, 10 * Math.PI / 180, 0] };
+}
 
 function render3d() {
   if (!view.renderer || !state.world) return;
@@ -175,10 +179,12 @@ function render3d() {
   view.renderer.setViewport(0, 0, w, h); view.renderer.setScissor(0, 0, w, h);
   view.renderer.render(view.scene, view.chase);
   if (r) {
-    const cam = new THREE.Vector3(ONBOARD.ahead_m, 0, ONBOARD.up_m).applyQuaternion(robotMesh(state.selected).quaternion).add(pos);
+    const m = onboardMount(), q = robotMesh(state.selected).quaternion;
+    const cam = new THREE.Vector3(...m.position).applyQuaternion(q).add(pos);
     view.onboard.position.copy(cam);
-    const dir = new THREE.Vector3(Math.cos(ONBOARD.pitch_rad), 0, -Math.sin(ONBOARD.pitch_rad))
-      .applyQuaternion(robotMesh(state.selected).quaternion);
+    // The mount's x axis, R = Rz(yaw) Ry(pitch) Rx(roll), in the world.
+    const [, p, y] = m.rpy;
+    const dir = new THREE.Vector3(Math.cos(p) * Math.cos(y), Math.cos(p) * Math.sin(y), -Math.sin(p)).applyQuaternion(q);
     view.onboard.lookAt(cam.clone().add(dir));
     const iw = Math.round(w * 0.33), ih = Math.round(iw * 3 / 4);
     view.renderer.setViewport(w - iw - 4, 4, iw, ih); view.renderer.setScissor(w - iw - 4, 4, iw, ih);
