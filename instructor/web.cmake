@@ -3,7 +3,9 @@
 # packages at set-up into instructor/web/dist, see run.sh).
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(RISE_HTTPLIB REQUIRED IMPORTED_TARGET GLOBAL cpp-httplib)
-find_package(jsoncpp REQUIRED)
+if(NOT TARGET JsonCpp::JsonCpp)
+  find_package(jsoncpp REQUIRED)
+endif()
 add_library(rise_instructor_web web_server.cpp virtual_panel.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)

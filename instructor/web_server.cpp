@@ -555,7 +555,7 @@ struct WebServer::Impl {
     rise_msgs::FaultCommand c{};
     c.utime = 0;
     c.nonce = 0;
-    c.issuer = "instructor";
+    c.issuer = settings.issuer;
     c.trainee_id = id;
     c.action = action;
     const std::string name = (*body).get("fault", "").asString();

@@ -28,6 +28,7 @@ struct WebServerSettings {
   uint32_t virtual_timeout_ms = 200;  ///< a virtual panel without an update for this long fails safe
   double push_hz = 50.0;            ///< SSE push rate (≥ 20)
   std::string instructor_key_file;  ///< "" → fault buttons answer 503 (panels/command_auth.hpp)
+  std::string issuer = "instructor";  ///< FaultCommand.issuer
 };
 
 /// One fault button of the console: a FaultCommand's fields (hil/input_fault.hpp,

@@ -128,6 +128,7 @@ IoStatus FaultyCanBus::receive(CanFrame& frame, int timeout_ms) {
     if (st != IoStatus::Ok && st != IoStatus::Timeout) return st;
     now = wire_clock_us();
     if (st == IoStatus::Ok) {
+      // A lost or held frame: look again at once, the bus may hold more.
       std::lock_guard lock(mutex_);
       const uint64_t n = frames_++;
       if (bus_off_) {
@@ -149,6 +150,7 @@ IoStatus FaultyCanBus::receive(CanFrame& frame, int timeout_ms) {
           held_.emplace_back(now, f);  // keep the order behind frames still held
         }
       }
+      continue;
     }
     if (now >= deadline_us) {
       std::lock_guard lock(mutex_);

@@ -1,19 +1,25 @@
-// rise-instructor: the instructor station's tools.
+// rise-instructor: the instructor station. Lists trainees, injects and
+// clears faults, runs fault scenarios and starts/stops tasks over signed
+// LCM commands (panels/command_auth.hpp), prints the trainer's reports.
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "instructor/app/instructor_commands.hpp"
 #include "instructor/app/serve_command.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"rise-instructor: the instructor station"};
+  CLI::App app{"rise-instructor: the instructor station (signed fault and training commands over LCM)"};
   app.require_subcommand(1);
+  rise::instructor::add_common_options(app);
+  rise::instructor::add_keygen_command(app);
+  rise::instructor::add_list_command(app);
+  rise::instructor::add_inject_command(app);
+  rise::instructor::add_clear_command(app);
+  rise::instructor::add_scenario_command(app);
+  rise::instructor::add_task_command(app);
+  rise::instructor::add_report_command(app);
   rise::instructor::add_serve_command(app);
-  try {
-    CLI11_PARSE(app, argc, argv);
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  }
+  CLI11_PARSE(app, argc, argv);
   return 0;
 }

@@ -8,6 +8,7 @@
 #include <semaphore>
 #include <sstream>
 
+#include "instructor/app/instructor_commands.hpp"
 #include "instructor/web_server.hpp"
 #include "panels/command_auth.hpp"
 #include "panels/data_path.hpp"
@@ -21,13 +22,11 @@ struct ServeOptions {
   std::string token_file;
   std::string world;
   std::string robot = "sim/robots/skid4.yaml";
-  std::string lcm = "udpm://239.255.76.67:7667?ttl=0";
   std::string reports_dir;
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
   double push_hz = 50.0;
-  std::string instructor_key;
 };
 
 std::binary_semaphore g_stop{0};
@@ -58,12 +57,15 @@ int serve(const ServeOptions& o) {
   s.web_dir = o.web_dir.empty() ? std::string(RISE_WEB_DIST_DIR) : o.web_dir;
   s.world_file = o.world.empty() ? "" : panels::find_data_file(o.world);
   s.robot_file = o.robot.empty() ? "" : panels::find_data_file(o.robot);
-  s.lcm_url = o.lcm;
+  // --lcm, --instructor-key, --issuer: rise-instructor's common options.
+  const CommonOptions& common = common_options();
+  s.lcm_url = common.lcm_url;
+  s.issuer = common.issuer;
   s.reports_dir = o.reports_dir;
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
-  s.instructor_key_file = panels::instructor_key_path(o.instructor_key);
+  s.instructor_key_file = panels::instructor_key_path(common.key_file);
   if (s.instructor_key_file.empty()) spdlog::warn("no instructor key: the fault buttons are off (--instructor-key FILE)");
 
   WebServer server(s);
@@ -91,16 +93,23 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--world", o->world, "world file the map and 3D view draw (default: the built-in yard)");
   cmd->add_option("--robot", o->robot, "robot file the 3D view takes the chassis and the onboard camera from (\"\": none)")
       ->capture_default_str();
-  cmd->add_option("--lcm", o->lcm, "LCM URL")->capture_default_str();
   cmd->add_option("--reports-dir", o->reports_dir, "training reports to list and serve (rise-trainer --out)");
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")
       ->capture_default_str();
   cmd->add_option("--push-hz", o->push_hz, "SSE push rate (>= 20)")->capture_default_str();
-  cmd->add_option("--instructor-key", o->instructor_key,
-                  "key file that signs FaultCommands (default: env RISE_INSTRUCTOR_KEY)");
-  cmd->callback([o] { std::exit(serve(*o)); });
+  cmd->callback([o] {
+    spdlog::set_level(spdlog::level::from_str(common_options().log_level));
+    int code = 0;
+    try {
+      code = serve(*o);
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      code = 2;
+    }
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
 }
 
 }  // namespace rise::instructor

@@ -155,7 +155,7 @@ TaskDescription parse_task_description(const std::string& text, const std::strin
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with task:, robot:, world:, events:");
   r.only_keys(root, "",
               {"task", "title", "robot", "world", "panel", "console_script", "start", "time_limit_s", "events",
-               "regions", "end_on", "success"});
+               "regions", "end_on", "success", "scenario"});
   TaskDescription t;
   t.file = file;
   for (const char* key : {"task", "robot", "world"})
@@ -167,6 +167,7 @@ TaskDescription parse_task_description(const std::string& text, const std::strin
   if (root["panel"]) t.panel_file = resolve(file, r.as<std::string>(root["panel"], "panel"));
   if (root["console_script"])
     t.console_script = resolve(file, r.as<std::string>(root["console_script"], "console_script"));
+  if (root["scenario"]) t.scenario_file = resolve(file, r.as<std::string>(root["scenario"], "scenario"));
   if (const YAML::Node s = root["start"]) {
     r.only_keys(s, "start", {"xy_m", "yaw_deg"});
     RobotStart start;

@@ -59,6 +59,7 @@ struct TaskDescription {
   std::string world_file;
   std::string panel_file;    ///< the console's panel definition ("" = none named)
   std::string console_script;  ///< a scripted console timeline for demos ("" = none)
+  std::string scenario_file;   ///< a fault scenario for the instructor (rise-instructor scenario --task; "" = none)
   std::optional<RobotStart> start;  ///< default: the world's robot_start
   double time_limit_s = 300;
   std::vector<TaskEventSpec> events;

@@ -1,0 +1,38 @@
+#include "instructor/trainee_directory.hpp"
+
+namespace rise::instructor {
+
+std::optional<std::pair<std::string, std::string>> TraineeDirectory::split_channel(const std::string& channel) {
+  if (channel.rfind("rise/", 0) != 0) return std::nullopt;
+  const auto slash = channel.find('/', 5);
+  if (slash == std::string::npos || slash == 5) return std::nullopt;
+  const std::string what = channel.substr(slash + 1);
+  if (what.empty() || what.find('/') != std::string::npos) return std::nullopt;
+  return std::make_pair(channel.substr(5, slash - 5), what);
+}
+
+bool TraineeDirectory::on_message(const std::string& channel, const void* data, int size, int64_t now_us) {
+  const auto parts = split_channel(channel);
+  if (!parts) return false;
+  const auto& [id, what] = *parts;
+  const auto take = [&](auto slot, auto message) {
+    if (message.decode(data, 0, size) < 0) return false;
+    TraineeRow& row = rows_[id];
+    row.id = id;
+    row.last_seen_us = now_us;
+    slot(row) = std::move(message);
+    return true;
+  };
+  if (what == "panel_state") return take([](TraineeRow& r) -> auto& { return r.panel; }, rise_msgs::PanelState{});
+  if (what == "robot_state") return take([](TraineeRow& r) -> auto& { return r.robot; }, rise_msgs::RobotState{});
+  if (what == "task_status") return take([](TraineeRow& r) -> auto& { return r.task; }, rise_msgs::TaskStatus{});
+  return false;
+}
+
+std::vector<TraineeRow> TraineeDirectory::rows() const {
+  std::vector<TraineeRow> out;
+  for (const auto& [id, row] : rows_) out.push_back(row);
+  return out;
+}
+
+}  // namespace rise::instructor

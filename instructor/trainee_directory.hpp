@@ -1,0 +1,42 @@
+#pragma once
+
+// Who is training: every trainee station seen on rise/<id>/panel_state,
+// robot_state and task_status, with what the instructor wants at a glance.
+// Fed by rise-instructor list (and the web console) from LCM; pure.
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rise_msgs/PanelState.hpp"
+#include "rise_msgs/RobotState.hpp"
+#include "rise_msgs/TaskStatus.hpp"
+
+namespace rise::instructor {
+
+struct TraineeRow {
+  std::string id;
+  int64_t last_seen_us = 0;  ///< wall clock of the newest message
+  std::optional<rise_msgs::PanelState> panel;
+  std::optional<rise_msgs::RobotState> robot;
+  std::optional<rise_msgs::TaskStatus> task;
+};
+
+class TraineeDirectory {
+ public:
+  /// Takes one message from `channel` (rise/<id>/<what>); false for a
+  /// channel that is not a trainee's panel_state/robot_state/task_status.
+  /// The channel's id names the trainee, whatever the message claims.
+  bool on_message(const std::string& channel, const void* data, int size, int64_t now_us);
+  std::vector<TraineeRow> rows() const;
+
+  /// The trainee id of rise/<id>/<what>, with `what`; nullopt otherwise.
+  static std::optional<std::pair<std::string, std::string>> split_channel(const std::string& channel);
+
+ private:
+  std::map<std::string, TraineeRow> rows_;
+};
+
+}  // namespace rise::instructor
