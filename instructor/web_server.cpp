@@ -16,13 +16,17 @@
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
+#include <functional>
+#include <future>
 #include <map>
 #include <mutex>
 #include <regex>
 #include <stdexcept>
 #include <thread>
 
+#include "app/child_process.hpp"
 #include "hil/panel_state_message.hpp"
+#include "instructor/scenario.hpp"
 #include "instructor/virtual_panel.hpp"
 #include "panels/command_auth.hpp"
 #include "panels/panel_definition.hpp"
@@ -351,6 +355,47 @@ struct WebServer::Impl {
   int64_t sim_control_seq = 0;
   std::optional<panels::InstructorKey> key;
 
+  // Running scenarios by trainee id.
+  struct ScenarioRun {
+    std::string name;
+    std::string file;
+    uint64_t seed = 0;
+    std::unique_ptr<app::ChildProcess> process;
+  };
+  std::mutex scenario_mutex;
+  std::map<std::string, ScenarioRun> scenarios;
+  // Children are started from this one long-lived thread: a child dies with
+  // the thread that forked it (PR_SET_PDEATHSIG), and request threads come and go.
+  std::thread launcher_thread;
+  std::mutex launcher_mutex;
+  std::condition_variable launcher_cv;
+  std::deque<std::packaged_task<void()>> launcher_tasks;
+
+  void launcher_loop() {
+    for (;;) {
+      std::packaged_task<void()> task;
+      {
+        std::unique_lock lock(launcher_mutex);
+        launcher_cv.wait(lock, [&] { return !launcher_tasks.empty() || !running; });
+        if (launcher_tasks.empty()) return;
+        task = std::move(launcher_tasks.front());
+        launcher_tasks.pop_front();
+      }
+      task();
+    }
+  }
+  /// Runs `f` on the launcher thread and waits for it; rethrows what it threw.
+  void on_launcher(std::function<void()> f) {
+    std::packaged_task<void()> task(std::move(f));
+    auto done = task.get_future();
+    {
+      std::lock_guard lock(launcher_mutex);
+      launcher_tasks.push_back(std::move(task));
+    }
+    launcher_cv.notify_one();
+    done.get();
+  }
+
   explicit Impl(WebServerSettings s) : settings(std::move(s)), lcm(settings.lcm_url) {
     if (settings.token.empty()) throw std::runtime_error("a token is required (--token or --token-file)");
     if (!lcm.good()) throw std::runtime_error("cannot open LCM at " + settings.lcm_url);
@@ -593,6 +638,107 @@ struct WebServer::Impl {
     reply_json(res, v);
   }
 
+  // The scenario files offered: name (the file's `scenario:`), file, faults,
+  // and which trainees run one now.
+  Json::Value scenarios_json() {
+    Json::Value v;
+    v["enabled"] = !settings.scenario_program.empty() && key.has_value();
+    Json::Value files(Json::arrayValue);
+    if (!settings.scenarios_dir.empty() && fs::is_directory(settings.scenarios_dir)) {
+      std::vector<fs::path> paths;
+      for (const auto& e : fs::directory_iterator(settings.scenarios_dir))
+        if (e.is_regular_file() && e.path().extension() == ".yaml") paths.push_back(e.path());
+      std::sort(paths.begin(), paths.end());
+      for (const auto& p : paths) {
+        Json::Value f;
+        f["file"] = p.filename().string();
+        try {
+          const Scenario s = load_scenario(p.string());
+          f["name"] = s.name;
+          f["faults"] = static_cast<Json::UInt64>(s.faults.size());
+          f["seed"] = static_cast<Json::UInt64>(s.seed);
+        } catch (const std::exception& e) {
+          f["error"] = e.what();
+        }
+        files.append(f);
+      }
+    }
+    v["files"] = files;
+    Json::Value running(Json::objectValue);
+    std::lock_guard lock(scenario_mutex);
+    for (auto& [id, run] : scenarios) {
+      if (!run.process->running()) continue;
+      Json::Value r;
+      r["file"] = run.file;
+      r["seed"] = static_cast<Json::UInt64>(run.seed);
+      r["pid"] = run.process->pid();
+      running[id] = r;
+    }
+    v["running"] = running;
+    return v;
+  }
+
+  void handle_scenario(const httplib::Request& req, httplib::Response& res, bool start) {
+    if (settings.scenario_program.empty() || settings.scenarios_dir.empty())
+      return reply_error(res, 503, "scenario control is off (rise-instructor serve --scenarios-dir DIR)");
+    if (!key) return reply_error(res, 503, "no instructor key (rise-instructor serve --instructor-key FILE)");
+    std::string error;
+    const auto body = parse_body(req, &error);
+    if (!body || !body->isObject()) return reply_error(res, 400, error.empty() ? "body: not a JSON object" : error);
+    const std::string id = body->get("trainee", "").asString();
+    if (!valid_id(id)) return reply_error(res, 400, "trainee '" + id + "': letters, digits, _ . - only");
+    std::lock_guard lock(scenario_mutex);
+    auto it = scenarios.find(id);
+    if (it != scenarios.end()) {
+      // Stopping (or replacing) a run: SIGINT, so it clears its auto_clear faults.
+      if (it->second.process->running()) it->second.process->stop(5000);
+      scenarios.erase(it);
+    }
+    Json::Value v;
+    v["trainee"] = id;
+    if (!start) {
+      v["stopped"] = true;
+      return reply_json(res, v);
+    }
+    const std::string file = body->get("file", "").asString();
+    const fs::path path = fs::path(settings.scenarios_dir) / file;
+    if (file.empty() || file.find('/') != std::string::npos || path.extension() != ".yaml" || !fs::is_regular_file(path))
+      return reply_error(res, 400, "scenario file '" + file + "': not a .yaml file in " + settings.scenarios_dir);
+    ScenarioRun run;
+    run.file = file;
+    try {
+      const Scenario s = load_scenario(path.string());
+      run.name = s.name;
+      run.seed = body->isMember("seed") ? body->get("seed", 0).asUInt64() : s.seed;
+    } catch (const std::exception& e) {
+      return reply_error(res, 400, e.what());
+    }
+    std::vector<std::string> argv{settings.scenario_program,
+                                  "scenario",
+                                  path.string(),
+                                  "--trainee",
+                                  id,
+                                  "--seed",
+                                  std::to_string(run.seed),
+                                  "--lcm",
+                                  settings.lcm_url,
+                                  "--instructor-key",
+                                  settings.instructor_key_file,
+                                  "--issuer",
+                                  settings.issuer};
+    try {
+      on_launcher([&] { run.process = std::make_unique<app::ChildProcess>(argv, ""); });
+    } catch (const std::exception& e) {
+      return reply_error(res, 500, e.what());
+    }
+    v["file"] = file;
+    v["name"] = run.name;
+    v["seed"] = static_cast<Json::UInt64>(run.seed);
+    v["pid"] = run.process->pid();
+    scenarios[id] = std::move(run);
+    reply_json(res, v);
+  }
+
   // One SSE stream: the channels that changed since the client's last push,
   // and the new events, at most push_hz times a second, at least every second.
   void handle_stream(const httplib::Request&, httplib::Response& res) {
@@ -703,6 +849,13 @@ struct WebServer::Impl {
     http.Post("/api/fault/clear", [this](const httplib::Request& req, httplib::Response& res) {
       handle_fault(req, res, "clear");
     });
+    http.Get("/api/scenarios", [this](const httplib::Request&, httplib::Response& res) { reply_json(res, scenarios_json()); });
+    http.Post("/api/scenario/start", [this](const httplib::Request& req, httplib::Response& res) {
+      handle_scenario(req, res, true);
+    });
+    http.Post("/api/scenario/stop", [this](const httplib::Request& req, httplib::Response& res) {
+      handle_scenario(req, res, false);
+    });
     http.Post(R"(/api/sim/([^/]+)/(pause|resume|step|reset))",
               [this](const httplib::Request& req, httplib::Response& res) { handle_sim_control(req, res); });
   }
@@ -731,6 +884,7 @@ void WebServer::start() {
   d.running = true;
   d.lcm_thread = std::thread([&d] { d.lcm_loop(); });
   d.virtual_thread = std::thread([&d] { d.virtual_loop(); });
+  d.launcher_thread = std::thread([&d] { d.launcher_loop(); });
   d.http_thread = std::thread([&d] { d.http.listen_after_bind(); });
 }
 
@@ -738,8 +892,15 @@ void WebServer::stop() {
   Impl& d = *impl_;
   if (!d.running.exchange(false)) return;
   d.changed.notify_all();
+  d.launcher_cv.notify_all();
   d.http.stop();
-  for (auto* t : {&d.http_thread, &d.lcm_thread, &d.virtual_thread})
+  {
+    std::lock_guard lock(d.scenario_mutex);
+    for (auto& [id, run] : d.scenarios)
+      if (run.process->running()) run.process->stop(5000);
+    d.scenarios.clear();
+  }
+  for (auto* t : {&d.http_thread, &d.lcm_thread, &d.virtual_thread, &d.launcher_thread})
     if (t->joinable()) t->join();
 }
 

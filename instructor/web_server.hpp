@@ -29,6 +29,11 @@ struct WebServerSettings {
   double push_hz = 50.0;            ///< SSE push rate (≥ 20)
   std::string instructor_key_file;  ///< "" → fault buttons answer 503 (panels/command_auth.hpp)
   std::string issuer = "instructor";  ///< FaultCommand.issuer
+  /// Scenario control: the *.yaml scenario files offered (instructor/scenario.hpp)
+  /// and the program that runs one (`rise-instructor scenario FILE --trainee ID`,
+  /// started per trainee, stopped with SIGINT so it clears its auto_clear faults).
+  std::string scenarios_dir;        ///< "" → no scenarios
+  std::string scenario_program;     ///< "" → scenario control off
 };
 
 /// One fault button of the console: a FaultCommand's fields (hil/input_fault.hpp,

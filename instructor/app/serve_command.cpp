@@ -8,6 +8,7 @@
 #include <semaphore>
 #include <sstream>
 
+#include "app/child_process.hpp"
 #include "instructor/app/instructor_commands.hpp"
 #include "instructor/web_server.hpp"
 #include "panels/command_auth.hpp"
@@ -23,6 +24,7 @@ struct ServeOptions {
   std::string world;
   std::string robot = "sim/robots/skid4.yaml";
   std::string reports_dir;
+  std::string scenarios_dir = "instructor/scenarios";
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
@@ -62,6 +64,8 @@ int serve(const ServeOptions& o) {
   s.lcm_url = common.lcm_url;
   s.issuer = common.issuer;
   s.reports_dir = o.reports_dir;
+  s.scenarios_dir = o.scenarios_dir.empty() ? "" : panels::find_data_file(o.scenarios_dir);
+  s.scenario_program = app::executable_dir() + "/rise-instructor";
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
@@ -94,6 +98,8 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--robot", o->robot, "robot file the 3D view takes the chassis and the onboard camera from (\"\": none)")
       ->capture_default_str();
   cmd->add_option("--reports-dir", o->reports_dir, "training reports to list and serve (rise-trainer --out)");
+  cmd->add_option("--scenarios-dir", o->scenarios_dir, "the scenario files the console offers (\"\": none)")
+      ->capture_default_str();
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")

@@ -38,6 +38,12 @@ struct ServerFixture {
     settings.reports_dir = (dir / "reports").string();
     settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
     settings.instructor_key_file = (dir / "instructor.key").string();
+    fs::create_directories(dir / "scenarios");
+    std::ofstream(dir / "scenarios" / "stuck.yaml")
+        << "scenario: stuck-stick\nseed: 3\nfaults:\n  - {id: stuck, kind: stuck_at, target: drive_y, value: 0.4, at: 0.0, duration: 60}\n";
+    std::ofstream(dir / "scenarios" / "broken.yaml") << "scenario: broken\nfaults:\n  - {id: x, kind: stuck_at, at: nope}\n";
+    settings.scenarios_dir = (dir / "scenarios").string();
+    settings.scenario_program = std::string(RISE_BINARY_DIR) + "/bin/rise-instructor";
   }
   ~ServerFixture() { fs::remove_all(dir); }
   httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
@@ -236,6 +242,46 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
       REQUIRE(peer.wait_until([&] { return !peer.panels.empty() && !peer.panels.back().sources[0].connected; }, 5000));
       CHECK(peer.panels.back().failsafe);
     }
+  }
+  server.stop();
+}
+
+TEST_CASE("scenario control runs a scenario file against a trainee and stops it", "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  TraineePeer peer(f.id);
+  httplib::Client http("127.0.0.1", server.port());
+  const auto list = parse_json(http.Get("/api/scenarios", f.auth())->body);
+  CHECK(list["enabled"].asBool());
+  REQUIRE(list["files"].size() == 2);
+  CHECK(list["files"][0]["file"].asString() == "broken.yaml");
+  CHECK(list["files"][0]["error"].asString().find("broken.yaml:") != std::string::npos);
+  CHECK(list["files"][1]["name"].asString() == "stuck-stick");
+  SECTION("a bad file is refused") {
+    CHECK(http.Post("/api/scenario/start", f.auth(), R"({"trainee":")" + f.id + R"(","file":"broken.yaml"})",
+                    "application/json")->status == 400);
+    CHECK(http.Post("/api/scenario/start", f.auth(), R"({"trainee":")" + f.id + R"(","file":"../x.yaml"})",
+                    "application/json")->status == 400);
+  }
+  SECTION("start: its fault is injected, signed; stop: its auto_clear fault is cleared") {
+    auto r = http.Post("/api/scenario/start", f.auth(), R"({"trainee":")" + f.id + R"(","file":"stuck.yaml","seed":11})",
+                       "application/json");
+    REQUIRE(r->status == 200);
+    CHECK(parse_json(r->body)["seed"].asUInt64() == 11);
+    REQUIRE(peer.wait_until([&] { return !peer.faults.empty(); }, 10000));
+    CHECK(peer.faults[0].action == "inject");
+    CHECK(peer.faults[0].fault_id == "stuck");
+    CHECK(peer.faults[0].kind == "stuck_at");
+    rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key(f.settings.instructor_key_file));
+    CHECK(verifier.check(peer.faults[0], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+    CHECK(parse_json(http.Get("/api/scenarios", f.auth())->body)["running"].isMember(f.id));
+    REQUIRE(http.Post("/api/scenario/stop", f.auth(), R"({"trainee":")" + f.id + R"("})", "application/json")->status ==
+            200);
+    REQUIRE(peer.wait_until([&] { return peer.faults.size() >= 2; }, 10000));
+    CHECK(peer.faults.back().action == "clear");
+    CHECK(peer.faults.back().fault_id == "stuck");
+    CHECK_FALSE(parse_json(http.Get("/api/scenarios", f.auth())->body)["running"].isMember(f.id));
   }
   server.stop();
 }

@@ -256,12 +256,40 @@ async function setupFaults() {
     out.textContent = 'clear: ' + (r.ok ? 'published' : 'HTTP ' + r.status);
   } }, 'clear all faults'));
   const sc = document.getElementById('scenario');
+  await setupScenarios(sc, out);
   for (const cmd of ['pause', 'resume', 'step', 'reset']) {
     sc.append(el('button', { 'data-sim': cmd, onclick: async () => {
       const r = await api('/api/sim/' + encodeURIComponent(state.selected) + '/' + cmd, { method: 'POST' });
       out.textContent = 'sim ' + cmd + ': ' + (r.ok ? 'published' : 'HTTP ' + r.status);
     } }, 'sim ' + cmd));
   }
+}
+
+// Scenario files (rise-instructor serve --scenarios-dir): start one against
+// the selected trainee (run by `rise-instructor scenario`), stop it.
+async function setupScenarios(box, out) {
+  let info;
+  try { info = await getJson('/api/scenarios'); } catch (e) { box.append(el('div', {}, 'scenarios: ' + e.message)); return; }
+  const pick = el('select', { id: 'scenario-file' }, ...info.files.map((f) =>
+    el('option', { value: f.file }, f.error ? f.file + ' (' + f.error + ')' : f.name + ' — ' + f.faults + ' faults, seed ' + f.seed)));
+  const seed = el('input', { id: 'scenario-seed', type: 'number', placeholder: 'seed', style: 'width:6em' });
+  const status = el('span', { id: 'scenario-status' });
+  const refresh = async () => {
+    const s = await getJson('/api/scenarios');
+    status.textContent = Object.entries(s.running).map(([id, r]) => id + ': ' + r.file + ' (seed ' + r.seed + ')').join(', ') || 'no scenario running';
+  };
+  const post = async (what) => {
+    const body = { trainee: state.selected, file: pick.value };
+    if (seed.value !== '') body.seed = parseInt(seed.value, 10);
+    const r = await postJson('/api/scenario/' + what, body);
+    out.textContent = 'scenario ' + what + ': ' + (r.ok ? 'ok' : 'HTTP ' + r.status + ' ' + await r.text());
+    refresh();
+  };
+  box.append(el('div', {}, 'scenario ', pick, seed,
+    el('button', { id: 'scenario-start', onclick: () => post('start') }, 'start'),
+    el('button', { id: 'scenario-stop', onclick: () => post('stop') }, 'stop'), ' ', status));
+  if (!info.enabled) status.textContent = 'scenario control off (--scenarios-dir, --instructor-key)';
+  else refresh();
 }
 
 async function loadReports() {
