@@ -65,6 +65,9 @@ struct Stations {
     dir = ::mkdtemp(tmpl);
     rise::panels::write_new_instructor_key((dir / "instructor.key").string());
     const std::string key = (dir / "instructor.key").string();
+    fs::create_directories(dir / "scenarios");
+    std::ofstream(dir / "scenarios" / "stuck.yaml")
+        << "scenario: stuck\nfaults:\n  - {id: s, kind: stuck_at, target: drive_y, value: 0.4, at: 1.0}\n";
     sim = ChildProcess({kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100", "--instructor-key", key},
                        (dir / "sim.log").string());
     if (emulated) {
@@ -81,7 +84,8 @@ struct Stations {
     }
     server = ChildProcess({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token",
                            token, "--lcm", kLcm, "--world", kSource + "/sim/worlds/yard.yaml", "--instructor-key",
-                           (dir / "instructor.key").string(), "--reports-dir", dir.string()},
+                           (dir / "instructor.key").string(), "--reports-dir", dir.string(), "--scenarios-dir",
+                           (dir / "scenarios").string()},
                           (dir / "server.log").string());
   }
   ~Stations() {
@@ -157,6 +161,7 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   CHECK(is_png(st.out_dir() + "/instructor_console.png"));
   CHECK(is_png(st.out_dir() + "/instructor_view3d.png"));
   CHECK(result["page_errors"].size() == 0);
+  CHECK(result["scenario_options"].asInt() == 1);
   // The click published one signed FaultCommand for this trainee.
   CHECK(result["fault_result"].asString().find("published") != std::string::npos);
   REQUIRE(peer.wait_until([&] { return !peer.faults.empty(); }, 5000));

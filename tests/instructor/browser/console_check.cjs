@@ -39,6 +39,8 @@ run(async () => {
     result.stats = await page.evaluate(() => window.riseConsole.stats());
     await page.locator('#view3d').screenshot({ path: path.join(outDir, 'instructor_view3d.png') });
     await page.screenshot({ path: path.join(outDir, 'instructor_console.png') });
+    await page.waitForFunction(() => /no scenario running/.test(document.getElementById('scenario-status').textContent), null, { timeout: 10000 });
+    result.scenario_options = await page.locator('#scenario-file option').count();
     result.trainee_rows = await page.locator('#panels tr[data-trainee]').count();
     result.source_text = await page.textContent('#panels');
     await page.click('button[data-fault="stick-stuck"]');
