@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "hil/input_fault.hpp"
 #include "hil/panel_state_message.hpp"
 
 namespace rise::instructor {
@@ -98,9 +99,43 @@ std::optional<std::string> VirtualPanel::update(const VirtualControls& controls,
 
 void VirtualPanel::disconnect(int64_t now_us) { mapper_.on_connection(0, false, now_us); }
 
+std::string VirtualPanel::apply(const rise_msgs::FaultCommand& command, int64_t now_us) {
+  if (command.action == "clear") {
+    mapper_.clear_input_faults(command.fault_id, now_us);
+    return "";
+  }
+  if (command.action != "inject") return "action '" + command.action + "': not inject or clear";
+  const auto kind = hil::parse_input_fault_kind(command.kind);
+  if (!kind) return "'" + command.kind + "' is not an input fault (a virtual panel has no wire)";
+  if (command.fault_id.empty()) return "a fault needs an id";
+  const auto& d = mapper_.definition();
+  const auto control = d.find_control(command.target);
+  if (!control) return "no control '" + command.target + "' in panel '" + d.name + "'";
+  hil::InputFault f;
+  f.id = command.fault_id;
+  f.kind = *kind;
+  f.control = *control;
+  f.value = command.value;
+  f.rate = command.rate;
+  f.seed = static_cast<uint64_t>(command.seed);
+  f.start_us = now_us;
+  f.end_us = command.duration_s > 0.0 ? now_us + static_cast<int64_t>(command.duration_s * 1e6) : 0;
+  return mapper_.inject_input_fault(std::move(f));
+}
+
+void VirtualPanel::note_rejected(const std::string& why, int64_t now_us) {
+  rejected_note_ = "rejected: " + why;
+  rejected_until_us_ = now_us + 10'000'000;
+}
+
 rise_msgs::PanelState VirtualPanel::state(const std::string& trainee_id, int64_t now_us, int64_t utime) {
   const hil::PanelSnapshot snapshot = mapper_.evaluate(now_us);
-  return hil::to_message(mapper_.definition(), snapshot, trainee_id, ++seq_, utime, {url_});
+  auto m = hil::to_message(mapper_.definition(), snapshot, trainee_id, ++seq_, utime, {url_});
+  if (now_us < rejected_until_us_) {
+    m.active_faults.push_back(rejected_note_);
+    m.num_faults = static_cast<int16_t>(m.active_faults.size());
+  }
+  return m;
 }
 
 }  // namespace rise::instructor

@@ -12,6 +12,7 @@
 
 #include "hil/panel_mapper.hpp"
 #include "panels/panel_definition.hpp"
+#include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 
 namespace rise::instructor {
@@ -44,6 +45,16 @@ class VirtualPanel {
   /// disconnected, so the next PanelState is the safe state.
   void disconnect(int64_t now_us);
 
+  /// Applies a FaultCommand that passed its signature check: an input fault
+  /// (stuck_at, offset, drift, noise, out_of_range, intermittent, disconnect
+  /// on a control; hil/input_fault.hpp) is injected into the mapper for its
+  /// duration, as rise-hild does; a clear removes it ("" = every one).
+  /// Returns "" or why it was not taken (another layer's kind: a virtual
+  /// panel has no wire; an unknown control).
+  std::string apply(const rise_msgs::FaultCommand& command, int64_t now_us);
+  /// A rejected command is reported in active_faults ("rejected: <why>") for 10 s.
+  void note_rejected(const std::string& why, int64_t now_us);
+
   /// The PanelState to publish at now_us (`utime` wall clock), after the
   /// safety rules; seq counts up by one per call.
   rise_msgs::PanelState state(const std::string& trainee_id, int64_t now_us, int64_t utime);
@@ -57,6 +68,8 @@ class VirtualPanel {
   int64_t seq_ = 0;
   int64_t last_update_us_ = 0;
   uint16_t alive_ = 0;
+  std::string rejected_note_;
+  int64_t rejected_until_us_ = 0;
 };
 
 /// The definition a virtual panel uses: `definition` with its one source

@@ -354,6 +354,9 @@ struct WebServer::Impl {
   std::map<std::string, std::unique_ptr<VirtualPanel>> virtual_panels;
   int64_t sim_control_seq = 0;
   std::optional<panels::InstructorKey> key;
+  // Checks the fault commands meant for this server's virtual panels (they
+  // come back over LCM like any receiver's; the LCM thread owns it).
+  std::unique_ptr<panels::CommandVerifier> verifier;
 
   // Running scenarios by trainee id.
   struct ScenarioRun {
@@ -408,7 +411,10 @@ struct WebServer::Impl {
     panel = panels::load_panel_definition(settings.panel_file);
     (void)virtual_definition(panel, settings.virtual_timeout_ms);  // fails here, not on the first page
     if (settings.push_hz < 20.0) throw std::runtime_error("push_hz must be at least 20");
-    if (!settings.instructor_key_file.empty()) key = panels::load_instructor_key(settings.instructor_key_file);
+    if (!settings.instructor_key_file.empty()) {
+      key = panels::load_instructor_key(settings.instructor_key_file);
+      verifier = std::make_unique<panels::CommandVerifier>(*key);
+    }
   }
 
   void store(const std::string& channel, const std::string& trainee, const std::string& kind, Json::Value value,
@@ -435,7 +441,9 @@ struct WebServer::Impl {
     std::smatch m;
     if (!std::regex_match(channel, m, re)) return;
     const std::string trainee = m[1], kind = m[2];
-    if (kind == "panel_state") {
+    if (kind == "fault_command") {
+      if (auto c = decode<rise_msgs::FaultCommand>(rbuf)) on_fault_command(trainee, *c);
+    } else if (kind == "panel_state") {
       if (auto s = decode<rise_msgs::PanelState>(rbuf)) store(channel, trainee, kind, panel_json(*s), false);
     } else if (kind == "robot_state") {
       if (auto s = decode<rise_msgs::RobotState>(rbuf)) store(channel, trainee, kind, robot_json(*s), false);
@@ -446,6 +454,22 @@ struct WebServer::Impl {
     } else if (kind == "task_event") {
       if (auto s = decode<rise_msgs::TaskEvent>(rbuf)) store(channel, trainee, kind, task_event_json(*s), true);
     }
+  }
+
+  // A virtual panel is a receiver like rise-hild: it takes signed input
+  // faults and reports the rest; commands for other trainees are not ours.
+  void on_fault_command(const std::string& trainee, const rise_msgs::FaultCommand& c) {
+    std::lock_guard lock(virtual_mutex);
+    const auto it = virtual_panels.find(trainee);
+    if (it == virtual_panels.end()) return;
+    const int64_t now = monotonic_us();
+    if (c.trainee_id != trainee) return it->second->note_rejected("for trainee '" + c.trainee_id + "'", now);
+    if (!verifier) return it->second->note_rejected("no instructor key on this server", now);
+    const auto verdict = verifier->check(c, panels::wall_clock_us());
+    if (verdict != panels::Verdict::Accepted) return it->second->note_rejected(panels::to_string(verdict), now);
+    // Other layers' faults (physics, sensors) are rise-sim's: not an error here.
+    const std::string why = it->second->apply(c, now);
+    (void)why;
   }
 
   void lcm_loop() {
@@ -868,7 +892,7 @@ WebServer::~WebServer() { stop(); }
 void WebServer::start() {
   Impl& d = *impl_;
   d.routes();
-  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event)",
+  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|fault_command)",
                           +[](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Impl* self) {
                             self->on_message(rbuf, channel);
                           },

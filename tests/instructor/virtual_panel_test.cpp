@@ -156,3 +156,51 @@ TEST_CASE("a virtual panel needs a console definition with one source", "[instru
   d.sources[1].name = "second";
   CHECK_THROWS_WITH(VirtualPanel(d, 200, "x"), Catch::Contains("needs a definition with one source"));
 }
+
+TEST_CASE("a virtual panel takes input faults like rise-hild and clears them", "[instructor]") {
+  VirtualPanel panel(console(), 200, "test");
+  const int64_t t0 = 1'000'000;
+  REQUIRE_FALSE(panel.update(driving(), t0).has_value());
+  rise_msgs::FaultCommand c{};
+  c.action = "inject";
+  c.fault_id = "stuck";
+  c.kind = "stuck_at";
+  c.target = "drive_y";
+  c.value = 0.4;
+  c.duration_s = 0.5;
+  REQUIRE(panel.apply(c, t0) == "");
+  auto m = panel.state("v", t0 + 1'000, 0);
+  CHECK(axis(m, "drive_y") == Approx((0.4 - 0.05) / 0.95).margin(1e-4));
+  REQUIRE(m.active_faults.size() == 1);
+  CHECK(m.active_faults[0] == "stuck: stuck_at drive_y");
+  SECTION("it ends after its duration") {
+    REQUIRE_FALSE(panel.update(driving(), t0 + 150'000).has_value());
+    REQUIRE_FALSE(panel.update(driving(), t0 + 300'000).has_value());
+    REQUIRE_FALSE(panel.update(driving(), t0 + 450'000).has_value());
+    REQUIRE_FALSE(panel.update(driving(), t0 + 600'000).has_value());
+    m = panel.state("v", t0 + 601'000, 0);
+    CHECK(axis(m, "drive_y") == Approx(1.0f).margin(1e-4));
+    CHECK(m.active_faults.empty());
+  }
+  SECTION("a clear removes it") {
+    c.action = "clear";
+    c.fault_id = "";
+    REQUIRE(panel.apply(c, t0 + 2'000) == "");
+    m = panel.state("v", t0 + 3'000, 0);
+    CHECK(axis(m, "drive_y") == Approx(1.0f).margin(1e-4));
+    CHECK(m.active_faults.empty());
+  }
+  SECTION("another layer's fault or an unknown control is not taken") {
+    c.kind = "can_drop";
+    CHECK(panel.apply(c, t0) == "'can_drop' is not an input fault (a virtual panel has no wire)");
+    c.kind = "stuck_at";
+    c.target = "throttle";
+    CHECK(panel.apply(c, t0) == "no control 'throttle' in panel 'rise-console'");
+  }
+  SECTION("a rejected command is reported for 10 s") {
+    panel.note_rejected("unsigned", t0);
+    m = panel.state("v", t0 + 1'000, 0);
+    CHECK(std::find(m.active_faults.begin(), m.active_faults.end(), "rejected: unsigned") != m.active_faults.end());
+    CHECK(panel.state("v", t0 + 10'001'000, 0).active_faults.empty());  // the note and the 0.5 s fault are over
+  }
+}

@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -235,6 +236,25 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
     const auto gap_us = off.utime - peer.panels[last_driving].utime;
     INFO("failsafe " << gap_us / 1000 << " ms after the last driving state");
     CHECK(peer.panels.size() - last_driving > 5);
+    SECTION("a fault button's input fault reaches the virtual panel; an unsigned one is reported") {
+      const auto post = [&] { REQUIRE(http.Post("/api/virtual/" + f.id, f.auth(), body, "application/json")->status == 204); };
+      REQUIRE(http.Post("/api/fault/inject", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"stick-stuck"})",
+                        "application/json")->status == 200);
+      const auto has = [&](const std::string& text) {
+        if (peer.panels.empty()) return false;
+        const auto& a = peer.panels.back().active_faults;
+        return std::any_of(a.begin(), a.end(), [&](const std::string& s) { return s.rfind(text, 0) == 0; });
+      };
+      REQUIRE(peer.wait_until([&] { return has("stick-stuck: stuck_at drive_y") && !peer.panels.back().failsafe; }, 5000, post));
+      CHECK(peer.panels.back().axes[1].value == Approx((0.6 - 0.05) / 0.95).margin(1e-3));
+      rise_msgs::FaultCommand unsigned_command{};
+      unsigned_command.trainee_id = f.id;
+      unsigned_command.action = "clear";
+      unsigned_command.issuer = "trainee";
+      peer.lcm().publish("rise/" + f.id + "/fault_command", &unsigned_command);
+      REQUIRE(peer.wait_until([&] { return has("rejected: unsigned"); }, 5000, post));
+      CHECK(has("rejected: unsigned"));
+    }
     SECTION("the page's goodbye disconnects the source") {
       REQUIRE(http.Post("/api/virtual/" + f.id, f.auth(), body, "application/json")->status == 204);
       REQUIRE(http.Post("/api/virtual/" + f.id + "/close", f.auth(), "", "text/plain")->status == 204);
