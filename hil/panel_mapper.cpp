@@ -621,7 +621,10 @@ std::string PanelMapper::inject_input_fault(InputFault fault) {
   const bool ok = c.kind == ControlKind::Axis ||
                   any || (c.kind == ControlKind::Switch && fault.kind == InputFaultKind::OutOfRange);
   if (!ok) return std::string(to_string(fault.kind)) + " does not apply to " + c.name + " (not an axis)";
-  std::erase_if(input_faults_, [&](const InputFault& f) { return f.id == fault.id; });
+  // The same id replaces; those that ended before this one starts go.
+  std::erase_if(input_faults_, [&](const InputFault& f) {
+    return f.id == fault.id || (f.end_us != 0 && f.end_us <= fault.start_us);
+  });
   input_faults_.push_back(std::move(fault));
   return {};
 }
