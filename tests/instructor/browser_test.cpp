@@ -178,7 +178,7 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   CHECK(result["page_faults"].asString().find("stick-stuck: stuck_at drive_y") != std::string::npos);
 }
 
-TEST_CASE("the virtual panel page drives the robot and closing it stops the robot", "[instructor]") {
+TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, and closing it stops the robot", "[instructor]") {
   if (const auto why = missing_browser(); !why.empty()) {
     WARN("skipped: " << why);
     return;
@@ -202,6 +202,11 @@ TEST_CASE("the virtual panel page drives the robot and closing it stops the robo
   CHECK(result["sticks"].asInt() == 2);
   CHECK(result["buttons"].asInt() >= 4);
   CHECK(result["closed"].asBool());
+  // The keys released the dead-man; the gamepad held it and drove forward.
+  CHECK_FALSE(result["released"].asBool());
+  CHECK(result["gamepad_panel"]["deadman"].asBool());
+  CHECK(result["gamepad_panel"]["axes"]["drive_y"].asDouble() > 0.9);
+  CHECK(result["gamepad_label"].asString() == "1 gamepad(s)");
   // The page's PanelState drove rise-sim: the robot moved on LCM.
   double moved = 0.0;
   for (const auto& r : peer.robot) moved = std::max(moved, distance_xy(r, start));
