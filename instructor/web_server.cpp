@@ -16,6 +16,7 @@
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <future>
 #include <map>
@@ -814,8 +815,19 @@ struct WebServer::Impl {
     });
     if (!http.set_mount_point("/", settings.web_dir))
       throw std::runtime_error(settings.web_dir + ": cannot serve this folder");
-    if (!settings.reports_dir.empty() && fs::is_directory(settings.reports_dir))
-      http.set_mount_point("/reports", settings.reports_dir);
+    // Reports: only the .html / .json files /api/reports lists, never
+    // whatever else the folder holds (a key file, a journal).
+    http.Get(R"(/reports/(.+))", [this](const httplib::Request& req, httplib::Response& res) {
+      const std::string rel = req.matches[1];
+      const fs::path path = fs::path(settings.reports_dir) / rel;
+      const auto ext = path.extension().string();
+      const bool inside = !settings.reports_dir.empty() && rel.find("..") == std::string::npos && rel[0] != '/';
+      if (!inside || (ext != ".html" && ext != ".json") || !fs::is_regular_file(path))
+        return reply_error(res, 404, "no report '" + rel + "'");
+      std::ifstream in(path, std::ios::binary);
+      std::string body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      res.set_content(body, ext == ".html" ? "text/html" : "application/json");
+    });
     http.Get("/api/world", [this](const httplib::Request&, httplib::Response& res) {
       res.set_content(world_text, "application/json");
     });

@@ -41,6 +41,12 @@ run(async () => {
     await page.screenshot({ path: path.join(outDir, 'instructor_console.png') });
     await page.waitForFunction(() => /no scenario running/.test(document.getElementById('scenario-status').textContent), null, { timeout: 10000 });
     result.scenario_options = await page.locator('#scenario-file option').count();
+    await page.waitForFunction(() => document.getElementById('training').textContent.includes('approach_object'), null, { timeout: 10000 });
+    result.training_text = await page.textContent('#training');
+    result.report_link = await page.getAttribute('#reports a', 'href');
+    const report = await page.request.get(base + result.report_link);  // the page's cookie carries the token
+    result.report_status = report.status();
+    result.report_body = await report.text();
     result.trainee_rows = await page.locator('#panels tr[data-trainee]').count();
     result.source_text = await page.textContent('#panels');
     await page.click('button[data-fault="stick-stuck"]');
