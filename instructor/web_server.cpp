@@ -803,6 +803,8 @@ struct WebServer::Impl {
   }
 
   void routes() {
+    const std::size_t threads = std::max<std::size_t>(settings.http_threads, 4);
+    http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
     http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
       if (authorised(req)) {
         // The pages load their scripts by plain URLs: a cookie carries the token on.

@@ -8,6 +8,7 @@
 // their controls here, published as PanelState under the daemon's safety
 // rules (instructor/virtual_panel.hpp).
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -27,6 +28,9 @@ struct WebServerSettings {
   std::string panel_file;           ///< the console definition the virtual panel copies
   uint32_t virtual_timeout_ms = 200;  ///< a virtual panel without an update for this long fails safe
   double push_hz = 50.0;            ///< SSE push rate (≥ 20)
+  /// Request threads: every open page holds one for its SSE stream and one
+  /// for its keep-alive requests (cpp-httplib's default pool is 8).
+  std::size_t http_threads = 64;
   std::string instructor_key_file;  ///< "" → fault buttons answer 503 (panels/command_auth.hpp)
   std::string issuer = "instructor";  ///< FaultCommand.issuer
   /// Scenario control: the *.yaml scenario files offered (instructor/scenario.hpp)

@@ -166,6 +166,46 @@ TEST_CASE("the web server streams the latest LCM messages of every trainee over 
   server.stop();
 }
 
+TEST_CASE("the web server keeps answering while many pages hold their streams open", "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  TraineePeer peer(f.id);
+  // 20 streams (more than cpp-httplib's default 8 request threads), each until it has one push.
+  std::atomic<int> opened{0}, closed{0};
+  std::atomic<bool> done{false};
+  std::vector<std::thread> readers;
+  for (int i = 0; i < 20; ++i)
+    readers.emplace_back([&] {
+      httplib::Client http("127.0.0.1", server.port());
+      http.set_read_timeout(10, 0);
+      bool counted = false;
+      http.Get("/api/stream", f.auth(), [&](const char*, size_t) {
+        if (!counted) opened++;
+        counted = true;
+        return !done.load();
+      });
+      closed++;
+    });
+  rise_msgs::RobotState r{};
+  r.robot_id = f.id;
+  r.orientation_wxyz[0] = 1.0;
+  const bool all_open = peer.wait_until([&] { return opened.load() == 20; }, 10000,
+                                        [&] { peer.lcm().publish("rise/" + f.id + "/robot_state", &r); });
+  // With every stream open, an ordinary request is still answered.
+  httplib::Client http("127.0.0.1", server.port());
+  const auto answer = http.Get("/api/world", f.auth());
+  done = true;
+  // Each stream ends at its next push.
+  CHECK(peer.wait_until([&] { return closed.load() == 20; }, 10000,
+                        [&] { peer.lcm().publish("rise/" + f.id + "/robot_state", &r); }));
+  for (auto& t : readers) t.join();
+  CHECK(all_open);
+  REQUIRE(answer);
+  CHECK(answer->status == 200);
+  server.stop();
+}
+
 TEST_CASE("a fault button publishes a FaultCommand signed with the instructor key", "[instructor]") {
   ServerFixture f;
   rise::instructor::WebServer server(f.settings);
