@@ -18,7 +18,10 @@ build=${RISE_BUILD_DIR:-$root/build}
 # systemd-udevd for the USB hot-plug test inside the VM, PCL + OpenCV +
 # Ceres for the semantic engine and Open3D as its benchmark peer, jsoncpp for
 # the training reports and journal, Chromium to render the HTML report in its
-# test). Installing
+# test, and to run the instructor console's browser tests), cpp-httplib for
+# the instructor's web server, Node.js + npm to build its pages from the
+# locked npm packages in instructor/web (three.js, esbuild, playwright-core)
+# at set-up. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -37,6 +40,8 @@ packages=(
 setup() {
   local missing=()
   for p in "${packages[@]}"; do
+    # A nodejs that bundles npm (NodeSource's) provides it without the package.
+    [ "$p" = npm ] && command -v npm >/dev/null && continue
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   [ ${#missing[@]} -eq 0 ] && return 0
@@ -48,7 +53,23 @@ setup() {
     >/tmp/rise-apt.log 2>&1 || { tail -30 /tmp/rise-apt.log; exit 1; }
 }
 
+# The instructor's pages: npm ci from package-lock.json, then the bundle
+# into instructor/web/dist (served by rise-instructor serve; nothing is
+# fetched when they run). Redone when the lock file or a source is newer.
+web_setup() {
+  local web=$root/instructor/web
+  [ -f "$web/package.json" ] || return 0
+  if [ ! -f "$web/node_modules/.package-lock.json" ] || [ "$web/package-lock.json" -nt "$web/node_modules/.package-lock.json" ]; then
+    echo "run.sh: npm ci in instructor/web"
+    (cd "$web" && npm ci --no-audit --no-fund >/tmp/rise-npm.log 2>&1) || { tail -30 /tmp/rise-npm.log; exit 1; }
+  fi
+  if [ ! -f "$web/dist/index.html" ] || [ -n "$(find "$web/src" "$web/build.mjs" -newer "$web/dist/index.html" 2>/dev/null | head -1)" ]; then
+    (cd "$web" && node build.mjs >/dev/null) || exit 1
+  fi
+}
+
 build() {
+  web_setup
   local werror=OFF
   [ -n "${CI:-}" ] && werror=ON
   if [ ! -f "$build/build.ninja" ]; then

@@ -6,6 +6,7 @@
 #include <spdlog/spdlog.h>
 
 #include "instructor/app/instructor_commands.hpp"
+#include "instructor/app/serve_command.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"rise-instructor: the instructor station (signed fault and training commands over LCM)"};
@@ -18,8 +19,7 @@ int main(int argc, char** argv) {
   rise::instructor::add_scenario_command(app);
   rise::instructor::add_task_command(app);
   rise::instructor::add_report_command(app);
-  // The web console (issue 8, parts 5-6) adds `serve` here: add_serve_command(app)
-  // from instructor/app/serve_command.hpp, listed in instructor/CMakeLists.txt.
+  rise::instructor::add_serve_command(app);
   CLI11_PARSE(app, argc, argv);
   return 0;
 }

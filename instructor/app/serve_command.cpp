@@ -1,0 +1,121 @@
+#include "instructor/app/serve_command.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <fstream>
+#include <memory>
+#include <semaphore>
+#include <sstream>
+
+#include "app/child_process.hpp"
+#include "instructor/app/instructor_commands.hpp"
+#include "instructor/web_server.hpp"
+#include "panels/command_auth.hpp"
+#include "panels/data_path.hpp"
+
+namespace rise::instructor {
+namespace {
+
+struct ServeOptions {
+  std::string listen = "127.0.0.1:8080";
+  std::string token;
+  std::string token_file;
+  std::string world;
+  std::string robot = "sim/robots/skid4.yaml";
+  std::string reports_dir;
+  std::string scenarios_dir = "instructor/scenarios";
+  std::string web_dir;
+  std::string panel = "panels/definitions/rise_console.yaml";
+  uint32_t virtual_timeout_ms = 200;
+  double push_hz = 50.0;
+};
+
+std::binary_semaphore g_stop{0};
+
+void on_signal(int) { g_stop.release(); }
+
+std::string read_token(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file + ": cannot read the token file");
+  std::string token;
+  std::getline(in, token);
+  while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
+  if (token.empty()) throw std::runtime_error(file + ":1: empty token");
+  return token;
+}
+
+int serve(const ServeOptions& o) {
+  WebServerSettings s;
+  const auto colon = o.listen.rfind(':');
+  if (colon == std::string::npos) throw std::runtime_error("--listen '" + o.listen + "': expected HOST:PORT");
+  s.host = o.listen.substr(0, colon);
+  s.port = std::stoi(o.listen.substr(colon + 1));
+  if (s.host != "127.0.0.1" && s.host != "localhost" && s.host != "::1")
+    spdlog::warn("listening on {} — not loopback: anyone who can reach it and has the token can drive", s.host);
+  if (!o.token.empty() && !o.token_file.empty()) throw std::runtime_error("give --token or --token-file, not both");
+  s.token = o.token_file.empty() ? o.token : read_token(o.token_file);
+  if (s.token.empty()) throw std::runtime_error("a token is required: --token T or --token-file F");
+  s.web_dir = o.web_dir.empty() ? std::string(RISE_WEB_DIST_DIR) : o.web_dir;
+  s.world_file = o.world.empty() ? "" : panels::find_data_file(o.world);
+  s.robot_file = o.robot.empty() ? "" : panels::find_data_file(o.robot);
+  // --lcm, --instructor-key, --issuer: rise-instructor's common options.
+  const CommonOptions& common = common_options();
+  s.lcm_url = common.lcm_url;
+  s.issuer = common.issuer;
+  s.reports_dir = o.reports_dir;
+  s.scenarios_dir = o.scenarios_dir.empty() ? "" : panels::find_data_file(o.scenarios_dir);
+  s.scenario_program = app::executable_dir() + "/rise-instructor";
+  s.panel_file = panels::find_data_file(o.panel);
+  s.virtual_timeout_ms = o.virtual_timeout_ms;
+  s.push_hz = o.push_hz;
+  s.instructor_key_file = panels::instructor_key_path(common.key_file);
+  if (s.instructor_key_file.empty()) spdlog::warn("no instructor key: the fault buttons are off (--instructor-key FILE)");
+
+  WebServer server(s);
+  server.start();
+  spdlog::info("rise-instructor serve: http://{}:{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "
+               "LCM {}",
+               s.host, server.port(), s.lcm_url);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  g_stop.acquire();
+  spdlog::info("stopping");
+  server.stop();
+  return 0;
+}
+
+}  // namespace
+
+void add_serve_command(CLI::App& app) {
+  auto o = std::make_shared<ServeOptions>();
+  auto* cmd = app.add_subcommand("serve", "the web console (live map, 3D view, panels, faults, reports) and the "
+                                          "virtual panel pages");
+  cmd->add_option("--listen", o->listen, "HOST:PORT (loopback by default)")->capture_default_str();
+  cmd->add_option("--token", o->token, "the token every request must carry (?token=, Bearer, X-Rise-Token)");
+  cmd->add_option("--token-file", o->token_file, "read the token from the first line of this file");
+  cmd->add_option("--world", o->world, "world file the map and 3D view draw (default: the built-in yard)");
+  cmd->add_option("--robot", o->robot, "robot file the 3D view takes the chassis and the onboard camera from (\"\": none)")
+      ->capture_default_str();
+  cmd->add_option("--reports-dir", o->reports_dir, "training reports to list and serve (rise-trainer --out)");
+  cmd->add_option("--scenarios-dir", o->scenarios_dir, "the scenario files the console offers (\"\": none)")
+      ->capture_default_str();
+  cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist of the source tree)");
+  cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();
+  cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")
+      ->capture_default_str();
+  cmd->add_option("--push-hz", o->push_hz, "SSE push rate (>= 20)")->capture_default_str();
+  cmd->callback([o] {
+    spdlog::set_level(spdlog::level::from_str(common_options().log_level));
+    int code = 0;
+    try {
+      code = serve(*o);
+    } catch (const std::exception& e) {
+      spdlog::error("{}", e.what());
+      code = 2;
+    }
+    if (code != 0) throw CLI::RuntimeError(code);
+  });
+}
+
+}  // namespace rise::instructor

@@ -1,0 +1,17 @@
+# rise::instructor_web — the web console's server and the virtual panel
+# (cpp-httplib from Debian's libcpp-httplib-dev; the pages are built from npm
+# packages at set-up into instructor/web/dist, see run.sh).
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(RISE_HTTPLIB REQUIRED IMPORTED_TARGET GLOBAL cpp-httplib)
+add_library(rise_instructor_web web_server.cpp virtual_panel.cpp)
+add_library(rise::instructor_web ALIAS rise_instructor_web)
+rise_target_options(rise_instructor_web)
+target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::lcmtypes rise::command_auth
+  PRIVATE rise::sim rise::instructor rise::app PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
+
+# rise-instructor serve
+add_library(rise_instructor_serve STATIC app/serve_command.cpp)
+rise_target_options(rise_instructor_serve)
+target_compile_definitions(rise_instructor_serve PRIVATE
+  RISE_WEB_DIST_DIR="${PROJECT_SOURCE_DIR}/instructor/web/dist" RISE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+target_link_libraries(rise_instructor_serve PUBLIC rise::instructor_web rise::panels CLI11::CLI11 spdlog::spdlog)

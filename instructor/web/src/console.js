@@ -1,0 +1,360 @@
+// The instructor console: live map, 3D view, panels, faults, training, reports.
+import * as THREE from 'three';
+import { api, getJson, postJson, stream, el, token, ROBOT_COLOUR } from './common.js';
+
+const state = {
+  world: null,
+  trainees: new Map(),   // id → {panel_state, robot_state, task_status, trail: [[x,y]...]}
+  selected: '',
+  events: [],
+  pushes: 0,
+  dirty: true,
+};
+const colourHex = '#' + ROBOT_COLOUR.toString(16).padStart(6, '0');
+
+function trainee(id) {
+  if (!state.trainees.has(id)) {
+    state.trainees.set(id, { trail: [] });
+    const sel = document.getElementById('trainee');
+    sel.append(el('option', { value: id }, id));
+    if (!state.selected) { state.selected = id; sel.value = id; updatePanelLink(); }
+  }
+  return state.trainees.get(id);
+}
+
+function updatePanelLink() {
+  document.getElementById('panel-link').href =
+    'panel.html?id=' + encodeURIComponent(state.selected || 't1') + '&token=' + encodeURIComponent(token);
+}
+
+// ---- top-down map -------------------------------------------------------
+function worldBounds() {
+  let min = [Infinity, Infinity], max = [-Infinity, -Infinity];
+  const grow = (x, y) => { min = [Math.min(min[0], x), Math.min(min[1], y)]; max = [Math.max(max[0], x), Math.max(max[1], y)]; };
+  for (const b of state.world.boxes) {
+    const r = Math.hypot(b.size[0], b.size[1]) / 2;
+    grow(b.center[0] - r, b.center[1] - r); grow(b.center[0] + r, b.center[1] + r);
+  }
+  for (const r of state.world.regions) { grow(r.min[0], r.min[1]); grow(r.max[0], r.max[1]); }
+  for (const t of state.trainees.values()) for (const p of t.trail) grow(p[0], p[1]);
+  grow(state.world.robot_start[0] - 3, state.world.robot_start[1] - 3);
+  grow(state.world.robot_start[0] + 3, state.world.robot_start[1] + 3);
+  return { min, max };
+}
+
+function drawMap() {
+  const c = document.getElementById('map'), g = c.getContext('2d');
+  g.fillStyle = '#101215'; g.fillRect(0, 0, c.width, c.height);
+  if (!state.world) return;
+  const { min, max } = worldBounds();
+  const margin = 0.5;
+  const s = Math.min(c.width / (max[0] - min[0] + 2 * margin), c.height / (max[1] - min[1] + 2 * margin));
+  // World x to the right, y up.
+  const px = (x, y) => [(x - min[0] + margin) * s, c.height - (y - min[1] + margin) * s];
+  g.strokeStyle = '#2a2f36'; g.lineWidth = 1;
+  for (let x = Math.floor(min[0]); x <= max[0]; ++x) { const [a] = px(x, 0); g.beginPath(); g.moveTo(a, 0); g.lineTo(a, c.height); g.stroke(); }
+  for (let y = Math.floor(min[1]); y <= max[1]; ++y) { const [, b] = px(0, y); g.beginPath(); g.moveTo(0, b); g.lineTo(c.width, b); g.stroke(); }
+  for (const r of state.world.regions) {
+    const [x0, y0] = px(r.min[0], r.max[1]), [x1, y1] = px(r.max[0], r.min[1]);
+    g.fillStyle = 'rgba(46,160,67,0.25)'; g.fillRect(x0, y0, x1 - x0, y1 - y0);
+    g.fillStyle = '#7ee787'; g.font = '10px sans-serif'; g.fillText(r.name, x0 + 2, y0 + 10);
+  }
+  const fills = { wall: '#8b949e', door: '#a0522d', stairs: '#4c6ef5', box: '#6e7681', prop: '#6e5494' };
+  const drawBox = (center, size, yaw, fill) => {
+    g.save();
+    const [cx, cy] = px(center[0], center[1]);
+    g.translate(cx, cy); g.rotate(-yaw);
+    g.fillStyle = fill; g.fillRect(-size[0] * s / 2, -size[1] * s / 2, size[0] * s, size[1] * s);
+    g.restore();
+  };
+  for (const b of state.world.boxes) drawBox(b.center, b.size, b.yaw, fills[b.kind] || fills.prop);
+  for (const [id, t] of state.trainees) {
+    const r = t.robot_state;
+    const objects = r ? r.objects : state.world.objects.map((o) => ({ name: o.name, position: o.center }));
+    for (const o of objects) {
+      const w = state.world.objects.find((x) => x.name === o.name);
+      drawBox(o.position, w ? w.size : [0.3, 0.3, 0.3], 0, '#e3b341');
+    }
+    if (t.trail.length > 1) {
+      g.strokeStyle = id === state.selected ? 'rgba(255,90,0,0.8)' : 'rgba(255,255,255,0.4)'; g.lineWidth = 2;
+      g.beginPath();
+      t.trail.forEach((p, i) => { const [x, y] = px(p[0], p[1]); if (i) g.lineTo(x, y); else g.moveTo(x, y); });
+      g.stroke();
+    }
+    if (r) {
+      drawBox(r.position, [0.8, 0.6], r.yaw, colourHex);
+      const [x, y] = px(r.position[0], r.position[1]);
+      g.strokeStyle = '#fff'; g.beginPath(); g.moveTo(x, y);
+      g.lineTo(x + Math.cos(r.yaw) * 0.6 * s, y - Math.sin(r.yaw) * 0.6 * s); g.stroke();
+      g.fillStyle = '#fff'; g.font = '11px sans-serif'; g.fillText(id, x + 8, y - 8);
+    }
+  }
+}
+
+// ---- 3D view ------------------------------------------------------------
+const view = {};
+function setup3d() {
+  const canvas = document.getElementById('view3d');
+  // preserveDrawingBuffer: the tests read the pixels back.
+  view.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+  view.renderer.setSize(canvas.width, canvas.height, false);
+  view.renderer.setScissorTest(true);
+  view.scene = new THREE.Scene();
+  view.scene.background = new THREE.Color(0x87a8c8);
+  view.scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
+  const sun = new THREE.DirectionalLight(0xffffff, 1.5); sun.position.set(5, -3, 10); view.scene.add(sun);
+  view.chase = new THREE.PerspectiveCamera(60, canvas.width / canvas.height, 0.05, 200);
+  view.chase.up.set(0, 0, 1);
+  view.onboard = new THREE.PerspectiveCamera(70, 4 / 3, 0.05, 200);
+  view.onboard.up.set(0, 0, 1);
+  view.robots = new Map();
+  view.objects = new Map();
+}
+
+function buildScene() {
+  const ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200), new THREE.MeshLambertMaterial({ color: 0x5b6b4a }));
+  view.scene.add(ground);
+  const grid = new THREE.GridHelper(100, 100, 0x333333, 0x444444); grid.rotation.x = Math.PI / 2; grid.position.z = 0.01;
+  view.scene.add(grid);
+  const colours = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x8d8d8d, prop: 0x9775fa };
+  for (const b of state.world.boxes) {
+    const m = new THREE.Mesh(new THREE.BoxGeometry(...b.size), new THREE.MeshLambertMaterial({ color: colours[b.kind] || colours.prop }));
+    m.position.set(...b.center); m.rotation.z = b.yaw;
+    view.scene.add(m);
+  }
+  for (const r of state.world.regions) {
+    const size = [0, 1, 2].map((i) => Math.max(0.01, r.max[i] - r.min[i]));
+    const m = new THREE.Mesh(new THREE.BoxGeometry(...size),
+      new THREE.MeshBasicMaterial({ color: 0x2ea043, transparent: true, opacity: 0.2, depthWrite: false }));
+    m.position.set(...[0, 1, 2].map((i) => (r.max[i] + r.min[i]) / 2));
+    view.scene.add(m);
+  }
+  for (const o of state.world.objects) {
+    const m = new THREE.Mesh(new THREE.BoxGeometry(...o.size), new THREE.MeshLambertMaterial({ color: 0xe3b341 }));
+    m.position.set(...o.center); view.scene.add(m); view.objects.set(o.name, m);
+  }
+}
+
+function robotMesh(id) {
+  if (!view.robots.has(id)) {
+    const g = new THREE.Group();
+    const size = (state.world.robot && state.world.robot.chassis_size) || [0.8, 0.5, 0.25];
+    // Unlit: its colour reaches the screen as it is (the tests look for it).
+    const body = new THREE.Mesh(new THREE.BoxGeometry(...size), new THREE.MeshBasicMaterial({ color: ROBOT_COLOUR }));
+    g.add(body);
+    const nose = new THREE.Mesh(new THREE.BoxGeometry(0.15, size[1] / 2, 0.08), new THREE.MeshLambertMaterial({ color: 0x222222 }));
+    nose.position.set(size[0] / 2 - 0.08, 0, size[2] / 2 + 0.04); g.add(nose);
+    view.scene.add(g); view.robots.set(id, g);
+  }
+  return view.robots.get(id);
+}
+
+// The onboard camera: the robot file's first camera mount (`sensors.cameras`,
+// base frame, x forward, z up, rpy; e.g. skid4's "front" 0.41 m ahead, 10°
+// down), or without a robot file 0.30 m ahead and 0.50 m above the base,
+// 10° down; placed from RobotState's base pose.
+function onboardMount() {
+  const c = state.world.robot && state.world.robot.cameras && state.world.robot.cameras[0];
+  return c ? { name: c.name, position: c.position, rpy: c.rpy } : { name: 'onboard', position: [0.30, 0, 0.50], rpy: [0, 10 * Math.PI / 180, 0] };
+}
+
+function render3d() {
+  if (!view.renderer || !state.world) return;
+  for (const [id, t] of state.trainees) {
+    const r = t.robot_state; if (!r) continue;
+    const g = robotMesh(id);
+    const q = r.orientation_wxyz;
+    g.position.set(...r.position);
+    g.quaternion.set(q[1], q[2], q[3], q[0]);
+    for (const o of r.objects) { const m = view.objects.get(o.name); if (m) m.position.set(...o.position); }
+  }
+  const sel = state.trainees.get(state.selected);
+  const r = sel && sel.robot_state;
+  const pos = r ? new THREE.Vector3(...r.position) : new THREE.Vector3(state.world.robot_start[0], state.world.robot_start[1], 0.2);
+  const yaw = r ? r.yaw : state.world.robot_start[2];
+  const fwd = new THREE.Vector3(Math.cos(yaw), Math.sin(yaw), 0);
+  view.chase.position.copy(pos).addScaledVector(fwd, -4.0).add(new THREE.Vector3(0, 0, 2.5));
+  view.chase.lookAt(pos);
+  const w = view.renderer.domElement.width, h = view.renderer.domElement.height;
+  view.renderer.setViewport(0, 0, w, h); view.renderer.setScissor(0, 0, w, h);
+  view.renderer.render(view.scene, view.chase);
+  if (r) {
+    const m = onboardMount(), q = robotMesh(state.selected).quaternion;
+    const cam = new THREE.Vector3(...m.position).applyQuaternion(q).add(pos);
+    view.onboard.position.copy(cam);
+    // The mount's x axis, R = Rz(yaw) Ry(pitch) Rx(roll), in the world.
+    const [, p, y] = m.rpy;
+    const dir = new THREE.Vector3(Math.cos(p) * Math.cos(y), Math.cos(p) * Math.sin(y), -Math.sin(p)).applyQuaternion(q);
+    view.onboard.lookAt(cam.clone().add(dir));
+    const iw = Math.round(w * 0.33), ih = Math.round(iw * 3 / 4);
+    view.renderer.setViewport(w - iw - 4, 4, iw, ih); view.renderer.setScissor(w - iw - 4, 4, iw, ih);
+    view.renderer.render(view.scene, view.onboard);
+  }
+}
+
+// ---- panels, training, events --------------------------------------------
+function fmt(x, d = 2) { return typeof x === 'number' ? x.toFixed(d) : '—'; }
+
+function renderPanels() {
+  const rows = [];
+  for (const [id, t] of state.trainees) {
+    const p = t.panel_state;
+    const status = !p ? el('span', { class: 'warn' }, 'no PanelState')
+      : p.failsafe ? el('span', { class: 'bad' }, 'FAILSAFE ' + p.failsafe_reason) : el('span', { class: 'ok' }, 'ok');
+    const axes = p ? Object.entries(p.axes).map(([k, v]) => k + '=' + fmt(v)).join(' ') : '';
+    const sw = p ? Object.entries(p.switches).map(([k, v]) => k + '=' + v).join(' ') : '';
+    const faults = p && p.active_faults.length ? p.active_faults.join(', ') : '';
+    rows.push(el('tr', { 'data-trainee': id }, el('td', {}, id), el('td', {}, status),
+      el('td', {}, p ? (p.deadman ? 'dead-man held' : 'dead-man released') : ''),
+      el('td', {}, axes), el('td', {}, sw), el('td', { class: 'faults' }, faults)));
+    for (const s of (p ? p.sources : [])) {
+      const health = !s.connected ? el('span', { class: 'bad' }, 'disconnected') : s.stale ? el('span', { class: 'bad' }, 'stale')
+        : el('span', { class: 'ok' }, 'ok');
+      rows.push(el('tr', { class: 'source' }, el('td', {}, ''), el('td', {}, 'source ' + s.name), el('td', {}, health),
+        el('td', {}, s.url), el('td', {}, 'age ' + fmt(s.age_ms, 0) + ' ms'), el('td', {}, 'ok ' + s.frames_ok + ' bad ' + s.frames_bad)));
+    }
+  }
+  document.getElementById('panels').replaceChildren(el('table', {}, ...rows));
+}
+
+function renderTraining() {
+  const rows = [el('tr', {}, ...['trainee', 'training', 'node', 'task', 'attempt', 'state', 'time', 'score', 'done', 'training score']
+    .map((h) => el('th', {}, h)))];
+  for (const [id, t] of state.trainees) {
+    const s = t.task_status; if (!s) continue;
+    rows.push(el('tr', {}, ...[id, s.training, s.node, s.task, s.attempt, s.state,
+      fmt(s.task_time_s, 1) + ' / ' + fmt(s.time_limit_s, 0) + ' s', s.score, s.tasks_done, s.training_score]
+      .map((v) => el('td', {}, v))));
+  }
+  document.getElementById('training').replaceChildren(el('table', {}, ...rows));
+  const log = document.getElementById('events');
+  log.replaceChildren(...state.events.slice(-60).map((e) => el('div', {},
+    e.trainee + ' ' + (e.channel_kind === 'task_event' ? 'task ' + e.name + ' ' + (e.points >= 0 ? '+' : '') + e.points + ' → ' + e.score
+      : e.kind + ' ' + e.a + (e.b ? ' / ' + e.b : '') + (e.detail ? ' (' + e.detail + ')' : '')))));
+  log.scrollTop = log.scrollHeight;
+}
+
+function renderRobotLine() {
+  const t = state.trainees.get(state.selected), r = t && t.robot_state;
+  if (r) document.getElementById('robot-pos').textContent =
+    state.selected + ': x=' + fmt(r.position[0]) + ' y=' + fmt(r.position[1]) + ' yaw=' + fmt(r.yaw * 180 / Math.PI, 0) + '° v=' + fmt(r.speed_mps);
+}
+
+// ---- faults and scenario -------------------------------------------------
+async function setupFaults() {
+  const box = document.getElementById('faults'), out = document.getElementById('fault-result');
+  let kinds = [];
+  try { kinds = (await getJson('/api/faults')).faults; } catch (e) { box.textContent = 'faults: ' + e.message; }
+  for (const f of kinds) {
+    box.append(el('button', { 'data-fault': f.name, onclick: async () => {
+      const r = await postJson('/api/fault/inject', { trainee: state.selected, fault: f.name });
+      out.textContent = 'inject ' + f.name + ': ' + (r.ok ? 'published' : 'HTTP ' + r.status + ' ' + await r.text());
+    } }, f.label || f.name));
+  }
+  if (kinds.length) box.append(el('button', { id: 'fault-clear', onclick: async () => {
+    const r = await postJson('/api/fault/clear', { trainee: state.selected, fault: '*' });
+    out.textContent = 'clear: ' + (r.ok ? 'published' : 'HTTP ' + r.status);
+  } }, 'clear all faults'));
+  const sc = document.getElementById('scenario');
+  await setupScenarios(sc, out);
+  for (const cmd of ['pause', 'resume', 'step', 'reset']) {
+    sc.append(el('button', { 'data-sim': cmd, onclick: async () => {
+      const r = await api('/api/sim/' + encodeURIComponent(state.selected) + '/' + cmd, { method: 'POST' });
+      out.textContent = 'sim ' + cmd + ': ' + (r.ok ? 'published' : 'HTTP ' + r.status);
+    } }, 'sim ' + cmd));
+  }
+}
+
+// Scenario files (rise-instructor serve --scenarios-dir): start one against
+// the selected trainee (run by `rise-instructor scenario`), stop it.
+async function setupScenarios(box, out) {
+  let info;
+  try { info = await getJson('/api/scenarios'); } catch (e) { box.append(el('div', {}, 'scenarios: ' + e.message)); return; }
+  const pick = el('select', { id: 'scenario-file' }, ...info.files.map((f) =>
+    el('option', { value: f.file }, f.error ? f.file + ' (' + f.error + ')' : f.name + ' — ' + f.faults + ' faults, seed ' + f.seed)));
+  const seed = el('input', { id: 'scenario-seed', type: 'number', placeholder: 'seed', style: 'width:6em' });
+  const status = el('span', { id: 'scenario-status' });
+  const refresh = async () => {
+    const s = await getJson('/api/scenarios');
+    status.textContent = Object.entries(s.running).map(([id, r]) => id + ': ' + r.file + ' (seed ' + r.seed + ')').join(', ') || 'no scenario running';
+  };
+  const post = async (what) => {
+    const body = { trainee: state.selected, file: pick.value };
+    if (seed.value !== '') body.seed = parseInt(seed.value, 10);
+    const r = await postJson('/api/scenario/' + what, body);
+    out.textContent = 'scenario ' + what + ': ' + (r.ok ? 'ok' : 'HTTP ' + r.status + ' ' + await r.text());
+    refresh();
+  };
+  box.append(el('div', {}, 'scenario ', pick, seed,
+    el('button', { id: 'scenario-start', onclick: () => post('start') }, 'start'),
+    el('button', { id: 'scenario-stop', onclick: () => post('stop') }, 'stop'), ' ', status));
+  if (!info.enabled) status.textContent = 'scenario control off (--scenarios-dir, --instructor-key)';
+  else refresh();
+}
+
+async function loadReports() {
+  const list = await getJson('/api/reports');
+  const box = document.getElementById('reports');
+  if (!list.length) { box.textContent = 'no reports (rise-instructor serve --reports-dir DIR)'; return; }
+  box.replaceChildren(...list.map((r) => el('div', {}, el('a', { href: r.url, target: '_blank' }, r.path))));
+}
+
+// ---- the live stream -----------------------------------------------------
+function onUpdate(u) {
+  state.pushes++;
+  state.dirty = true;
+  for (const c of Object.values(u.channels)) {
+    const t = trainee(c.trainee);
+    t[c.kind] = c.value;
+    if (c.kind === 'robot_state') {
+      const p = c.value.position, last = t.trail[t.trail.length - 1];
+      if (!last || Math.hypot(p[0] - last[0], p[1] - last[1]) > 0.02) t.trail.push([p[0], p[1]]);
+      if (t.trail.length > 5000) t.trail.shift();
+    }
+  }
+  for (const e of u.events) { trainee(e.trainee); state.events.push(e); }
+  if (state.events.length > 500) state.events.splice(0, state.events.length - 500);
+  renderPanels(); renderTraining(); renderRobotLine();
+}
+
+// Drawn only when something new arrived: software WebGL (a machine without a
+// GPU) would otherwise take the CPU the trainee stations need.
+function frame() {
+  if (state.dirty) { state.dirty = false; drawMap(); render3d(); }
+  requestAnimationFrame(frame);
+}
+
+// Pixel statistics of a canvas for the browser tests: the variance of the
+// luminance, and how many pixels carry the robot's colour.
+function canvasStats(canvas) {
+  const c = document.createElement('canvas'); c.width = canvas.width; c.height = canvas.height;
+  const g = c.getContext('2d'); g.drawImage(canvas, 0, 0);
+  const d = g.getImageData(0, 0, c.width, c.height).data;
+  const want = [(ROBOT_COLOUR >> 16) & 255, (ROBOT_COLOUR >> 8) & 255, ROBOT_COLOUR & 255];
+  let sum = 0, sum2 = 0, robot = 0; const n = d.length / 4;
+  for (let i = 0; i < d.length; i += 4) {
+    const y = 0.299 * d[i] + 0.587 * d[i + 1] + 0.114 * d[i + 2]; sum += y; sum2 += y * y;
+    if (Math.abs(d[i] - want[0]) <= 12 && Math.abs(d[i + 1] - want[1]) <= 12 && Math.abs(d[i + 2] - want[2]) <= 12) robot++;
+  }
+  const mean = sum / n;
+  return { variance: sum2 / n - mean * mean, robot_pixels: robot, pixels: n };
+}
+window.riseConsole = { state, stats: () => ({ map: canvasStats(document.getElementById('map')),
+                                              view3d: canvasStats(document.getElementById('view3d')) }) };
+
+async function main() {
+  document.getElementById('trainee').addEventListener('change', (e) => { state.selected = e.target.value; state.dirty = true; updatePanelLink(); });
+  updatePanelLink();
+  state.world = await getJson('/api/world');
+  setup3d(); buildScene();
+  for (const t of await getJson('/api/trainees')) {
+    const x = trainee(t.id);
+    for (const k of ['panel_state', 'robot_state', 'task_status']) if (t[k]) x[k] = t[k];
+  }
+  setupFaults(); loadReports();
+  stream(onUpdate, (ok) => {
+    const l = document.getElementById('link'); l.textContent = ok ? 'live' : 'reconnecting…'; l.className = ok ? 'ok' : 'warn';
+  });
+  requestAnimationFrame(frame);
+}
+main().catch((e) => { document.getElementById('link').textContent = 'error: ' + e.message; });

@@ -1,0 +1,79 @@
+#pragma once
+
+// The instructor's web console: an HTTP server (cpp-httplib) on loopback
+// that serves the built pages, a JSON API, and a Server-Sent Events stream of
+// the classroom's LCM traffic (rise/<id>/panel_state, robot_state,
+// sim_event, task_status, task_event), coalesced to the latest message per
+// channel and pushed at push_hz; and the virtual panels whose pages post
+// their controls here, published as PanelState under the daemon's safety
+// rules (instructor/virtual_panel.hpp).
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace rise::instructor {
+
+struct WebServerSettings {
+  std::string host = "127.0.0.1";   ///< loopback only unless asked otherwise
+  int port = 8080;                  ///< 0: any free port (see WebServer::port)
+  std::string token;                ///< every request must carry it (non-empty)
+  std::string web_dir;              ///< the built pages (instructor/web/dist)
+  std::string world_file;           ///< "" → the built-in yard
+  std::string robot_file;           ///< the robot file the 3D view takes chassis and cameras from; "" → none
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string reports_dir;          ///< "" → no reports
+  std::string panel_file;           ///< the console definition the virtual panel copies
+  uint32_t virtual_timeout_ms = 200;  ///< a virtual panel without an update for this long fails safe
+  double push_hz = 50.0;            ///< SSE push rate (≥ 20)
+  /// Request threads: every open page holds one for its SSE stream and one
+  /// for its keep-alive requests (cpp-httplib's default pool is 8).
+  std::size_t http_threads = 64;
+  std::string instructor_key_file;  ///< "" → fault buttons answer 503 (panels/command_auth.hpp)
+  std::string issuer = "instructor";  ///< FaultCommand.issuer
+  /// Scenario control: the *.yaml scenario files offered (instructor/scenario.hpp)
+  /// and the program that runs one (`rise-instructor scenario FILE --trainee ID`,
+  /// started per trainee, stopped with SIGINT so it clears its auto_clear faults).
+  std::string scenarios_dir;        ///< "" → no scenarios
+  std::string scenario_program;     ///< "" → scenario control off
+};
+
+/// One fault button of the console: a FaultCommand's fields (hil/input_fault.hpp,
+/// hil/fault_injector.hpp, the sim's physics faults).
+struct FaultPreset {
+  std::string id;      ///< the fault instance's name (FaultCommand.fault_id)
+  std::string label;
+  std::string kind;
+  std::string target;
+  double value = 0.0;
+  double rate = 0.0;
+  double duration_s = 0.0;  ///< 0 = until cleared
+};
+
+/// The console's fault buttons for the reference console and robots.
+const std::vector<FaultPreset>& default_fault_presets();
+
+class WebServer {
+ public:
+  /// Loads the world and the panel definition and opens LCM. Throws
+  /// std::runtime_error (file:line: key: ... for bad files, or what failed).
+  explicit WebServer(WebServerSettings settings);
+  ~WebServer();
+  WebServer(const WebServer&) = delete;
+  WebServer& operator=(const WebServer&) = delete;
+
+  /// Binds the socket and starts the threads. Throws when it cannot bind.
+  void start();
+  /// Stops the server and the threads; publishes nothing more.
+  void stop();
+  /// The port bound (after start()).
+  int port() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rise::instructor

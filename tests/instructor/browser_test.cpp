@@ -1,0 +1,248 @@
+// The pages in headless Chromium (Debian's chromium, driven by playwright-core
+// from instructor/web) against `rise-instructor serve` and `rise-sim` as
+// separate processes over LCM: the console shows the robot moving while the
+// console emulator drives it through rise-hild, and its fault button injects
+// a signed fault that rise-hild applies and reports in PanelState; the
+// virtual panel page drives the robot, and closing it stops the robot.
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "app/child_process.hpp"
+#include "panels/command_auth.hpp"
+#include "rise_msgs/TaskStatus.hpp"
+#include "web_peer.hpp"
+
+namespace fs = std::filesystem;
+using namespace rise::instructor_test;
+using rise::app::ChildProcess;
+
+namespace {
+const std::string kSource = RISE_SOURCE_DIR;
+const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
+const std::string kWeb = kSource + "/instructor/web";
+
+/// Why the browser checks cannot run here, or "".
+std::string missing_browser() {
+  if (!fs::exists("/usr/bin/node")) return "node is not installed (/usr/bin/node)";
+  const char* chromium = std::getenv("RISE_CHROMIUM");
+  if (!fs::exists(chromium ? chromium : "/usr/bin/chromium")) return "chromium is not installed (/usr/bin/chromium)";
+  if (!fs::exists(kWeb + "/node_modules/playwright-core")) return "playwright-core is not installed (npm ci in instructor/web)";
+  return "";
+}
+
+/// The RESULT line a check printed.
+Json::Value read_result(const std::string& log) {
+  std::ifstream in(log);
+  std::string line;
+  Json::Value result;
+  while (std::getline(in, line))
+    if (line.rfind("RESULT ", 0) == 0) result = parse_json(line.substr(7));
+  return result;
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// rise-sim and rise-instructor serve for one trainee, in a scratch folder.
+struct Stations {
+  std::string id = "web" + std::to_string(::getpid());
+  std::string token = "browser-" + std::to_string(::getpid());
+  fs::path dir;
+  int port = free_port();
+  ChildProcess sim, server, hild, emulator;
+
+  /// `emulated`: the console emulator → rise-hild drive the robot too.
+  explicit Stations(bool emulated) {
+    char tmpl[] = "/tmp/rise-browser-test-XXXXXX";
+    dir = ::mkdtemp(tmpl);
+    rise::panels::write_new_instructor_key((dir / "instructor.key").string());
+    const std::string key = (dir / "instructor.key").string();
+    fs::create_directories(dir / "reports" / id);
+    std::ofstream(dir / "reports" / id / "training.html") << "<html><body>training report</body></html>";
+    fs::create_directories(dir / "scenarios");
+    std::ofstream(dir / "scenarios" / "stuck.yaml")
+        << "scenario: stuck\nfaults:\n  - {id: s, kind: stuck_at, target: drive_y, value: 0.4, at: 1.0}\n";
+    sim = ChildProcess({kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100", "--instructor-key", key},
+                       (dir / "sim.log").string());
+    if (emulated) {
+      // Forward at half stick, dead-man held, for as long as the test runs.
+      std::ofstream(dir / "drive.txt") << "0.0 mode drive\n0.0 speed medium\n0.2 deadman pressed\n0.5 drive_y 0.5\n";
+      const std::string bus = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
+      const std::string panel = kSource + "/panels/definitions/rise_console.yaml";
+      emulator = ChildProcess({kBin + "/rise-panel", "emulate", "--panel", panel, "--can", "socketcand+listen://" + bus,
+                               "--script", (dir / "drive.txt").string(), "--hold"},
+                              (dir / "emulator.log").string());
+      hild = ChildProcess({kBin + "/rise-hild", "--panel", panel, "--can", "socketcand://" + bus, "--id", id, "--lcm",
+                           kLcm, "--instructor-key", key},
+                          (dir / "hild.log").string());
+    }
+    server = ChildProcess({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token",
+                           token, "--lcm", kLcm, "--world", kSource + "/sim/worlds/yard.yaml", "--instructor-key",
+                           (dir / "instructor.key").string(), "--reports-dir", (dir / "reports").string(), "--scenarios-dir",
+                           (dir / "scenarios").string()},
+                          (dir / "server.log").string());
+  }
+  ~Stations() {
+    server.stop();
+    hild.stop();
+    emulator.stop();
+    sim.stop();
+    fs::remove_all(dir);
+  }
+  /// Waits for the server to answer with the token and the sim to publish.
+  bool ready(TraineePeer& peer) {
+    httplib::Client http("127.0.0.1", port);
+    http.set_connection_timeout(0, 200'000);
+    bool up = false;
+    return peer.wait_until(
+        [&] { return up && !peer.robot.empty(); }, 20000, [&] {
+          if (!up) {
+            auto r = http.Get("/api/world", {{"X-Rise-Token", token}});
+            up = r && r->status == 200;
+          }
+        });
+  }
+  std::string base() const { return "http://127.0.0.1:" + std::to_string(port); }
+  std::string out_dir() const {
+    const std::string d = std::string(RISE_BINARY_DIR) + "/instructor_screens";
+    fs::create_directories(d);
+    return d;
+  }
+};
+
+/// How many non-black pixels a PNG screenshot has is not checked here: the
+/// page measures its canvases itself (variance, robot colour); the file must
+/// exist and be a PNG of some size.
+bool is_png(const std::string& path) {
+  const std::string s = read_file(path);
+  return s.size() > 2000 && s.compare(1, 3, "PNG") == 0;
+}
+}  // namespace
+
+TEST_CASE("the console shows the robot moving while the emulator drives, and a click injects a fault", "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st(true);
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/console_check.cjs", st.base(), st.token, st.id,
+                     st.out_dir(), kWeb},
+                    (st.dir / "console_check.log").string());
+  // The emulated console drives while the page watches; a trainer's TaskStatus at ~2 Hz.
+  rise_msgs::TaskStatus task{};
+  task.trainee_id = st.id;
+  task.training = "drill";
+  task.task = "approach_object";
+  task.state = "running";
+  task.score = 7;
+  int ticks = 0;
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] {
+    if (ticks++ % 50 == 0) peer.lcm().publish("rise/" + st.id + "/task_status", &task);
+  });
+  if (!finished) node.stop();
+  const auto result = read_result((st.dir / "console_check.log").string());
+  INFO(read_file((st.dir / "console_check.log").string()));
+  REQUIRE(finished);
+  REQUIRE(result.isObject());
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["no_token_status"].asInt() == 401);
+  CHECK(result["wrong_token_status"].asInt() == 401);
+  CHECK(result["status"].asInt() == 200);
+  const double dx = result["later"][0].asDouble() - result["first"][0].asDouble();
+  const double dy = result["later"][1].asDouble() - result["first"][1].asDouble();
+  CHECK(std::hypot(dx, dy) > 0.5);
+  // The page was pushed to over one second (the rate is a figure, not asserted:
+  // no timed assertions; the server refuses a push rate under 20 Hz).
+  WARN("console page: " << result["pushes_per_s"].asInt() << " pushes in 1 s (--push-hz 50)");
+  CHECK(result["pushes_per_s"].asInt() > 0);
+  const auto& stats = result["stats"];
+  CHECK(stats["map"]["variance"].asDouble() > 50.0);
+  CHECK(stats["map"]["robot_pixels"].asInt() > 20);
+  CHECK(stats["view3d"]["variance"].asDouble() > 50.0);
+  CHECK(stats["view3d"]["robot_pixels"].asInt() > 200);
+  CHECK(is_png(st.out_dir() + "/instructor_console.png"));
+  CHECK(is_png(st.out_dir() + "/instructor_view3d.png"));
+  CHECK(result["page_errors"].size() == 0);
+  CHECK(result["scenario_options"].asInt() == 1);
+  CHECK(result["training_text"].asString().find("approach_object") != std::string::npos);
+  CHECK(result["report_link"].asString() == "/reports/" + st.id + "/training.html");
+  CHECK(result["report_status"].asInt() == 200);
+  CHECK(result["report_body"].asString().find("training report") != std::string::npos);
+  // The click published one signed FaultCommand for this trainee.
+  CHECK(result["fault_result"].asString().find("published") != std::string::npos);
+  REQUIRE(peer.wait_until([&] { return !peer.faults.empty(); }, 5000));
+  CHECK(peer.faults[0].kind == "stuck_at");
+  CHECK(peer.faults[0].trainee_id == st.id);
+  rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key((st.dir / "instructor.key").string()));
+  CHECK(verifier.check(peer.faults[0], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+  // rise-hild took it: the fault is in PanelState.active_faults over LCM, and on the page.
+  const auto has_fault = [](const rise_msgs::PanelState& p) {
+    return std::any_of(p.active_faults.begin(), p.active_faults.end(),
+                       [](const std::string& f) { return f.rfind("stick-stuck: stuck_at drive_y", 0) == 0; });
+  };
+  CHECK(std::any_of(peer.daemon_panels.begin(), peer.daemon_panels.end(), has_fault));
+  CHECK(result["page_faults"].asString().find("stick-stuck: stuck_at drive_y") != std::string::npos);
+}
+
+TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, and closing it stops the robot", "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st(false);
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  const auto start = peer.robot.back();
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/panel_check.cjs", st.base(), st.token, st.id,
+                     st.out_dir(), kWeb},
+                    (st.dir / "panel_check.log").string());
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000);
+  if (!finished) node.stop();
+  const auto result = read_result((st.dir / "panel_check.log").string());
+  INFO(read_file((st.dir / "panel_check.log").string()));
+  REQUIRE(finished);
+  REQUIRE(result.isObject());
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["status"].asInt() == 200);
+  CHECK(result["sticks"].asInt() == 2);
+  CHECK(result["buttons"].asInt() >= 4);
+  CHECK(result["closed"].asBool());
+  // The keys released the dead-man; the gamepad held it and drove forward.
+  CHECK_FALSE(result["released"].asBool());
+  CHECK(result["gamepad_panel"]["deadman"].asBool());
+  CHECK(result["gamepad_panel"]["axes"]["drive_y"].asDouble() > 0.9);
+  CHECK(result["gamepad_label"].asString() == "1 gamepad(s)");
+  // The page's PanelState drove rise-sim: the robot moved on LCM.
+  double moved = 0.0;
+  for (const auto& r : peer.robot) moved = std::max(moved, distance_xy(r, start));
+  CHECK(moved > 0.5);
+  bool drove = false;
+  for (const auto& p : peer.panels) drove |= !p.failsafe && p.deadman && p.axes[1].value > 0.9f;
+  CHECK(drove);
+  // Closed with the keys held: the server publishes the safe state, the robot stops.
+  const std::size_t at_close = peer.panels.size();
+  REQUIRE(peer.wait_until([&] { return peer.panels.size() > at_close && peer.panels.back().failsafe; }, 5000));
+  const auto& safe = peer.panels.back();
+  CHECK_FALSE(safe.deadman);
+  for (const auto& a : safe.axes) CHECK(a.value == 0.0f);
+  CHECK((safe.sources[0].stale || !safe.sources[0].connected));
+  REQUIRE(peer.wait_until(
+      [&] {
+        const auto& r = peer.robot.back();
+        return !r.motors_enabled && std::abs(r.linear_velocity_mps[0]) < 0.02;
+      },
+      5000));
+}
