@@ -205,10 +205,26 @@ void check_pcd_data(const std::string& path, std::string_view text, const PcdHea
     // refused here, though a float's bytes spell a keyword only by chance.
     static const char* keywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
                                      "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
-    const std::string_view data = text.substr(std::min(at, text.size()));
-    for (const char* k : keywords)
-      if (data.starts_with(k))
-        fail_byte(path, at, "binary data begins with '" + std::string(k) + "', which PCL's reader takes for a header line");
+    // PCL's loop skips blank lines and '#' comments before it looks for a
+    // keyword at the start of a (whitespace-trimmed) line, so do the same.
+    std::string_view data = text.substr(std::min(at, text.size()));
+    size_t line_at = at;
+    while (!data.empty()) {
+      const size_t eol = data.find('\n');
+      std::string_view line = data.substr(0, eol);
+      const size_t first = line.find_first_not_of(" \t\r\v\f");
+      line = first == std::string_view::npos ? std::string_view{} : line.substr(first);
+      if (!line.empty() && line.front() != '#') {
+        for (const char* k : keywords)
+          if (line.starts_with(k))
+            fail_byte(path, line_at,
+                      "binary data has a line beginning with '" + std::string(k) + "', which PCL's reader takes for a header line");
+        break;
+      }
+      if (eol == std::string_view::npos) break;
+      data.remove_prefix(eol + 1);
+      line_at += eol + 1;
+    }
   }
   if (h.data == "binary") {
     if (need > have)

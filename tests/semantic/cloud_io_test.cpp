@@ -237,7 +237,11 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFIELDS x y z\xfe\n"), Catch::Contains("t.pcd:2: FIELDS: field name"));
     // Found by the fuzzer: PCL takes binary data that starts with a header keyword for the header.
     CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\nCOLUMNS?" + std::string(16, '\0')),
-               Catch::Contains("t.pcd: byte 121: binary data begins with 'COLUMNS'"));
+               Catch::Contains("t.pcd: byte 121: binary data has a line beginning with 'COLUMNS'"));
+    // Found by the fuzzer: PCL skips '#' comment lines and blank lines before
+    // it looks for a keyword, then allocates what a POINTS line says.
+    CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\n# comment\n\n  POINTS 99999999999\n" + std::string(16, '\0')),
+               Catch::Contains("t.pcd: byte 132: binary data has a line beginning with 'POINTS'"));
     // 1.2 GB announced by a 4-byte LZF block: refused before PCL allocates.
     const std::string huge = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100000000\nHEIGHT 1\n"
                              "POINTS 100000000\nDATA binary_compressed\n";
@@ -245,7 +249,7 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
                Catch::Contains("uncompressed bytes cannot come from 4"));
     // Found by the fuzzer: PCL's own header reader throws std::out_of_range on this one.
     CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\n" + std::string("\x44\x41\x54\x41\x00\x00\x00\x40\x00\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\x00\x40\x00\x00\x40\xc0\x7f\x00\x00\x00\x00\x00\x00\x00\x00", 43)),
-               Catch::Contains("t.pcd: byte 121: binary data begins with 'DATA'"));
+               Catch::Contains("t.pcd: byte 121: binary data has a line beginning with 'DATA'"));
     CHECK_THAT(error_of("t.pcd", "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 3\nHEIGHT 1\nPOINTS 2\nDATA ascii\n"),
                Catch::Contains("t.pcd:7: POINTS: 2 is not WIDTH x HEIGHT = 3"));
   }
