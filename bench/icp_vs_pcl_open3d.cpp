@@ -142,16 +142,19 @@ void run_pair(const Pair& pair, bool quick) {
   struct Variant {
     sem::IcpMetric metric;
     bool exact;
+    bool reuse;
     const char* name;
   };
-  const Variant variants[] = {{sem::IcpMetric::PointToPoint, false, "ours point-to-point"},
-                              {sem::IcpMetric::PointToPoint, true, "ours point-to-point, exact pairs"},
-                              {sem::IcpMetric::PointToPlane, false, "ours point-to-plane"}};
+  const Variant variants[] = {{sem::IcpMetric::PointToPoint, false, true, "ours point-to-point"},
+                              {sem::IcpMetric::PointToPoint, false, false, "ours point-to-point, no pair reuse"},
+                              {sem::IcpMetric::PointToPoint, true, true, "ours point-to-point, exact pairs"},
+                              {sem::IcpMetric::PointToPlane, false, true, "ours point-to-plane"}};
   for (const auto& v : variants)
     for (int threads : {1, 2}) {
       sem::IcpSettings s;
       s.metric = v.metric;
       s.exact_neighbours = v.exact;
+      s.reuse_pairs = v.reuse;
       s.max_iterations = kIterations;
       s.max_correspondence_m = s.min_correspondence_m = r;
       s.translation_epsilon_m = s.rotation_epsilon_rad = 0.0;  // all 30 iterations, as the peers

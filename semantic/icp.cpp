@@ -115,23 +115,46 @@ class GridPyramid {
   /// the answer, where the next iteration (pairs change little) should
   /// start. Starting higher finds the same point, at more cost: what a
   /// level finds is the nearest within its whole radius.
-  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level, uint8_t widest) const {
+  /// With `clear_m` non-null, also the clearance of the answer
+  /// (VoxelGrid::nearest_with_clearance) when the search that gave it read
+  /// every point in its radius, else 0: with nothing found, no point lies
+  /// within the clearance.
+  VoxelGrid::Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint8_t& level, uint8_t widest,
+                               float* clear_m = nullptr) const {
+    if (clear_m != nullptr) *clear_m = 0.0f;
     for (size_t l = std::min<size_t>(level, widest); l < levels_.size(); ++l) {
       const Level& lv = levels_[l];
       const float r = std::min(lv.radius_m, radius_m);
       const bool sample = !exact_ || r > exact_radius_m_;
-      const VoxelGrid::Neighbour nb = lv.grid->nearest(q, r, sample ? lv.stride_cap : 0u);
+      const uint32_t stride = sample ? lv.stride_cap : 0u;
+      VoxelGrid::Neighbour nb;
+      float clear = 0.0f;
+      if (clear_m != nullptr && stride == 0) {
+        nb = lv.grid->nearest_with_clearance(q, r, clear);
+      } else {
+        nb = lv.grid->nearest(q, r, stride);
+      }
       if (nb.index != VoxelGrid::kNone) {
-        size_t m = l;
-        while (m > 0 && levels_[m - 1].radius_m * levels_[m - 1].radius_m >= nb.distance2_m2) --m;
-        level = static_cast<uint8_t>(m);
+        level = level_of(nb.distance2_m2);
+        if (clear_m != nullptr) *clear_m = clear;
         return nb;
       }
-      if (r >= radius_m) break;
+      if (r >= radius_m || l + 1 == levels_.size()) {
+        if (clear_m != nullptr) *clear_m = clear;
+        break;
+      }
     }
     level = static_cast<uint8_t>(levels_.size() - 1);
     return {};
   }
+  /// The finest level whose radius holds a pair `distance2_m2` apart:
+  /// where the next search for it starts.
+  uint8_t level_of(float distance2_m2) const {
+    size_t m = 0;
+    while (m + 1 < levels_.size() && levels_[m].radius_m * levels_[m].radius_m < distance2_m2) ++m;
+    return static_cast<uint8_t>(m);
+  }
+  uint8_t coarsest() const { return static_cast<uint8_t>(levels_.size() - 1); }
   /// The finest level whose radius covers `radius_m`: no search at that
   /// radius needs to start above it.
   uint8_t level_for(float radius_m) const {
@@ -202,6 +225,16 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   const std::ptrdiff_t chunks = (n + kChunk - 1) / kChunk;
   std::vector<Sums> partial(static_cast<size_t>(chunks));
   std::vector<uint8_t> hint(src.size(), 0);  // per source point: the pyramid level to start at
+  // Per source point, its last exact search: where it was, its answer and
+  // that answer's clearance (0: none to reuse). Capped cells keep different
+  // points per level: no reuse there.
+  struct Memo {
+    Eigen::Vector3f at = Eigen::Vector3f::Zero();
+    float clear_m = 0.0f;
+    uint32_t index = VoxelGrid::kNone;
+  };
+  const bool reuse = settings.reuse_pairs && settings.max_points_per_cell == 0;
+  std::vector<Memo> memo(reuse ? src.size() : 0);
 
   IcpResult result;
   Eigen::Isometry3d T = T_initial;
@@ -218,7 +251,42 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
       for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
         uint8_t& level = hint[static_cast<size_t>(i)];
-        const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level, widest);
+        VoxelGrid::Neighbour nb;
+        if (reuse) {
+          // Moved by δ since its last exact search: every other target point
+          // is still at least clear − δ away, so while its answer is nearer
+          // than that it is still the nearest, and a search would return it
+          // (with the same start level). The same pairs, without the search.
+          Memo& m = memo[static_cast<size_t>(i)];
+          const float delta = (p - m.at).norm();
+          const float slack = delta + 1e-6f * (p.cwiseAbs().maxCoeff() + 1.0f);  // float rounding
+          bool reused = false;
+          if (m.clear_m > 0.0f) {
+            if (m.index != VoxelGrid::kNone) {
+              const Eigen::Vector3f& tp = target.points[m.index];
+              const float d2 = (Eigen::Vector4f(tp.x(), tp.y(), tp.z(), 0.0f) - Eigen::Vector4f(p.x(), p.y(), p.z(), 0.0f)).squaredNorm();
+              if (std::sqrt(d2) + slack < m.clear_m) {
+                reused = true;
+                if (d2 <= rf * rf) {
+                  nb = {m.index, d2};
+                  level = pyramid.level_of(d2);
+                } else {
+                  level = pyramid.coarsest();
+                }
+              }
+            } else if (rf + slack < m.clear_m) {
+              reused = true;  // nothing within the clearance then: nothing within rf now
+              level = pyramid.coarsest();
+            }
+          }
+          if (!reused) {
+            float clear = 0.0f;
+            nb = pyramid.nearest(p, rf, level, widest, &clear);
+            m = {p, clear, nb.index};
+          }
+        } else {
+          nb = pyramid.nearest(p, rf, level, widest);
+        }
         if (nb.index == VoxelGrid::kNone) continue;
         const Eigen::Vector3d pd = p.cast<double>();
         const Eigen::Vector3d qd = target.points[nb.index].cast<double>();

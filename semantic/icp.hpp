@@ -29,6 +29,11 @@ struct IcpSettings {
   /// within min_correspondence_m is the exact nearest neighbour (PCL's and
   /// Open3D's k-d tree answer, iteration by iteration).
   bool exact_neighbours = false;
+  /// true: a source point whose last exact search found its nearest target
+  /// point with the next one farther away than the distance it has moved
+  /// since (plus its distance to it) keeps that pair without a search. The
+  /// pairs, and so the result, are those searching would give, to the bit.
+  bool reuse_pairs = true;
 };
 
 struct IcpResult {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -42,7 +43,21 @@ class VoxelGrid {
   /// allocation, no throw: safe in a parallel loop.
   /// With `stride_cap` > 0, a cell of more points reads only about that
   /// many of them, evenly spread (an approximate answer at a bounded cost).
-  Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap = 0) const;
+  Neighbour nearest(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap = 0) const {
+    return search<false>(q, radius_m, stride_cap, nullptr);
+  }
+
+  /// nearest() reading every point, and also `clear_m`: no kept point
+  /// other than the answer lies closer than that to q (the second nearest
+  /// read, the nearest face of a cell skipped, or radius_m). A query that
+  /// moves by δ keeps the same answer while its distance to it + δ stays
+  /// below clear_m − δ (what ICP uses to skip searches exactly).
+  Neighbour nearest_with_clearance(const Eigen::Vector3f& q, float radius_m, float& clear_m) const {
+    float clear2 = 0.0f;
+    const Neighbour nb = search<true>(q, radius_m, 0, &clear2);
+    clear_m = std::sqrt(clear2);
+    return nb;
+  }
 
   /// The k nearest kept points to `q`, nearest first, into `out` (cleared
   /// first). Exact where the k-th lies within `max_rings` cells of q's
@@ -56,6 +71,9 @@ class VoxelGrid {
   const std::vector<uint32_t>& cell_offsets() const { return offsets_; }
 
  private:
+  template <bool kClearance>
+  Neighbour search(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap, float* clear2) const;
+
   struct Slot {
     uint64_t key = kEmpty;
     uint32_t begin = 0;
@@ -98,9 +116,12 @@ class VoxelGrid {
   std::vector<uint32_t> offsets_;
 };
 
-inline VoxelGrid::Neighbour VoxelGrid::nearest(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap) const {
+template <bool kClearance>
+inline VoxelGrid::Neighbour VoxelGrid::search(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap,
+                                              float* clear2) const {
   Neighbour best;
   best.distance2_m2 = radius_m * radius_m;
+  float second2 = best.distance2_m2;  // kClearance: the nearest other point (or skipped cell) so far
   // The cells the cube [q - r, q + r] touches (1 or 2 per axis when r <=
   // cell / 2), q's own cell first so that its best prunes the others: a
   // cell whose nearest face is farther than the best so far is not read.
@@ -116,7 +137,10 @@ inline VoxelGrid::Neighbour VoxelGrid::nearest(const Eigen::Vector3f& q, float r
     return cell < c[a] ? q[a] - static_cast<float>(cell + 1) * cell_m_ : static_cast<float>(cell) * cell_m_ - q[a];
   };
   const auto visit = [&](int32_t x, int32_t y, int32_t z, float box2) {
-    if (box2 > best.distance2_m2) return;
+    if (box2 > best.distance2_m2) {
+      if constexpr (kClearance) second2 = std::min(second2, box2);
+      return;
+    }
     const Slot* s = find(pack(x, y, z));
     if (s == nullptr) return;
     const Eigen::Vector4f* p = sorted_.data() + s->begin;
@@ -124,8 +148,11 @@ inline VoxelGrid::Neighbour VoxelGrid::nearest(const Eigen::Vector3f& q, float r
     for (uint32_t i = 0; i < s->count; i += step) {
       const float d2 = (p[i] - q4).squaredNorm();
       if (d2 <= best.distance2_m2) {
+        if constexpr (kClearance) second2 = best.distance2_m2;
         best.distance2_m2 = d2;
         best.index = s->begin + i;
+      } else if constexpr (kClearance) {
+        second2 = std::min(second2, d2);
       }
     }
   };
@@ -142,6 +169,7 @@ inline VoxelGrid::Neighbour VoxelGrid::nearest(const Eigen::Vector3f& q, float r
     }
   }
   if (best.index != kNone) best.index = index_[best.index];
+  if constexpr (kClearance) *clear2 = second2;
   return best;
 }
 

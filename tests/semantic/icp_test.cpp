@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 
 #include "semantic/voxel_grid.hpp"
 #include "tests/semantic/synthetic_room.hpp"
@@ -66,6 +67,30 @@ TEST_CASE("icp gives the same answer on one thread and on two", "[semantic]") {
   CHECK(one.rmse_m == two.rmse_m);
 }
 
+TEST_CASE("icp reusing pairs gives the pairs and transform a search would, to the bit", "[semantic]") {
+  sem::Cloud target = sem::test::synthetic_room(20000, 3);
+  sem::estimate_normals(target, 10, Eigen::Vector3f(3, 2, 1.5));
+  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 1.0, 1.0, {-0.15, 0.1, 0.05});
+  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  sem::IcpSettings s;
+  s.metric = GENERATE(sem::IcpMetric::PointToPoint, sem::IcpMetric::PointToPlane);
+  s.exact_neighbours = GENERATE(false, true);
+  // A shrinking pairing distance, and a fixed one (the benchmark's).
+  s.max_correspondence_m = GENERATE(0.5, 0.1);
+  s.min_correspondence_m = 0.1;
+  s.translation_epsilon_m = s.rotation_epsilon_rad = 0.0;
+  s.reuse_pairs = false;
+  const auto searched = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
+  s.reuse_pairs = true;
+  const auto reused = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
+  CHECK(searched.iterations == reused.iterations);
+  CHECK(searched.T_target_source.matrix() == reused.T_target_source.matrix());
+  CHECK(searched.rmse_m == reused.rmse_m);
+  CHECK(searched.inlier_ratio == reused.inlier_ratio);
+  // The fixed 10 cm pairing cannot pull in a 6 degree turn; the shrinking one does.
+  if (s.max_correspondence_m > 0.2) CHECK(rotation_error_deg(reused.T_target_source, T_true) < 0.05);
+}
+
 TEST_CASE("icp refuses empty clouds, missing normals and bad settings", "[semantic]") {
   const sem::Cloud room = sem::test::synthetic_room(1000, 5);
   const Eigen::Isometry3d I = Eigen::Isometry3d::Identity();
@@ -121,6 +146,13 @@ TEST_CASE("voxel grid finds the same nearest neighbour as brute force", "[semant
     }
     const auto nb = grid.nearest(q, 0.1f);
     REQUIRE(nb.index == best);
+    // The clearance: a lower bound on every other point's distance (and at most the radius).
+    float clear = -1.0f;
+    const auto nc = grid.nearest_with_clearance(q, 0.1f, clear);
+    REQUIRE(nc.index == best);
+    CHECK(clear <= 0.1f);
+    for (uint32_t i = 0; i < room.points.size(); ++i)
+      if (i != best) REQUIRE(std::sqrt((room.points[i] - q).squaredNorm()) >= clear * (1.0f - 1e-6f));
     std::sort(all.begin(), all.end());
     grid.k_nearest(q, 8, knn, 6);
     REQUIRE(knn.size() == 8);
