@@ -246,6 +246,9 @@ Json::Value robot_json(const rise_msgs::RobotState& m) {
   Json::Value contacts(Json::arrayValue);
   for (const auto& c : m.contacts) contacts.append(c);
   v["contacts"] = contacts;
+  Json::Value faults(Json::arrayValue);
+  for (const auto& f : m.active_faults) faults.append(f);
+  v["active_faults"] = faults;  // "id: kind target", as rise-sim lists them
   return v;
 }
 

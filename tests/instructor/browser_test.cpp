@@ -2,7 +2,8 @@
 // from instructor/web) against `rise-instructor serve` and `rise-sim` as
 // separate processes over LCM: the console shows the robot moving while the
 // console emulator drives it through rise-hild, and its fault button injects
-// a signed fault that rise-hild applies and reports in PanelState; the
+// a signed fault that rise-hild applies and reports in PanelState, and its
+// camera-blackout button blacks out the camera inset until the fault ends; the
 // virtual panel page drives the robot, and closing it stops the robot.
 
 #include <catch2/catch.hpp>
@@ -148,7 +149,7 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   task.state = "running";
   task.score = 7;
   int ticks = 0;
-  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] {
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 120000, [&] {
     if (ticks++ % 50 == 0) peer.lcm().publish("rise/" + st.id + "/task_status", &task);
   });
   if (!finished) node.stop();
@@ -186,7 +187,9 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   CHECK(peer.faults[0].kind == "stuck_at");
   CHECK(peer.faults[0].trainee_id == st.id);
   rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key((st.dir / "instructor.key").string()));
-  CHECK(verifier.check(peer.faults[0], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+  // Checked as of its own time: the page ran on for the camera blackout's 10 s,
+  // past the 5 s window (the window itself is signed_command_test's).
+  CHECK(verifier.check(peer.faults[0], peer.faults[0].utime) == rise::panels::Verdict::Accepted);
   // rise-hild took it: the fault is in PanelState.active_faults over LCM, and on the page.
   const auto has_fault = [](const rise_msgs::PanelState& p) {
     return std::any_of(p.active_faults.begin(), p.active_faults.end(),
@@ -194,6 +197,22 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   };
   CHECK(std::any_of(peer.daemon_panels.begin(), peer.daemon_panels.end(), has_fault));
   CHECK(result["page_faults"].asString().find("stick-stuck: stuck_at drive_y") != std::string::npos);
+  // The camera-blackout button: rise-sim listed it in RobotState, the inset
+  // was the camera's picture, then black with its label, then the picture again.
+  bool listed = false;
+  for (const auto& f : result["blackout_robot_faults"])
+    listed |= f.asString().rfind("camera-blackout: camera_blackout", 0) == 0;
+  CHECK(listed);
+  REQUIRE(peer.faults.size() >= 2);
+  CHECK(peer.faults[1].kind == "camera_blackout");
+  CHECK(verifier.check(peer.faults[1], peer.faults[1].utime) == rise::panels::Verdict::Accepted);
+  CHECK(result["inset_before"]["mean"].asDouble() > 20.0);
+  CHECK(result["inset_before"]["label"].asString().empty());
+  CHECK(result["inset_blackout"]["max"].asDouble() < 8.0);
+  CHECK(result["inset_blackout"]["label"].asString().find("camera blackout") != std::string::npos);
+  CHECK(result["inset_after"]["mean"].asDouble() > 20.0);
+  CHECK(result["inset_after"]["label"].asString().empty());
+  CHECK(is_png(st.out_dir() + "/instructor_view3d_blackout.png"));
 }
 
 TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, and closing it stops the robot", "[instructor]") {

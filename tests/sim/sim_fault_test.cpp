@@ -1,7 +1,10 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
@@ -30,6 +33,24 @@ PhysicsFault fault(const std::string& id, SimFaultKind kind, const std::string& 
   f.duration_s = duration_s;
   f.seed = 11;
   return f;
+}
+// Dead-man held, mode = arm, the shoulder stick pushing the arm down.
+ControlInput shoulder_down() {
+  ControlInput in = drive_panel(0.0f, 0.0f);
+  in.axes = {{"arm_x", 0.0f}, {"arm_y", -1.0f}, {"arm_twist", 0.0f}};
+  in.switches = {{"mode", 1}, {"speed", 2}};
+  in.switch_labels = {{"mode", "arm"}, {"speed", "fast"}};
+  return in;
+}
+// Steps for `seconds`; the name of the first joint that broke, or "" if none did.
+std::string first_broken_joint(Simulation& sim, double seconds) {
+  const auto steps = static_cast<int>(std::lround(seconds / Simulation::kStepS));
+  for (int i = 0; i < steps; ++i) {
+    sim.step();
+    for (const auto& e : sim.take_events())
+      if (e.kind == SimEventKind::JointBroken) return e.b;
+  }
+  return {};
 }
 bool has_event(const std::vector<SimEvent>& events, SimEventKind kind, const std::string& b) {
   for (const auto& e : events)
@@ -104,6 +125,33 @@ TEST_CASE("faults with a bad target are refused with the reason", "[sim]") {
   CHECK_THAT(sim.set_fault(3, fault("x", SimFaultKind::MotorFailure, "left", 0, 0)), Catch::Contains("no robot"));
   CHECK(sim.set_fault(0, fault("w", SimFaultKind::WeakJoint, "elbow_pitch", 0.3, 0)).empty());
   CHECK(sim.faults(0).size() == 1);
+}
+
+TEST_CASE("a weak joint breaks under a push the healthy joint holds and is whole again after the fault", "[sim]") {
+  // The shipped shoulder motor (120 N·m) pressing the gripper into the floor
+  // cannot break its 300 N·m joint; at 0.3 of that limit (90 N·m) it can.
+  Simulation healthy(tracked(), WorldDescription{});
+  healthy.set_input(shoulder_down());
+  CHECK(first_broken_joint(healthy, 4.0).empty());
+
+  Simulation weakened(tracked(), WorldDescription{});
+  REQUIRE(weakened.set_fault(0, fault("wj", SimFaultKind::WeakJoint, "shoulder_pitch", 0.3, 0.0)).empty());
+  weakened.set_input(shoulder_down());
+  CHECK(first_broken_joint(weakened, 4.0) == "shoulder_pitch");
+  const RobotSnapshot s = weakened.snapshot();
+  CHECK(s.damage > 0.0);
+  const auto broken = std::count_if(s.joints.begin(), s.joints.end(), [](const JointState& j) { return j.broken; });
+  CHECK(broken == 1);
+
+  // The same fault lasting 0.5 s, over before the push: the joint has its
+  // nominal limit back and holds the push again.
+  Simulation restored(tracked(), WorldDescription{});
+  REQUIRE(restored.set_fault(0, fault("wj", SimFaultKind::WeakJoint, "shoulder_pitch", 0.3, 0.5)).empty());
+  CHECK(first_broken_joint(restored, 0.6).empty());
+  CHECK(restored.faults(0).empty());
+  CHECK(restored.snapshot().active_faults.empty());
+  restored.set_input(shoulder_down());
+  CHECK(first_broken_joint(restored, 4.0).empty());
 }
 
 TEST_CASE("scanner dropout removes returns and scanner noise moves them, both seeded", "[sim]") {

@@ -158,6 +158,21 @@ function onboardMount() {
   return c ? { name: c.name, position: c.position, rpy: c.rpy } : { name: 'onboard', position: [0.30, 0, 0.50], rpy: [0, 10 * Math.PI / 180, 0] };
 }
 
+// Whether the robot's RobotState.active_faults ("id: camera_blackout
+// target", target "" = every camera) blacks out the camera `name`.
+function cameraBlackedOut(robotState, name) {
+  return (robotState.active_faults || []).some((f) => {
+    const m = /^[^:]*: camera_blackout ?(.*)$/.exec(f);
+    return m && (m[1].trim() === '' || m[1].trim() === name);
+  });
+}
+
+// The inset's rectangle in canvas pixels (y up, as WebGL's viewport).
+function insetRect(w, h) {
+  const iw = Math.round(w * 0.33), ih = Math.round(iw * 3 / 4);
+  return { x: w - iw - 4, y: 4, w: iw, h: ih };
+}
+
 function render3d() {
   if (!view.renderer || !state.world) return;
   for (const [id, t] of state.trainees) {
@@ -186,10 +201,24 @@ function render3d() {
     const [, p, y] = m.rpy;
     const dir = new THREE.Vector3(Math.cos(p) * Math.cos(y), Math.cos(p) * Math.sin(y), -Math.sin(p)).applyQuaternion(q);
     view.onboard.lookAt(cam.clone().add(dir));
-    const iw = Math.round(w * 0.33), ih = Math.round(iw * 3 / 4);
-    view.renderer.setViewport(w - iw - 4, 4, iw, ih); view.renderer.setScissor(w - iw - 4, 4, iw, ih);
-    view.renderer.render(view.scene, view.onboard);
+    const inset = insetRect(w, h);
+    view.renderer.setViewport(inset.x, inset.y, inset.w, inset.h); view.renderer.setScissor(inset.x, inset.y, inset.w, inset.h);
+    const blackout = cameraBlackedOut(r, m.name);
+    if (blackout) {
+      // The camera sends nothing: the inset is black, labelled.
+      view.renderer.setClearColor(0x000000, 1); view.renderer.clear();
+    } else {
+      view.renderer.render(view.scene, view.onboard);
+    }
+    setCameraLabel(blackout ? 'camera blackout (' + m.name + ')' : '');
+  } else {
+    setCameraLabel('');
   }
+}
+
+function setCameraLabel(text) {
+  const l = document.getElementById('camera-label');
+  l.textContent = text; l.hidden = !text;
 }
 
 // ---- panels, training, events --------------------------------------------
@@ -339,8 +368,21 @@ function canvasStats(canvas) {
   const mean = sum / n;
   return { variance: sum2 / n - mean * mean, robot_pixels: robot, pixels: n };
 }
-window.riseConsole = { state, stats: () => ({ map: canvasStats(document.getElementById('map')),
-                                              view3d: canvasStats(document.getElementById('view3d')) }) };
+// The camera inset's mean luminance (0..255) and the label over it.
+function insetStats() {
+  const v = document.getElementById('view3d'), r = insetRect(v.width, v.height);
+  const c = document.createElement('canvas'); c.width = r.w; c.height = r.h;
+  const g = c.getContext('2d'); g.drawImage(v, r.x, v.height - r.y - r.h, r.w, r.h, 0, 0, r.w, r.h);
+  const d = g.getImageData(0, 0, r.w, r.h).data;
+  let sum = 0, max = 0;
+  for (let i = 0; i < d.length; i += 4) {
+    const y = 0.299 * d[i] + 0.587 * d[i + 1] + 0.114 * d[i + 2]; sum += y; max = Math.max(max, y);
+  }
+  const l = document.getElementById('camera-label');
+  return { mean: sum / (d.length / 4), max, label: l.hidden ? '' : l.textContent };
+}
+window.riseConsole = { state, insetStats, stats: () => ({ map: canvasStats(document.getElementById('map')),
+                                                          view3d: canvasStats(document.getElementById('view3d')) }) };
 
 async function main() {
   document.getElementById('trainee').addEventListener('change', (e) => { state.selected = e.target.value; state.dirty = true; updatePanelLink(); });

@@ -1,6 +1,7 @@
 // The console page: 401 without the token, the robot moving on it while a
 // scripted panel drives rise-sim, the map and 3D view drawn (pixel variance,
-// the robot's colour in the 3D canvas), a fault button publishing.
+// the robot's colour in the 3D canvas), a fault button publishing, the
+// camera-blackout button blacking out the camera inset until the fault ends.
 // usage: node console_check.cjs BASE_URL TOKEN TRAINEE OUT_DIR WEB_DIR
 const path = require('node:path');
 const { launch, parsePos, run } = require('./browser.cjs');
@@ -59,6 +60,25 @@ run(async () => {
     }, id, { timeout: 15000 });
     result.page_faults = await page.textContent('#panels tr[data-trainee="' + id + '"] .faults');
     await page.screenshot({ path: path.join(outDir, 'instructor_console_fault.png') });
+    // The camera-blackout button: rise-sim lists it in RobotState.active_faults
+    // for its 10 s; the camera inset goes black, labelled, and comes back.
+    result.inset_before = await page.evaluate(() => window.riseConsole.insetStats());
+    await page.click('button[data-fault="camera-blackout"]');
+    await page.waitForFunction(() => {
+      const s = window.riseConsole.insetStats();
+      return s.label.includes('camera blackout') && s.max < 8;
+    }, null, { timeout: 15000 });
+    result.inset_blackout = await page.evaluate(() => window.riseConsole.insetStats());
+    result.blackout_robot_faults = await page.evaluate(() => {
+      const t = window.riseConsole.state.trainees.get(window.riseConsole.state.selected);
+      return t.robot_state.active_faults;
+    });
+    await page.locator('#view3d-box').screenshot({ path: path.join(outDir, 'instructor_view3d_blackout.png') });
+    await page.waitForFunction(() => {
+      const s = window.riseConsole.insetStats();
+      return s.label === '' && s.mean > 20;
+    }, null, { timeout: 25000 });
+    result.inset_after = await page.evaluate(() => window.riseConsole.insetStats());
     result.page_errors = consoleErrors;
   } finally {
     await browser.close();
