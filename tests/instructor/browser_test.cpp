@@ -167,7 +167,7 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   // The page was pushed to over one second (the rate is a figure, not asserted:
   // no timed assertions; the server refuses a push rate under 20 Hz).
   WARN("console page: " << result["pushes_per_s"].asInt() << " pushes in 1 s (--push-hz 50)");
-  CHECK(result["pushes_per_s"].asInt() > 0);
+  CHECK(result["push_continued"].asBool());
   const auto& stats = result["stats"];
   CHECK(stats["map"]["variance"].asDouble() > 50.0);
   CHECK(stats["map"]["robot_pixels"].asInt() > 20);
