@@ -1,6 +1,8 @@
 #include "firmware_protocol/dbc.hpp"
 
 #include <catch2/catch.hpp>
+
+#include "tests/test_data.hpp"
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -14,13 +16,7 @@ namespace fp = rise::firmware_protocol;
 
 namespace {
 
-// Real DBC files from ../shared/data (see its MANIFEST.md); empty when absent.
-std::string data_file(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const std::filesystem::path p = std::filesystem::path(root) / relative;
-  return std::filesystem::exists(p) ? p.string() : std::string{};
-}
+using rise::test::data_file;
 
 std::map<std::string, double> by_name(const std::vector<fp::DecodedSignal>& decoded) {
   std::map<std::string, double> out;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+
+#include "tests/test_data.hpp"
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -19,13 +21,7 @@ namespace fp = rise::firmware_protocol;
 
 namespace {
 
-// Real descriptors from ../shared/data/hid (see its MANIFEST.md); empty when absent.
-std::string data_file(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const std::filesystem::path p = std::filesystem::path(root) / relative;
-  return std::filesystem::exists(p) ? p.string() : std::string{};
-}
+using rise::test::data_file;
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -1,6 +1,8 @@
 #include "firmware_protocol/hid_report.hpp"
 
 #include <catch2/catch.hpp>
+
+#include "tests/test_data.hpp"
 #include <algorithm>
 #include <cctype>
 #include <cstdlib>
@@ -21,12 +23,7 @@ namespace fp = rise::firmware_protocol;
 
 namespace {
 
-std::string data_file(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const std::filesystem::path p = std::filesystem::path(root) / relative;
-  return std::filesystem::exists(p) ? p.string() : std::string{};
-}
+using rise::test::data_file;
 
 // A lenient JSON reader for the Android CTS test files: they use 0x literals
 // and are therefore not strict JSON.

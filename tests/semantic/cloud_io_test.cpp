@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/test_data.hpp"
+
 #include <unistd.h>
 
 #include <cstdlib>
@@ -15,12 +17,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string data_file(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const fs::path p = fs::path(root) / relative;
-  return fs::exists(p) ? p.string() : std::string{};
-}
+using rise::test::data_file;
 
 fs::path scratch(const std::string& name) {
   const fs::path dir = fs::temp_directory_path() / ("rise_cloud_io_test_" + std::to_string(::getpid()));

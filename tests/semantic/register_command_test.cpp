@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/test_data.hpp"
+
 #include <array>
 #include <cstdio>
 #include <cstdlib>
@@ -11,12 +13,7 @@
 
 namespace {
 
-std::string data_file(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const std::filesystem::path p = std::filesystem::path(root) / relative;
-  return std::filesystem::exists(p) ? p.string() : std::string{};
-}
+using rise::test::data_file;
 
 struct Run {
   int status = -1;

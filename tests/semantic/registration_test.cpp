@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include "tests/test_data.hpp"
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -16,12 +18,7 @@ using sem::test::translation_error_m;
 
 namespace {
 
-std::string data_file(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const std::filesystem::path p = std::filesystem::path(root) / relative;
-  return std::filesystem::exists(p) ? p.string() : std::string{};
-}
+using rise::test::data_file;
 
 }  // namespace
 

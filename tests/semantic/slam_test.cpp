@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include "tests/test_data.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -71,13 +73,6 @@ std::vector<Cloud> scan_building(const std::vector<Eigen::Isometry3d>& T_world_s
   return clouds;
 }
 
-
-std::string data_dir(const std::string& relative) {
-  const char* root = std::getenv("RISE_TEST_DATA");
-  if (root == nullptr) return {};
-  const std::filesystem::path p = std::filesystem::path(root) / relative;
-  return std::filesystem::exists(p) ? p.string() : std::string{};
-}
 
 }  // namespace
 
@@ -294,7 +289,7 @@ TEST_CASE("the information of a match grows with its points and shrinks with its
 }
 
 TEST_CASE("slam registers 3DTK's three scans near slam6d's own frames from a poor guess", "[semantic]") {
-  const std::string dir = data_dir("pointclouds/3DTK-dat");
+  const std::string dir = rise::test::data_file("pointclouds/3DTK-dat");
   if (dir.empty()) {
     WARN("skipped: RISE_TEST_DATA/pointclouds/3DTK-dat not found");
     return;
