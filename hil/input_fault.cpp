@@ -1,5 +1,7 @@
 #include "hil/input_fault.hpp"
 
+#include "hil/io/seeded_draw.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -7,12 +9,6 @@
 namespace rise::hil {
 namespace {
 
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
 
 bool intermittently_lost(const InputFault& f, int64_t now_us) {
   const double slot_s = f.rate > 0.0 ? f.rate : 0.1;
@@ -45,10 +41,7 @@ std::optional<InputFaultKind> parse_input_fault_kind(std::string_view name) {
   return std::nullopt;
 }
 
-double seeded_uniform(uint64_t seed, uint64_t index) {
-  const uint64_t r = splitmix64(splitmix64(seed) ^ (index * 0xd1b54a32d192ed03ull));
-  return static_cast<double>(r >> 11) * 0x1.0p-53;
-}
+double seeded_uniform(uint64_t seed, uint64_t index) { return io::seeded_uniform(seed, index); }
 
 double seeded_normal(uint64_t seed, uint64_t index) {
   const double u1 = 1.0 - seeded_uniform(seed, 2 * index);  // (0, 1]

@@ -1,16 +1,12 @@
 #include "instructor/scenario_runner.hpp"
 
+#include "hil/io/seeded_draw.hpp"
+
 namespace rise::instructor {
 namespace {
 
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-uint64_t draw(uint64_t seed, uint64_t index) { return splitmix64(splitmix64(seed) ^ (index * 0xd1b54a32d192ed03ull)); }
-double uniform(uint64_t seed, uint64_t index) { return static_cast<double>(draw(seed, index) >> 11) * 0x1.0p-53; }
+uint64_t draw(uint64_t seed, uint64_t index) { return io::seeded_bits(seed, index); }
+double uniform(uint64_t seed, uint64_t index) { return io::seeded_uniform(seed, index); }
 
 }  // namespace
 

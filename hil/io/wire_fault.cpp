@@ -1,5 +1,7 @@
 #include "hil/io/wire_fault.hpp"
 
+#include "hil/io/seeded_draw.hpp"
+
 #include <linux/can/error.h>
 
 #include <algorithm>
@@ -7,19 +9,6 @@
 
 namespace rise::io {
 namespace {
-
-uint64_t splitmix64(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ull;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
-}
-
-// Same draw as hil::seeded_uniform (hil/input_fault.hpp).
-double uniform(uint64_t seed, uint64_t index) {
-  const uint64_t r = splitmix64(splitmix64(seed) ^ (index * 0xd1b54a32d192ed03ull));
-  return static_cast<double>(r >> 11) * 0x1.0p-53;
-}
 
 CanFrame error_frame(uint32_t classes) {
   CanFrame f;
@@ -80,7 +69,7 @@ std::vector<WireFault> WireFaultSet::active(int64_t now_us) const {
 const WireFault* WireFaultSet::hits(WireFaultKind kind, int64_t now_us, uint64_t n) const {
   for (const auto& f : faults_) {
     if (f.kind != kind || !f.active(now_us)) continue;
-    if (f.value <= 0.0 || f.value >= 1.0 || uniform(f.seed, n) < f.value) return &f;
+    if (f.value <= 0.0 || f.value >= 1.0 || seeded_uniform(f.seed, n) < f.value) return &f;
   }
   return nullptr;
 }
