@@ -18,7 +18,9 @@
 // inliers are evaluated the same way for every method: nearest target point
 // within the pairing distance after applying its transform.
 //
-//   bench_icp_vs_pcl_open3d [--quick]
+//   bench_icp_vs_pcl_open3d [--quick] [--ours-only] [--pair NAME]
+//   --quick: one run per cell; --ours-only: no PCL, no Open3D rows;
+//   --pair: only the pair of that name.
 
 #include <omp.h>
 #include <pcl/point_cloud.h>
@@ -123,7 +125,7 @@ Eigen::Isometry3d iso(const Eigen::Matrix4d& M) {
 // The fastest of the runs: on a shared machine the others measure the neighbours.
 double fastest(const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); }
 
-void run_pair(const Pair& pair, bool quick) {
+void run_pair(const Pair& pair, bool quick, bool ours_only) {
   constexpr int kIterations = 30;
   const int reps = quick ? 1 : 3;  // ours 2 * reps + 1 runs, Open3D reps, PCL one (seconds each)
   std::vector<Row> rows;
@@ -143,18 +145,22 @@ void run_pair(const Pair& pair, bool quick) {
     sem::IcpMetric metric;
     bool exact;
     bool reuse;
+    int coarse_stride;
     const char* name;
   };
-  const Variant variants[] = {{sem::IcpMetric::PointToPoint, false, true, "ours point-to-point"},
-                              {sem::IcpMetric::PointToPoint, false, false, "ours point-to-point, no pair reuse"},
-                              {sem::IcpMetric::PointToPoint, true, true, "ours point-to-point, exact pairs"},
-                              {sem::IcpMetric::PointToPlane, false, true, "ours point-to-plane"}};
+  const Variant variants[] = {
+      {sem::IcpMetric::PointToPoint, false, true, 8, "ours point-to-point"},
+      {sem::IcpMetric::PointToPoint, false, true, 1, "ours point-to-point, all points"},
+      {sem::IcpMetric::PointToPoint, false, false, 1, "ours point-to-point, all, no pair reuse"},
+      {sem::IcpMetric::PointToPoint, true, true, 1, "ours point-to-point, all, exact pairs"},
+      {sem::IcpMetric::PointToPlane, false, true, 8, "ours point-to-plane"}};
   for (const auto& v : variants)
     for (int threads : {1, 2}) {
       sem::IcpSettings s;
       s.metric = v.metric;
       s.exact_neighbours = v.exact;
       s.reuse_pairs = v.reuse;
+      s.coarse_stride = v.coarse_stride;
       s.max_iterations = kIterations;
       s.max_correspondence_m = s.min_correspondence_m = r;
       s.translation_epsilon_m = s.rotation_epsilon_rad = 0.0;  // all 30 iterations, as the peers
@@ -164,7 +170,7 @@ void run_pair(const Pair& pair, bool quick) {
       rows.push_back({v.name, threads, ms, T});
     }
 
-  {
+  if (!ours_only) {
     const auto src = to_pcl(pair.source), tgt = to_pcl(pair.target);
     pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
     icp.setInputSource(src);
@@ -194,7 +200,7 @@ void run_pair(const Pair& pair, bool quick) {
     rows.push_back({"PCL GeneralizedIterativeClosestPoint", 1, gms, T});
   }
 
-  {
+  if (!ours_only) {
     const auto src = to_open3d(pair.source), tgt = to_open3d(pair.target);
     const o3r::ICPConvergenceCriteria criteria(0.0, 0.0, kIterations);
     for (int plane = 0; plane < 2; ++plane)
@@ -249,7 +255,20 @@ void run_pair(const Pair& pair, bool quick) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  bool quick = false, ours_only = false;
+  std::string only;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--quick") == 0) {
+      quick = true;
+    } else if (std::strcmp(argv[i], "--ours-only") == 0) {
+      ours_only = true;
+    } else if (std::strcmp(argv[i], "--pair") == 0 && i + 1 < argc) {
+      only = argv[++i];
+    } else {
+      std::fprintf(stderr, "usage: bench_icp_vs_pcl_open3d [--quick] [--ours-only] [--pair 3dtk-17k|3dtk-78k|office-100k]\n");
+      return 2;
+    }
+  }
   const std::string root = data_root();
   const std::string dtk = root + "/pointclouds/3DTK-dat", office = root + "/pointclouds/pcl/office1.pcd";
   if (!std::filesystem::exists(dtk + "/scan000.3d") || !std::filesystem::exists(office)) {
@@ -284,8 +303,9 @@ int main(int argc, char** argv) {
     pairs.push_back(std::move(p));
   }
   for (auto& p : pairs) {
+    if (!only.empty() && p.name != only) continue;
     sem::estimate_normals(p.target, 10);  // both sensors sit at their cloud's origin
-    run_pair(p, quick);
+    run_pair(p, quick, ours_only);
   }
   return 0;
 }

@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -187,6 +188,7 @@ void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
   if (!(s.huber_m >= 0.0)) throw std::invalid_argument("icp: huber_m must be >= 0");
   if (s.threads < 0) throw std::invalid_argument("icp: threads must be >= 0");
   if (s.max_points_per_cell < 0) throw std::invalid_argument("icp: max_points_per_cell must be >= 0");
+  if (s.coarse_stride < 1) throw std::invalid_argument("icp: coarse_stride must be at least 1");
 }
 
 }  // namespace
@@ -236,6 +238,18 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   const bool reuse = settings.reuse_pairs && settings.max_points_per_cell == 0;
   std::vector<Memo> memo(reuse ? src.size() : 0);
 
+  // The stride of each iteration: coarse_stride over the first half, then
+  // halving in equal steps down to 1 for the last ones. Each chunk counts
+  // its stride from its own first point: the points used depend on the
+  // chunks only, not on the threads.
+  const int coarse_iterations = settings.max_iterations / 2;
+  const int halvings = std::bit_width(static_cast<unsigned>(settings.coarse_stride)) - 1;  // log2, rounded down
+  const int rest = settings.max_iterations - coarse_iterations;
+  const auto stride_of = [&](int it) -> std::ptrdiff_t {
+    if (it < coarse_iterations) return settings.coarse_stride;
+    const int step = (it - coarse_iterations) * (halvings + 1) / std::max(1, rest);  // 0 .. halvings
+    return std::max<std::ptrdiff_t>(1, settings.coarse_stride >> (step + 1));
+  };
   IcpResult result;
   Eigen::Isometry3d T = T_initial;
   for (int it = 0; it < settings.max_iterations; ++it) {
@@ -245,10 +259,11 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
     const Eigen::Matrix3f R = T.linear().cast<float>();
     const Eigen::Vector3f t = T.translation().cast<float>();
     const double huber = settings.huber_m;
+    const std::ptrdiff_t stride = stride_of(it);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (std::ptrdiff_t c = 0; c < chunks; ++c) {
       Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
-      for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
+      for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); i += stride) {
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
         uint8_t& level = hint[static_cast<size_t>(i)];
         VoxelGrid::Neighbour nb;
@@ -314,7 +329,9 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
     Sums s;
     for (const auto& p : partial) s.add(p);
     result.iterations = it + 1;
-    result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(n);
+    const std::ptrdiff_t last = n - (chunks - 1) * kChunk;  // the last chunk's points
+    const std::ptrdiff_t used = (chunks - 1) * ((kChunk + stride - 1) / stride) + (last + stride - 1) / stride;
+    result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(used);
     result.rmse_m = s.pairs > 0 ? std::sqrt(s.squared_error / static_cast<double>(s.pairs)) : 0.0;
     const size_t needed = plane ? 6 : 3;
     if (s.pairs < needed) break;  // too few pairs to pin the pose down: keep the last one
@@ -330,7 +347,7 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
     const double moved = dT.translation().norm();
     const double turned = Eigen::AngleAxisd(dT.linear()).angle();
     if (moved < settings.translation_epsilon_m && turned < settings.rotation_epsilon_rad &&
-        radius <= settings.min_correspondence_m * (1.0 + 1e-9)) {
+        radius <= settings.min_correspondence_m * (1.0 + 1e-9) && stride == 1) {
       result.converged = true;
       break;
     }

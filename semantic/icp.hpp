@@ -27,13 +27,21 @@ struct IcpSettings {
   /// spacing) is searched in a sample of at most 32 points per cell: much
   /// faster early on, the same answer once converged. true: every pair
   /// within min_correspondence_m is the exact nearest neighbour (PCL's and
-  /// Open3D's k-d tree answer, iteration by iteration).
+  /// Open3D's k-d tree answer; iteration by iteration with coarse_stride 1).
   bool exact_neighbours = false;
   /// true: a source point whose last exact search found its nearest target
   /// point with the next one farther away than the distance it has moved
   /// since (plus its distance to it) keeps that pair without a search. The
   /// pairs, and so the result, are those searching would give, to the bit.
   bool reuse_pairs = true;
+  /// The first half of the iterations (while the pairing distance
+  /// shrinks) pairs only every coarse_stride-th source point, the rest all
+  /// of them: Rusinkiewicz and Levoy's sampling of the source ("Efficient
+  /// variants of the ICP algorithm", 2001). The early, far pairs cost the
+  /// most to search and only have to point the right way; the last
+  /// iterations, and so the result's accuracy, use every point. 1: every
+  /// point in every iteration (PCL's and Open3D's ICP).
+  int coarse_stride = 8;
 };
 
 struct IcpResult {

@@ -25,6 +25,7 @@ struct RegisterOptions {
   double huber_m = 0.0;
   int threads = 0;
   bool exact = false;
+  int coarse_stride = IcpSettings{}.coarse_stride;
 };
 
 // 16 numbers, row-major, the last row 0 0 0 1.
@@ -83,6 +84,7 @@ int run_register(const RegisterOptions& o) {
   s.huber_m = o.huber_m;
   s.threads = o.threads;
   s.exact_neighbours = o.exact;
+  s.coarse_stride = o.coarse_stride;
   if (s.metric == IcpMetric::PointToPlane && target.cloud.normals.size() != target.cloud.size()) {
     const auto tn = clock::now();
     estimate_normals(target.cloud, 10);
@@ -121,6 +123,10 @@ void add_register_command(CLI::App& app) {
   cmd->add_option("--huber", o->huber_m, "Huber kernel width, m (0: none)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--threads", o->threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_flag("--exact", o->exact, "pair every point with its exact nearest neighbour (as PCL's and Open3D's k-d trees)");
+  cmd->add_option("--coarse-stride", o->coarse_stride,
+                  "the first half of the iterations pairs every N-th source point, then halving to all (1: all points in every iteration, as PCL and Open3D)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->callback([o]() {
     if (o->min_dist_m > o->max_dist_m) throw CLI::ValidationError("--min-dist", "must not exceed --max-dist");
     try {

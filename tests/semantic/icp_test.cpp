@@ -105,6 +105,9 @@ TEST_CASE("icp refuses empty clouds, missing normals and bad settings", "[semant
   s = {};
   s.max_iterations = 0;
   CHECK_THROWS_AS(sem::icp(room, room, I, s), std::invalid_argument);
+  s = {};
+  s.coarse_stride = 0;
+  CHECK_THROWS_WITH(sem::icp(room, room, I, s), Catch::Contains("coarse_stride"));
 }
 
 TEST_CASE("icp keeps the initial guess when nothing pairs within the distance", "[semantic]") {
