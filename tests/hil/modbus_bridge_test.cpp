@@ -3,6 +3,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -64,38 +65,58 @@ std::vector<rise::hil::SourceTransport> modbus_transport(uint16_t port) {
   return modbus_transport("modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=50");
 }
 
-// socat linking a pty pair at two paths, stopped by PID.
+// socat linking a pty pair at two paths, stopped by PID. With -d -d it
+// says "starting data transfer loop" once both ptys (and their links)
+// exist: ready() reads its stderr for that line.
 class Socat {
  public:
   Socat(const std::string& a, const std::string& b) : a_(a), b_(b) {
     const std::string left = "pty,raw,echo=0,link=" + a, right = "pty,raw,echo=0,link=" + b;
-    std::vector<char*> argv = {const_cast<char*>("/usr/bin/socat"), const_cast<char*>(left.c_str()),
-                               const_cast<char*>(right.c_str()), nullptr};
-    if (::posix_spawn(&pid_, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    std::vector<char*> argv = {const_cast<char*>("/usr/bin/socat"), const_cast<char*>("-d"), const_cast<char*>("-d"),
+                               const_cast<char*>(left.c_str()), const_cast<char*>(right.c_str()), nullptr};
+    int fds[2];
+    if (::pipe(fds) != 0) return;
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, fds[1], STDERR_FILENO);
+    posix_spawn_file_actions_addclose(&actions, fds[0]);
+    if (::posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+    ::close(fds[1]);
+    log_ = fds[0];  // kept open to the end: socat's later notices must not meet a closed pipe
   }
   ~Socat() {
     if (pid_ > 0) {
       ::kill(pid_, SIGKILL);  // as a crash: no goodbye on the ptys
       ::waitpid(pid_, nullptr, 0);
     }
+    if (log_ >= 0) ::close(log_);
     std::filesystem::remove(a_);
     std::filesystem::remove(b_);
   }
   Socat(const Socat&) = delete;
   Socat& operator=(const Socat&) = delete;
-  // Waits (deadline) for both links.
+  // Waits (5 s at most) for socat to say both links are up.
   bool ready() const {
+    if (pid_ <= 0 || log_ < 0) return false;
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-    while (!(std::filesystem::exists(a_) && std::filesystem::exists(b_))) {
-      if (pid_ <= 0 || std::chrono::steady_clock::now() > deadline) return false;
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    std::string said;
+    while (said.find("starting data transfer loop") == std::string::npos) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+      pollfd p{log_, POLLIN, 0};
+      if (left.count() <= 0 || ::poll(&p, 1, static_cast<int>(left.count())) <= 0) return false;
+      char buf[512];
+      const ssize_t n = ::read(log_, buf, sizeof buf);
+      if (n <= 0) return false;  // socat exited
+      said.append(buf, static_cast<size_t>(n));
     }
-    return true;
+    return std::filesystem::exists(a_) && std::filesystem::exists(b_);
   }
 
  private:
   std::string a_, b_;
   pid_t pid_ = -1;
+  int log_ = -1;
 };
 
 }  // namespace

@@ -21,9 +21,19 @@ work=$(mktemp -d)
 trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
 cd "$root"
 
-# wait_for FILE TEXT: until TEXT appears in FILE (10 s at most).
+# wait_for FILE REGEX: until a line matching REGEX (ERE) appears in FILE,
+# 10 s at most. tail -F hands over each line as the peer writes it.
 wait_for() {
-  for _ in $(seq 1000); do grep -q -- "$2" "$1" 2>/dev/null && return 0; sleep 0.01; done
+  local line fd pid
+  exec {fd}< <(exec timeout 10 tail -n +1 -F -- "$1" 2>/dev/null)
+  pid=$!
+  while IFS= read -r -u "$fd" line; do
+    if [[ $line =~ $2 ]]; then
+      kill "$pid" 2>/dev/null; exec {fd}<&-
+      return 0
+    fi
+  done
+  exec {fd}<&-
   echo "timed out waiting for '$2' in $1" >&2; cat "$1" >&2; return 1
 }
 
