@@ -28,6 +28,7 @@ struct Sums {
   double Sw = 0.0;
   double squared_error = 0.0;  // Σ d², unweighted, for the rmse
   size_t pairs = 0;
+  size_t points = 0;  // source points this iteration used
 
   void add(const Sums& o) {
     JtJ += o.JtJ;
@@ -38,6 +39,7 @@ struct Sums {
     Sw += o.Sw;
     squared_error += o.squared_error;
     pairs += o.pairs;
+    points += o.points;
   }
 };
 
@@ -264,6 +266,7 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
     for (std::ptrdiff_t c = 0; c < chunks; ++c) {
       Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
       for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); i += stride) {
+        ++acc.points;
         const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
         uint8_t& level = hint[static_cast<size_t>(i)];
         VoxelGrid::Neighbour nb;
@@ -329,9 +332,7 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
     Sums s;
     for (const auto& p : partial) s.add(p);
     result.iterations = it + 1;
-    const std::ptrdiff_t last = n - (chunks - 1) * kChunk;  // the last chunk's points
-    const std::ptrdiff_t used = (chunks - 1) * ((kChunk + stride - 1) / stride) + (last + stride - 1) / stride;
-    result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(used);
+    result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(s.points);
     result.rmse_m = s.pairs > 0 ? std::sqrt(s.squared_error / static_cast<double>(s.pairs)) : 0.0;
     const size_t needed = plane ? 6 : 3;
     if (s.pairs < needed) break;  // too few pairs to pin the pose down: keep the last one
