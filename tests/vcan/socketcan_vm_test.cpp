@@ -582,7 +582,11 @@ TEST_CASE("the bridge on socketcan follows the emulated console, goes failsafe a
     const std::size_t from = b.published.size();
     const auto sent = Clock::now();
     REQUIRE(run({"cansend", "vcan0", "20000040#0000000000000000"}) == 0);
-    auto off = b.published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, kPeerTimeoutMs, from);
+    // The snapshot that reports the bus-off (under TCG a late frame can
+    // fail the panel stale a moment before it).
+    auto off = b.published.wait_for(
+        [](const PanelSnapshot& s) { return s.failsafe && s.sources[0].bus_state == CanBusState::BusOff; },
+        kPeerTimeoutMs, from);
     REQUIRE(off);
     WARN("cansend bus-off -> failsafe PanelState: "
          << std::chrono::duration_cast<std::chrono::milliseconds>(Clock::now() - sent).count()
