@@ -34,7 +34,7 @@ packages=(
   libhidapi-dev libusb-1.0-0-dev udev
   libpcl-dev libopencv-dev libceres-dev libopen3d-dev
   libjsoncpp-dev chromium
-  libssl-dev
+  libssl-dev libcpp-httplib-dev nodejs npm
 )
 
 setup() {

@@ -1,7 +1,10 @@
 #include "app/chain_monitor.hpp"
 
+#include "panels/publisher_session.hpp"
+
 #include <poll.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -56,9 +59,25 @@ void ChainMonitor::loop() {
   }
 }
 
+void ChainMonitor::accept_only(std::vector<int32_t> pids) {
+  std::lock_guard lock(mutex_);
+  accepted_pids_ = std::move(pids);
+}
+
+bool ChainMonitor::accepted(const rise_msgs::Publisher& p) {
+  if (accepted_pids_.empty()) return true;
+  if (p.host == panels::this_publisher().host &&
+      std::find(accepted_pids_.begin(), accepted_pids_.end(), p.pid) != accepted_pids_.end())
+    return true;
+  ++view_.foreign_count;
+  view_.foreign = p;
+  return false;
+}
+
 void ChainMonitor::on_panel(const lcm::ReceiveBuffer*, const std::string&,
                             const rise_msgs::PanelState* m) {
   std::lock_guard lock(mutex_);
+  if (!accepted(m->publisher)) return;
   view_.panel = *m;
   view_.have_panel = true;
   ++view_.panel_count;
@@ -94,6 +113,7 @@ void ChainMonitor::on_panel(const lcm::ReceiveBuffer*, const std::string&,
 void ChainMonitor::on_robot(const lcm::ReceiveBuffer*, const std::string&,
                             const rise_msgs::RobotState* m) {
   std::lock_guard lock(mutex_);
+  if (!accepted(m->publisher)) return;
   if (view_.have_robot)
     view_.distance_m += std::hypot(m->position_m[0] - view_.robot.position_m[0],
                                    m->position_m[1] - view_.robot.position_m[1]);

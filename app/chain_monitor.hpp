@@ -11,6 +11,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 
@@ -46,6 +47,10 @@ struct ChainView {
   StopMeasurement deadman_stop;
   StopMeasurement loss_stop;
   std::string loss_reason;
+  /// Messages from processes that accept_only() did not name: counted,
+  /// never measured; the newest such publisher.
+  int64_t foreign_count = 0;
+  rise_msgs::Publisher foreign;
 };
 
 class ChainMonitor {
@@ -61,6 +66,9 @@ class ChainMonitor {
   bool wait_until(const std::function<bool(const ChainView&)>& pred, int timeout_ms) const;
   /// Arms both stop measurements again.
   void rearm();
+  /// Measures only messages published by these processes (pids on this
+  /// host); the rest count as ChainView::foreign_count. Empty: all.
+  void accept_only(std::vector<int32_t> pids);
   /// One line: panel state and robot pose.
   std::string live_line() const;
 
@@ -77,6 +85,8 @@ class ChainMonitor {
   bool deadman_was_held_ = false;
   bool was_failsafe_ = true;
   bool was_connected_ok_ = false;
+  std::vector<int32_t> accepted_pids_;
+  bool accepted(const rise_msgs::Publisher& p);  // caller holds mutex_
   std::atomic<bool> running_{true};
   std::thread thread_;
 };

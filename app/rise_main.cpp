@@ -12,9 +12,13 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <thread>
 
 #include "app/chain_monitor.hpp"
@@ -22,6 +26,7 @@
 #include "rise_msgs/PanelState.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
+#include "panels/publisher_session.hpp"
 #include "sim/simulation.hpp"
 #include "sim/training/report.hpp"
 
@@ -43,8 +48,46 @@ uint16_t free_tcp_port() {
   return port;
 }
 
+// printf into a std::string.
+template <typename... Args>
+std::string fmt_text(const char* format, Args... args) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, format, args...);
+  return buf;
+}
+
+// The last `n` lines of a child's log, indented, for a report of its exit.
+std::string last_lines(const std::string& file, std::size_t n) {
+  std::ifstream in(file);
+  std::deque<std::string> lines;
+  for (std::string line; std::getline(in, line);) {
+    lines.push_back(std::move(line));
+    if (lines.size() > n) lines.pop_front();
+  }
+  std::string out;
+  for (const auto& l : lines) out += "    " + l + "\n";
+  return out.empty() ? "    (its log is empty)\n" : out;
+}
+
+// Station ids that some process publishes on now: every rise/<id>/ heard
+// within wait_ms.
+std::set<std::string> busy_station_ids(lcm::LCM& lcm, int wait_ms) {
+  struct Heard {
+    std::set<std::string> ids;
+    void on(const lcm::ReceiveBuffer*, const std::string& channel) {
+      const auto slash = channel.find('/', 5);
+      if (slash != std::string::npos) ids.insert(channel.substr(5, slash - 5));
+    }
+  } heard;
+  auto* sub = lcm.subscribe("rise/[^/]+/(panel_state|robot_state|task_status)", &Heard::on, &heard);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
+  while (std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(20);
+  lcm.unsubscribe(sub);
+  return heard.ids;
+}
+
 struct DemoOptions {
-  std::string id = "demo";
+  std::string id;  ///< "" → the first free one of demo, demo-2, demo-3, ...
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   std::string script = "panels/scripts/demo_drive.txt";
   std::string panel = "panels/definitions/rise_console.yaml";
@@ -71,21 +114,35 @@ int run_demo(const DemoOptions& o) {
   const uint16_t port = o.port ? o.port : free_tcp_port();
   const std::string bus = "127.0.0.1:" + std::to_string(port) + "/can0";
 
-  rise::app::ChainMonitor monitor(o.lcm_url, o.id);
+  // A station id of its own: another demo (or a classroom) on this LCM
+  // network must not mix into this one's measurements.
+  std::string id = o.id;
+  if (id.empty()) {
+    lcm::LCM probe(o.lcm_url);
+    if (!probe.good()) {
+      std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
+      return 2;
+    }
+    const auto busy = busy_station_ids(probe, rise::panels::kProbeMs);
+    id = "demo";
+    for (int n = 2; busy.count(id) > 0; ++n) id = "demo-" + std::to_string(n);
+    if (id != "demo") std::printf("rise demo: station 'demo' is in use, taking '%s'\n", id.c_str());
+  }
+  rise::app::ChainMonitor monitor(o.lcm_url, id);
   if (!monitor.good()) {
     std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
     return 2;
   }
   std::printf("rise demo: station '%s', LCM %s, console on socketcand://%s, logs in %s\n",
-              o.id.c_str(), o.lcm_url.c_str(), bus.c_str(), log_dir.c_str());
+              id.c_str(), o.lcm_url.c_str(), bus.c_str(), log_dir.c_str());
 
   std::vector<ChildProcess> children;
   try {
-    children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url,
+    children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", id, "--lcm", o.lcm_url,
                                                    "--robot", rise::panels::find_data_file(o.robot)},
                           log_dir + "/rise-sim.log");
     std::vector<std::string> hild{bin + "/rise-hild", "--panel", rise::panels::find_data_file(o.panel),
-                                  "--can", "socketcand://" + bus, "--id", o.id, "--lcm", o.lcm_url};
+                                  "--can", "socketcand://" + bus, "--id", id, "--lcm", o.lcm_url};
     if (!o.record_dir.empty()) hild.insert(hild.end(), {"--record", o.record_dir});
     children.emplace_back(hild, log_dir + "/rise-hild.log");
     children.emplace_back(
@@ -98,16 +155,37 @@ int run_demo(const DemoOptions& o) {
     std::fprintf(stderr, "rise demo: %s\n", e.what());
     return 2;
   }
-  for (const auto& c : children) std::printf("  started %-10s pid %d\n", c.name().c_str(), c.pid());
-
-  const bool ready = monitor.wait_until(
-      [](const rise::app::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; },
-      15000);
-  if (!ready) {
-    std::fprintf(stderr, "rise demo: the chain did not come up within 15 s: %s\n",
-                 monitor.live_line().c_str());
-    return 1;
+  std::vector<int32_t> pids;
+  for (const auto& c : children) {
+    std::printf("  started %-10s pid %d\n", c.name().c_str(), c.pid());
+    pids.push_back(c.pid());
   }
+  monitor.accept_only(pids);
+
+  // A child that ends is reported at once, with why (its log's last lines).
+  const auto child_died = [&] {
+    bool died = false;
+    for (auto& c : children) {
+      if (c.running()) continue;
+      const int status = c.wait_for(0);
+      std::fprintf(stderr, "rise demo: %s exited with status %d; the end of %s/%s.log:\n%s", c.name().c_str(), status,
+                   log_dir.c_str(), c.name().c_str(), last_lines(log_dir + "/" + c.name() + ".log", 6).c_str());
+      died = true;
+    }
+    return died;
+  };
+  const auto up_since = std::chrono::steady_clock::now();
+  bool ready = false;
+  while (!ready && !g_stop) {
+    ready = monitor.wait_until(
+        [](const rise::app::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; }, 50);
+    if (!ready && child_died()) return 1;
+    if (!ready && std::chrono::steady_clock::now() - up_since > std::chrono::seconds(15)) {
+      std::fprintf(stderr, "rise demo: the chain did not come up within 15 s: %s\n", monitor.live_line().c_str());
+      return 1;
+    }
+  }
+  if (g_stop) return 130;
   std::printf("rise demo: chain up, playing %s\n", o.script.c_str());
 
   const auto start = std::chrono::steady_clock::now();
@@ -128,14 +206,7 @@ int run_demo(const DemoOptions& o) {
     }
     const auto v = monitor.view();
     if (v.loss_stop.stopped && v.deadman_stop.stopped) break;
-    bool died = false;
-    for (auto& c : children)
-      if (!c.running()) {
-        std::fprintf(stderr, "rise demo: %s exited unexpectedly, see %s/%s.log\n", c.name().c_str(),
-                     log_dir.c_str(), c.name().c_str());
-        died = true;
-      }
-    if (died) {
+    if (child_died()) {
       rc = 1;
       break;
     }
@@ -158,7 +229,7 @@ int run_demo(const DemoOptions& o) {
       180.0 / M_PI;
   std::printf("\n=== rise demo summary ===\n");
   std::printf("messages              %lld PanelState, %lld RobotState on rise/%s/*\n",
-              static_cast<long long>(v.panel_count), static_cast<long long>(v.robot_count), o.id.c_str());
+              static_cast<long long>(v.panel_count), static_cast<long long>(v.robot_count), id.c_str());
   std::printf("distance driven       %.2f m\n", v.distance_m);
   std::printf("final pose            x=%.2f m y=%.2f m yaw=%.1f deg (sim time %.1f s)\n",
               v.robot.position_m[0], v.robot.position_m[1], yaw, v.robot.sim_time_s);
@@ -174,11 +245,17 @@ int run_demo(const DemoOptions& o) {
     robot = rise::sim::load_robot_description(rise::panels::find_data_file(o.robot));
   } catch (const std::exception&) {
   }
+  if (v.foreign_count > 0)
+    std::printf("other publishers      %lld messages on rise/%s/* from %s, not counted\n",
+                static_cast<long long>(v.foreign_count), id.c_str(),
+                rise::panels::describe(v.foreign, rise::panels::publisher_clock_us()).c_str());
   // A silent console is noticed after its timeout; a closed link at once.
+  bool exceeded = false;
   auto report = [&](const char* what, const rise::app::StopMeasurement& s, double detect_s, const char* detect) {
     if (s.stopped && robot) {
       const double bound_s =
           detect_s + 2 * publish_period_s + rise::sim::stop_time_s(*robot, s.speed_at_trigger_mps) + 0.02;
+      exceeded = exceeded || s.seconds() > bound_s;
       std::printf("%-21s %.0f ms to standstill from %.2f m/s (bound %.0f ms: %s2 publish periods + braking + "
                   "1 RobotState period)%s\n",
                   what, s.seconds() * 1e3, s.speed_at_trigger_mps, bound_s * 1e3, detect,
@@ -196,7 +273,7 @@ int run_demo(const DemoOptions& o) {
   if (!o.record_dir.empty())
     std::printf("recorded into         %s (rise-hild verify --panel %s --record-dir %s)\n", o.record_dir.c_str(),
                 o.panel.c_str(), o.record_dir.c_str());
-  if (!v.deadman_stop.stopped || !v.loss_stop.stopped) rc = 1;
+  if (!v.deadman_stop.stopped || !v.loss_stop.stopped || exceeded) rc = 1;
   std::printf("result                %s\n", rc == 0 ? "ok" : "FAILED");
   return rc;
 }
@@ -259,50 +336,101 @@ int run_training_demo(const TrainingDemoOptions& o) {
   return rc == 0 && report && all_ok ? 0 : 1;
 }
 
-// `rise status`: the station's panel and source health, as rise-hild
-// publishes it (one table per PanelState, refreshed every --every seconds).
-int run_status(const std::string& lcm_url, const std::string& id, double every_s, int count) {
+// `rise status`: the station's panel as rise-hild (or a virtual panel)
+// publishes it: every control's value, the active faults, each source's
+// health and why it is down, and who publishes (two publishers on one
+// station are shown as such). One table per --every seconds.
+struct StatusOptions {
+  std::string id = "t1";
+  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  double every_s = 1.0;
+  int count = 0;          ///< stop after N tables (0: until Ctrl-C or --timeout)
+  double timeout_s = 0.0; ///< give up when no PanelState came for this long (0: never)
+};
+
+void print_panel(const rise_msgs::PanelState& p, const std::vector<rise_msgs::Publisher>& publishers, int64_t now) {
+  std::printf("panel %s (station %s) seq %lld: %s%s%s\n", p.panel_id.c_str(), p.trainee_id.c_str(),
+              static_cast<long long>(p.seq), p.failsafe ? "FAILSAFE: " : "ok", p.failsafe_reason.c_str(),
+              p.deadman ? ", dead-man held" : "");
+  std::string line;
+  for (const auto& a : p.axes) line += fmt_text("  %s %+.3f", a.name.c_str(), static_cast<double>(a.value));
+  std::printf("  axes     %s\n", line.empty() ? " -" : line.c_str());
+  line.clear();
+  for (const auto& b : p.buttons) line += fmt_text("  %s %s", b.name.c_str(), b.pressed ? "PRESSED" : "off");
+  std::printf("  buttons  %s\n", line.empty() ? " -" : line.c_str());
+  line.clear();
+  for (const auto& s : p.switches)
+    line += fmt_text("  %s %s", s.name.c_str(), s.label.empty() ? std::to_string(s.position).c_str() : s.label.c_str());
+  std::printf("  switches %s\n", line.empty() ? " -" : line.c_str());
+  line.clear();
+  for (const auto& f : p.active_faults) line += (line.empty() ? "  " : ", ") + f;
+  std::printf("  faults   %s\n", line.empty() ? "  none" : line.c_str());
+  std::printf("  %-10s %-5s %-5s %9s %10s %8s %6s %8s %6s %6s %6s  %s\n", "source", "conn", "stale", "age ms",
+              "frames ok", "bad", "crc", "counter", "length", "unk id", "reconn", "status, bus, url");
+  for (const auto& h : p.sources) {
+    const std::string age = h.last_frame_age_us < 0 ? "-" : fmt_text("%.1f", static_cast<double>(h.last_frame_age_us) / 1e3);
+    std::string detail = h.status.empty() ? "" : h.status + ", ";
+    if (!h.bus_state.empty()) detail += h.bus_state + " (" + std::to_string(h.error_frames) + " error frames), ";
+    detail += h.url;
+    std::printf("  %-10s %-5s %-5s %9s %10lld %8lld %6d %8d %6d %6d %6d  %s\n", h.name.c_str(), h.connected ? "yes" : "NO",
+                h.stale ? "YES" : "no", age.c_str(), static_cast<long long>(h.frames_ok),
+                static_cast<long long>(h.frames_bad), h.crc_errors, h.counter_errors, h.length_errors, h.unknown_ids,
+                h.reconnects, detail.c_str());
+    if (!h.connected && !h.down_reason.empty()) std::printf("  %-10s down: %s\n", "", h.down_reason.c_str());
+  }
+  if (publishers.size() > 1) {
+    std::printf("  DUPLICATE: %zu processes publish rise/%s/panel_state:\n", publishers.size(), p.trainee_id.c_str());
+    for (const auto& q : publishers) std::printf("    %s\n", rise::panels::describe(q, now).c_str());
+  } else if (!publishers.empty()) {
+    std::printf("  from     %s\n", rise::panels::describe(publishers.front(), now).c_str());
+  }
+}
+
+int run_status(const StatusOptions& o) {
   struct Latest {
     std::mutex m;
     rise_msgs::PanelState msg;
-    bool have = false;
+    bool fresh = false;  // a message since the last table
+    std::map<int64_t, rise_msgs::Publisher> publishers;  // by session, since the last table
     void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelState* p) {
       std::lock_guard lock(m);
       msg = *p;
-      have = true;
+      fresh = true;
+      publishers[p->publisher.session_id] = p->publisher;
     }
   } latest;
-  lcm::LCM lcm(lcm_url);
+  lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
-    std::fprintf(stderr, "rise status: cannot open LCM at %s\n", lcm_url.c_str());
+    std::fprintf(stderr, "rise status: cannot open LCM at %s\n", o.lcm_url.c_str());
     return 2;
   }
-  lcm.subscribe("rise/" + id + "/panel_state", &Latest::on, &latest)->setQueueCapacity(2);
-  for (int shown = 0; (count <= 0 || shown < count) && !g_stop;) {
-    const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(static_cast<int64_t>(every_s * 1e6));
+  const std::string channel = "rise/" + o.id + "/panel_state";
+  lcm.subscribe(channel, &Latest::on, &latest)->setQueueCapacity(200);
+  const auto period = std::chrono::microseconds(static_cast<int64_t>(o.every_s * 1e6));
+  auto last_message = std::chrono::steady_clock::now();
+  bool last_fresh = false;
+  for (int shown = 0; (o.count <= 0 || shown < o.count) && !g_stop; ++shown) {
+    const auto until = std::chrono::steady_clock::now() + period;
     while (std::chrono::steady_clock::now() < until && !g_stop) lcm.handleTimeout(50);
     std::lock_guard lock(latest.m);
-    if (!latest.have) {
-      std::printf("rise status: no PanelState on rise/%s/panel_state yet\n", id.c_str());
+    last_fresh = latest.fresh;
+    if (!latest.fresh) {
+      const double quiet_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_message).count();
+      std::printf("rise status: no PanelState on %s for %.1f s\n", channel.c_str(), quiet_s);
+      std::fflush(stdout);
+      if (o.timeout_s > 0 && quiet_s >= o.timeout_s) return 1;
       continue;
     }
-    const auto& p = latest.msg;
-    std::printf("panel %s (station %s) seq %lld: %s%s%s\n", p.panel_id.c_str(), p.trainee_id.c_str(),
-                static_cast<long long>(p.seq), p.failsafe ? "FAILSAFE: " : "ok", p.failsafe_reason.c_str(),
-                p.deadman ? ", dead-man held" : "");
-    std::printf("  %-10s %-5s %-5s %9s %10s %8s %6s %8s %6s %6s %5s  %s\n", "source", "conn", "stale", "age ms",
-                "frames ok", "bad", "crc", "counter", "length", "unk id", "reconn", "status / bus / url");
-    for (const auto& h : p.sources)
-      std::printf("  %-10s %-5s %-5s %9.1f %10lld %8lld %6d %8d %6d %6d %5d  %s %s %s\n", h.name.c_str(),
-                  h.connected ? "yes" : "NO", h.stale ? "YES" : "no", static_cast<double>(h.last_frame_age_us) / 1e3,
-                  static_cast<long long>(h.frames_ok), static_cast<long long>(h.frames_bad), h.crc_errors,
-                  h.counter_errors, h.length_errors, h.unknown_ids, h.reconnects, h.status.c_str(),
-                  h.bus_state.empty() ? "" : (h.bus_state + " (" + std::to_string(h.error_frames) + " error frames)").c_str(),
-                  h.url.c_str());
+    last_message = std::chrono::steady_clock::now();
+    std::vector<rise_msgs::Publisher> publishers;
+    for (const auto& [session, p] : latest.publishers) publishers.push_back(p);
+    print_panel(latest.msg, publishers, rise::panels::publisher_clock_us());
     std::fflush(stdout);
-    ++shown;
+    latest.fresh = false;
+    latest.publishers.clear();
   }
-  return 0;
+  // Nothing in the last table: the station is not there (exit 1).
+  return g_stop || last_fresh ? 0 : 1;
 }
 
 int main(int argc, char** argv) {
@@ -312,7 +440,7 @@ int main(int argc, char** argv) {
   CLI::App* d = app.add_subcommand(
       "demo", "run emulator → rise-hild → rise-sim as separate processes over socketcand and LCM "
               "multicast, play a scripted drive, print a summary");
-  d->add_option("--id", demo.id, "station id in the channel names")->capture_default_str();
+  d->add_option("--id", demo.id, "station id in the channel names (default: the first free one of demo, demo-2, ...)");
   d->add_option("--lcm", demo.lcm_url, "LCM URL")->capture_default_str();
   d->add_option("--script", demo.script, "console timeline to play")->capture_default_str();
   d->add_option("--panel", demo.panel, "panel definition")->capture_default_str();
@@ -331,15 +459,16 @@ int main(int argc, char** argv) {
   dt->add_option("--lcm", training_demo.lcm_url, "LCM URL")->capture_default_str();
   dt->add_option("--training", training_demo.training, "training file")->capture_default_str();
   dt->add_option("--out", training_demo.out_dir, "reports and journal (default /tmp/rise-training-demo-PID)");
-  std::string status_id = "t1";
-  std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
-  double status_every_s = 1.0;
-  int status_count = 0;
-  CLI::App* st = app.add_subcommand("status", "show a station's panel state and per-source health counters");
-  st->add_option("--id", status_id, "station id")->capture_default_str();
-  st->add_option("--lcm", status_lcm, "LCM URL")->capture_default_str();
-  st->add_option("--every", status_every_s, "refresh period in seconds")->capture_default_str();
-  st->add_option("--count", status_count, "stop after N tables (0: until Ctrl-C)")->capture_default_str();
+  StatusOptions status;
+  CLI::App* st = app.add_subcommand(
+      "status", "show a station's panel: every control's value, the active faults, per-source health (and why a "
+                "source is down), who publishes; exit 1 when no PanelState came in the last period");
+  st->add_option("--id", status.id, "station id")->capture_default_str();
+  st->add_option("--lcm", status.lcm_url, "LCM URL")->capture_default_str();
+  st->add_option("--every", status.every_s, "refresh period in seconds")->capture_default_str()->check(CLI::Range(0.05, 3600.0));
+  st->add_option("--count", status.count, "stop after N periods (0: until Ctrl-C or --timeout)")->capture_default_str();
+  st->add_option("--timeout", status.timeout_s, "exit 1 when no PanelState came for S seconds (0: wait forever)")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   std::signal(SIGINT, on_signal);
@@ -347,6 +476,6 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);  // a closed stdout must not skip stopping the children
   if (dt->parsed()) return run_training_demo(training_demo);
   if (d->parsed()) return run_demo(demo);
-  if (st->parsed()) return run_status(status_lcm, status_id, status_every_s, status_count);
+  if (st->parsed()) return run_status(status);
   return 1;
 }

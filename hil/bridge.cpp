@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <optional>
+#include <string>
 #include <utility>
 
 #include "firmware_protocol/console_modbus.hpp"
@@ -145,12 +146,14 @@ void Bridge::source_loop(std::size_t source) {
   bool have_sent = false;
   io::CanFrame frame;
 
+  std::string down_reason;  // the transport's error, read when it fails (not every loop)
+
   while (running_) {
     const int64_t now = monotonic_us();
     if (!bus.is_open()) {
       {
         std::lock_guard lock(mutex_);
-        mapper_.on_connection(source, false, now);
+        mapper_.on_connection(source, false, now, down_reason);
       }
       wake_.notify_all();
       if (now >= next_retry_us) {
@@ -158,6 +161,7 @@ void Bridge::source_loop(std::size_t source) {
           retry_ms = settings_.reopen_min_ms;
           have_sent = false;
         } else {
+          down_reason = bus.last_error();
           next_retry_us = now + retry_ms * 1000;
           retry_ms = std::min(retry_ms * 2, settings_.reopen_max_ms);
         }
@@ -206,15 +210,20 @@ void Bridge::source_loop(std::size_t source) {
       }
       if (changed) wake_.notify_all();
     } else if (st == io::IoStatus::Disconnected) {
+      down_reason = bus.last_error();
       std::lock_guard lock(mutex_);
-      mapper_.on_connection(source, false, monotonic_us());
+      mapper_.on_connection(source, false, monotonic_us(), down_reason);
     }
   }
 }
 
 // Counts a failed Modbus request; false when the link was closed. Caller holds mutex_.
 bool Bridge::report_modbus(std::size_t source, const io::ModbusResult& result) {
-  return apply_modbus_result(mapper_, source, result, modbus_links_[source]->is_open(), monotonic_us());
+  const io::ModbusLink& link = *modbus_links_[source];
+  const int64_t now = monotonic_us();
+  if (apply_modbus_result(mapper_, source, result, link.is_open(), now)) return true;
+  mapper_.on_connection(source, false, now, link.last_error());  // why it closed
+  return false;
 }
 
 void Bridge::modbus_source_loop(std::size_t source) {
@@ -231,6 +240,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
   fp::ModbusFeedbackBlock last_sent;
   bool have_sent = false;
   std::array<uint8_t, fp::kModbusCoils> coils{};
+  std::string down_reason;  // the link's error, read when it fails (not every loop)
 
   while (running_) {
     int64_t now = monotonic_us();
@@ -248,6 +258,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
           retry_ms = settings_.reopen_min_ms;
           reopened = true;
         } else {
+          down_reason = link.last_error();
           next_retry_us = now + retry_ms * 1000;
           retry_ms = std::min(retry_ms * 2, settings_.reopen_max_ms);
         }
@@ -255,7 +266,7 @@ void Bridge::modbus_source_loop(std::size_t source) {
       if (!reopened) {
         {
           std::lock_guard lock(mutex_);
-          mapper_.on_connection(source, false, now);
+          mapper_.on_connection(source, false, now, down_reason);
         }
         wake_.notify_all();
         std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -341,12 +352,13 @@ void Bridge::hid_source_loop(std::size_t source) {
   bool have_written = false;
   uint64_t written_version = ~0ull;
   int64_t next_feedback_us = 0;
+  std::string down_reason;  // the device's error, read when it fails (not every loop)
   while (running_) {
     const int64_t now = monotonic_us();
     if (!device.is_open()) {
       {
         std::lock_guard lock(mutex_);
-        mapper_.on_connection(source, false, now);
+        mapper_.on_connection(source, false, now, down_reason);
       }
       wake_.notify_all();
       // Hot-plug by enumeration: cheap (a sysfs walk), so a fixed period
@@ -355,7 +367,9 @@ void Bridge::hid_source_loop(std::size_t source) {
       // has bound the new device's interface.
       if (now >= next_enumerate_us) {
         next_enumerate_us = now + (now < fast_until_us ? 20'000 : settings_.hid_enumerate_ms * 1000);
-        if (device.reopen() == io::IoStatus::Ok) {
+        const io::IoStatus opened = device.reopen();
+        if (opened != io::IoStatus::Ok) down_reason = device.last_error();
+        if (opened == io::IoStatus::Ok) {
           {
             std::lock_guard lock(mutex_);
             // A descriptor without a bound name keeps the source failsafe
@@ -410,9 +424,10 @@ void Bridge::hid_source_loop(std::size_t source) {
       }
       if (changed) wake_.notify_all();
     } else if (st == io::IoStatus::Disconnected) {
+      down_reason = device.last_error();
       {
         std::lock_guard lock(mutex_);
-        mapper_.on_connection(source, false, monotonic_us());
+        mapper_.on_connection(source, false, monotonic_us(), down_reason);
         changed_ = true;  // publish the loss now, not at the next tick
       }
       wake_.notify_all();

@@ -321,10 +321,13 @@ void PanelMapper::on_source_error(std::size_t source, SourceError kind, int64_t 
   }
 }
 
-void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_us) {
+void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_us, std::string_view down_reason) {
   if (source >= sources_.size()) return;
   SourceState& s = sources_[source];
+  if (connected) s.status.down_reason.clear();
+  else if (!down_reason.empty() && s.status.down_reason != down_reason) s.status.down_reason = down_reason;
   if (s.status.connected == connected) return;
+  s.status.ever_connected = s.status.ever_connected || connected;
   if (connected && s.last_any_valid_us != 0) s.status.reconnects++;
   s.status.connected = connected;
   // A transport opened afresh (interface up again) starts error-active.

@@ -9,6 +9,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "firmware_protocol/console_can.hpp"
@@ -39,6 +40,8 @@ struct SourceStatus {
   int64_t error_frames = 0;         ///< CAN error frames seen on the source's bus
   io::CanBusState bus_state = io::CanBusState::Active;  ///< last state the controller reported
   int32_t bus_offs = 0;             ///< times the controller went bus-off
+  bool ever_connected = false;      ///< the transport was open at least once
+  std::string down_reason;          ///< why it is down ("" while connected); see on_connection
 
   int64_t frames_bad() const;
 };
@@ -121,7 +124,11 @@ class PanelMapper {
 
   /// Transport state of a source. A disconnect makes it stale at once and
   /// forgets its alive counters (the console restarts its counters too).
-  void on_connection(std::size_t source, bool connected, int64_t now_us);
+  /// `down_reason` says why a source is down (the transport's last error:
+  /// the OS's error, the host that did not resolve, the permission that is
+  /// missing); it is kept in SourceStatus::down_reason until it connects.
+  /// Allocates only when the reason changes; no throw.
+  void on_connection(std::size_t source, bool connected, int64_t now_us, std::string_view down_reason = {});
 
   /// Applies the safety rules at `now_us`: a source that is disconnected,
   /// stale (a bound frame type older than timeout_ms), failing its protection

@@ -70,11 +70,16 @@ rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
     h.reconnects = s.reconnects;
     h.timeouts = static_cast<int32_t>(s.timeouts);
     h.exceptions = static_cast<int32_t>(s.exceptions);
-    h.status = s.heartbeat_seen ? fp::to_string(s.console_status) : "unknown";
+    // A console that has not said its status (or has no heartbeat) shows "".
+    h.status = s.heartbeat_seen ? fp::to_string(s.console_status) : "";
     h.error_frames = static_cast<int32_t>(s.error_frames);
-    // Only CAN sources have a controller state.
+    // Only CAN sources have a controller state, and only while their
+    // transport is open: a bus that never opened has none to report.
     const bool can = i < definition.sources.size() && !definition.sources[i].is_modbus() && !definition.sources[i].is_hid();
-    h.bus_state = can ? std::string(io::to_string(s.bus_state)) : "";
+    h.bus_state = can && s.connected ? std::string(io::to_string(s.bus_state)) : "";
+    h.down_reason = s.connected ? "" : !s.down_reason.empty() ? s.down_reason
+                    : s.ever_connected     ? "disconnected"
+                                           : "not connected yet";
     h.bus_offs = s.bus_offs;
     m.sources.push_back(h);
   }

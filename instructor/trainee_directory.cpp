@@ -1,5 +1,7 @@
 #include "instructor/trainee_directory.hpp"
 
+#include <algorithm>
+
 namespace rise::instructor {
 
 std::optional<std::pair<std::string, std::string>> TraineeDirectory::split_channel(const std::string& channel) {
@@ -20,6 +22,11 @@ bool TraineeDirectory::on_message(const std::string& channel, const void* data, 
     TraineeRow& row = rows_[id];
     row.id = id;
     row.last_seen_us = now_us;
+    const auto seen = std::find_if(row.publishers.begin(), row.publishers.end(), [&](const SeenPublisher& p) {
+      return p.what == what && p.publisher.session_id == message.publisher.session_id;
+    });
+    if (seen != row.publishers.end()) seen->last_seen_us = now_us;
+    else row.publishers.push_back({what, message.publisher, now_us});
     slot(row) = std::move(message);
     return true;
   };
@@ -27,6 +34,16 @@ bool TraineeDirectory::on_message(const std::string& channel, const void* data, 
   if (what == "robot_state") return take([](TraineeRow& r) -> auto& { return r.robot; }, rise_msgs::RobotState{});
   if (what == "task_status") return take([](TraineeRow& r) -> auto& { return r.task; }, rise_msgs::TaskStatus{});
   return false;
+}
+
+std::vector<std::string> TraineeRow::duplicated(int64_t now_us, int64_t window_us) const {
+  std::map<std::string, int> count;
+  for (const auto& p : publishers)
+    if (now_us - p.last_seen_us <= window_us) ++count[p.what];
+  std::vector<std::string> out;
+  for (const auto& [what, n] : count)
+    if (n > 1) out.push_back(what);
+  return out;
 }
 
 std::vector<TraineeRow> TraineeDirectory::rows() const {

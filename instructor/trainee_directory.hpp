@@ -16,12 +16,24 @@
 
 namespace rise::instructor {
 
+/// A process heard publishing one of a trainee's channels.
+struct SeenPublisher {
+  std::string what;          ///< "panel_state", "robot_state", "task_status"
+  rise_msgs::Publisher publisher;
+  int64_t last_seen_us = 0;  ///< wall clock of its newest message there
+};
+
 struct TraineeRow {
   std::string id;
   int64_t last_seen_us = 0;  ///< wall clock of the newest message
   std::optional<rise_msgs::PanelState> panel;
   std::optional<rise_msgs::RobotState> robot;
   std::optional<rise_msgs::TaskStatus> task;
+  std::vector<SeenPublisher> publishers;  ///< every process heard, per channel
+
+  /// The channels ("panel_state", ...) on which more than one process was
+  /// heard within `window_us` before now_us: two publishers on one station.
+  std::vector<std::string> duplicated(int64_t now_us, int64_t window_us = 2'000'000) const;
 };
 
 class TraineeDirectory {

@@ -22,15 +22,18 @@
 #include <map>
 #include <mutex>
 #include <regex>
+#include <set>
 #include <stdexcept>
 #include <thread>
 
 #include "app/child_process.hpp"
 #include "hil/panel_state_message.hpp"
 #include "instructor/scenario.hpp"
+#include "instructor/trainee_directory.hpp"
 #include "instructor/virtual_panel.hpp"
 #include "panels/command_auth.hpp"
 #include "panels/panel_definition.hpp"
+#include "panels/publisher_session.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -180,9 +183,21 @@ Json::Value robot_json(const sim::RobotDescription& r) {
   return v;
 }
 
+Json::Value publisher_json(const rise_msgs::Publisher& p) {
+  Json::Value v;
+  v["program"] = p.program;
+  v["host"] = p.host;
+  v["pid"] = p.pid;
+  v["session"] = Json::Int64(p.session_id);
+  v["started_utime"] = Json::Int64(p.started_utime);
+  v["text"] = panels::describe(p, panels::publisher_clock_us());
+  return v;
+}
+
 Json::Value panel_json(const rise_msgs::PanelState& m) {
   Json::Value v;
   v["utime"] = Json::Int64(m.utime);
+  v["publisher"] = publisher_json(m.publisher);
   v["seq"] = Json::Int64(m.seq);
   v["panel_id"] = m.panel_id;
   v["failsafe"] = m.failsafe;
@@ -207,6 +222,7 @@ Json::Value panel_json(const rise_msgs::PanelState& m) {
     h["frames_bad"] = Json::Int64(s.frames_bad);
     h["status"] = s.status;
     h["bus_state"] = s.bus_state;
+    h["down_reason"] = s.down_reason;
     sources.append(h);
   }
   v["sources"] = sources;
@@ -219,6 +235,7 @@ Json::Value panel_json(const rise_msgs::PanelState& m) {
 Json::Value robot_json(const rise_msgs::RobotState& m) {
   Json::Value v;
   v["utime"] = Json::Int64(m.utime);
+  v["publisher"] = publisher_json(m.publisher);
   v["sim_time_s"] = m.sim_time_s;
   v["robot_id"] = m.robot_id;
   v["position"] = xyz(m.position_m);
@@ -255,6 +272,7 @@ Json::Value robot_json(const rise_msgs::RobotState& m) {
 Json::Value task_status_json(const rise_msgs::TaskStatus& m) {
   Json::Value v;
   v["utime"] = Json::Int64(m.utime);
+  v["publisher"] = publisher_json(m.publisher);
   v["training"] = m.training;
   v["node"] = m.node;
   v["task"] = m.task;
@@ -353,6 +371,10 @@ struct WebServer::Impl {
   std::map<std::string, Latest> latest;
   std::deque<std::pair<uint64_t, Json::Value>> events;
 
+  // Other processes publishing the trainees' states (this process's own
+  // virtual panels come back over LCM too and are not "others").
+  panels::PublisherWatch publishers{panels::this_publisher().session_id};
+
   // Virtual panels by trainee id.
   std::mutex virtual_mutex;
   std::map<std::string, std::unique_ptr<VirtualPanel>> virtual_panels;
@@ -448,16 +470,41 @@ struct WebServer::Impl {
     if (kind == "fault_command") {
       if (auto c = decode<rise_msgs::FaultCommand>(rbuf)) on_fault_command(trainee, *c);
     } else if (kind == "panel_state") {
-      if (auto s = decode<rise_msgs::PanelState>(rbuf)) store(channel, trainee, kind, panel_json(*s), false);
+      if (auto s = decode<rise_msgs::PanelState>(rbuf)) {
+        watch_publisher(channel, trainee, s->publisher);
+        store(channel, trainee, kind, panel_json(*s), false);
+      }
     } else if (kind == "robot_state") {
-      if (auto s = decode<rise_msgs::RobotState>(rbuf)) store(channel, trainee, kind, robot_json(*s), false);
+      if (auto s = decode<rise_msgs::RobotState>(rbuf)) {
+        watch_publisher(channel, trainee, s->publisher);
+        store(channel, trainee, kind, robot_json(*s), false);
+      }
     } else if (kind == "task_status") {
-      if (auto s = decode<rise_msgs::TaskStatus>(rbuf)) store(channel, trainee, kind, task_status_json(*s), false);
+      if (auto s = decode<rise_msgs::TaskStatus>(rbuf)) {
+        watch_publisher(channel, trainee, s->publisher);
+        store(channel, trainee, kind, task_status_json(*s), false);
+      }
     } else if (kind == "sim_event") {
       if (auto s = decode<rise_msgs::SimEvent>(rbuf)) store(channel, trainee, kind, sim_event_json(*s), true);
     } else if (kind == "task_event") {
       if (auto s = decode<rise_msgs::TaskEvent>(rbuf)) store(channel, trainee, kind, task_event_json(*s), true);
     }
+  }
+
+  // A second publisher beside one of this server's virtual panels is told
+  // to the program (it logs it); trainees_json lists every duplicate.
+  void watch_publisher(const std::string& channel, const std::string& trainee, const rise_msgs::Publisher& p) {
+    const auto other = publishers.observe(channel, p, monotonic_us());
+    if (!other || !settings.on_duplicate_publisher) return;
+    bool ours = false;
+    {
+      std::lock_guard lock(virtual_mutex);
+      ours = channel == hil::channel(trainee, "panel_state") && virtual_panels.count(trainee) > 0;
+    }
+    if (ours)
+      settings.on_duplicate_publisher("another publisher on " + channel + ": " +
+                                      panels::describe(other->publisher, panels::publisher_clock_us()) +
+                                      ", beside this server's virtual panel for '" + trainee + "'");
   }
 
   // A virtual panel is a receiver like rise-hild: it takes signed input
@@ -511,12 +558,26 @@ struct WebServer::Impl {
       t["id"] = l.trainee;
       t[l.kind] = l.value;
     }
+    std::set<std::string> virtual_ids;
     {
       std::lock_guard vlock(virtual_mutex);
       for (const auto& [id, vp] : virtual_panels) {
         by_id[id]["id"] = id;
         by_id[id]["virtual_panel"] = true;
+        virtual_ids.insert(id);
       }
+    }
+    // Every channel with more than one process publishing on it now.
+    std::map<std::string, std::vector<rise_msgs::Publisher>> by_channel;
+    for (const auto& o : publishers.others(monotonic_us())) by_channel[o.channel].push_back(o.publisher);
+    for (auto& [channel, list] : by_channel) {
+      const auto parts = TraineeDirectory::split_channel(channel);
+      if (!parts) continue;
+      const auto& [id, what] = *parts;
+      if (what == "panel_state" && virtual_ids.count(id)) list.push_back(panels::this_publisher());
+      if (list.size() < 2) continue;
+      Json::Value& d = by_id[id]["duplicate_publishers"][what];
+      for (const auto& p : list) d.append(publisher_json(p));
     }
     Json::Value out(Json::arrayValue);
     for (auto& [id, t] : by_id) out.append(t);
@@ -590,7 +651,17 @@ struct WebServer::Impl {
     }
     std::lock_guard lock(virtual_mutex);
     auto& vp = virtual_panels[id];
-    if (!vp) vp = std::make_unique<VirtualPanel>(panel, settings.virtual_timeout_ms, req.remote_addr);
+    if (!vp) {
+      // One publisher per station: not beside a console's rise-hild (or another server's panel).
+      for (const auto& o : publishers.others(monotonic_us()))
+        if (o.channel == hil::channel(id, "panel_state")) {
+          virtual_panels.erase(id);
+          return reply_error(res, 409, o.channel + " is already published by " +
+                                           panels::describe(o.publisher, panels::publisher_clock_us()) +
+                                           ": a virtual panel there would mix with it");
+        }
+      vp = std::make_unique<VirtualPanel>(panel, settings.virtual_timeout_ms, req.remote_addr);
+    }
     if (auto e = vp->update(controls, monotonic_us())) return reply_error(res, 400, *e);
     res.status = 204;
   }

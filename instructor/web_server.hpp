@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,6 +39,9 @@ struct WebServerSettings {
   /// started per trainee, stopped with SIGINT so it clears its auto_clear faults).
   std::string scenarios_dir;        ///< "" → no scenarios
   std::string scenario_program;     ///< "" → scenario control off
+  /// Told (from the LCM thread) when another process publishes on a channel
+  /// where one of this server's virtual panels does; the program logs it.
+  std::function<void(const std::string&)> on_duplicate_publisher;
 };
 
 /// One fault button of the console: a FaultCommand's fields (hil/input_fault.hpp,

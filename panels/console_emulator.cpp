@@ -32,10 +32,26 @@ ConsoleEmulator::ConsoleEmulator(const PanelDefinition& definition, std::size_t 
       source_(source),
       encoder_(definition.sources.at(source).node),
       feedback_decoder_(definition.sources.at(source).node) {
+  power_up_inputs();
+}
+
+void ConsoleEmulator::power_up_inputs() {
+  axes_.fill(0);
+  buttons_ = 0;
+  switches_.fill(0);
   // At power-up the firmware reads each switch where it rests; a scripted
   // session starts with switches in their safe position unless told otherwise.
   for (const auto& c : definition_.controls)
     if (c.source == source_ && c.kind == ControlKind::Switch) switches_[c.signal.index] = c.safe_switch;
+  digital_changed_ = true;
+}
+
+void ConsoleEmulator::restart() {
+  power_up_inputs();
+  status_ = fp::PanelStatus::Operational;
+  silent_ = false;
+  ended_ = false;
+  corrupt_left_ = 0;
 }
 
 void ConsoleEmulator::apply(const TimelineEvent& e) {

@@ -37,6 +37,12 @@ class ConsoleEmulator {
   /// Applies a scripted event (a control moved, a directive).
   void apply(const TimelineEvent& event);
 
+  /// A looped script starts again: every input back where it rests at
+  /// power-up and every directive's state undone (@silent, @corrupt,
+  /// @invalid, @status, @end). The alive counter and the frame schedule go
+  /// on, as a console that keeps running would. No allocation, no throw.
+  void restart();
+
   /// Sends every frame that is due at now_us (monotonic). Returns the number
   /// of frames sent. Does not throw.
   int tick(io::CanBus& bus, int64_t now_us);
@@ -71,6 +77,7 @@ class ConsoleEmulator {
 
  private:
   bool send(io::CanBus& bus, const firmware_protocol::Message& message);
+  void power_up_inputs();
 
   const PanelDefinition& definition_;
   std::size_t source_;

@@ -43,8 +43,6 @@ HidEmulator::HidEmulator(const PanelDefinition& definition, std::size_t source, 
   if (!def.is_hid())
     throw std::runtime_error(definition_.file + ": source '" + def.name + "' is protocol " + def.protocol +
                              ", not hid");
-  raw_.resize(input_.signals().size());
-  for (std::size_t i = 0; i < raw_.size(); ++i) raw_[i] = resting_raw(input_.signals()[i]);
   for (const ControlDefinition& c : definition_.controls) {
     if (c.source != source_) {
       signal_of_control_.push_back(npos);
@@ -56,11 +54,10 @@ HidEmulator::HidEmulator(const PanelDefinition& definition, std::size_t source, 
                                ".signal: the descriptor has no input signal '" + c.hid_signal +
                                "' (it has: " + fp::hid_signal_names(input_.signals()) + ")");
     signal_of_control_.push_back(index);
-    const fp::HidSignal& s = input_.signals()[index];
-    // At power-up a switch rests where it is; the script starts it safe.
-    if (c.kind == ControlKind::Switch) raw_[index] = c.safe_switch;
-    if (c.kind == ControlKind::Button) raw_[index] = fp::hid_raw_from_value(s, 0.0);
   }
+  raw_.resize(input_.signals().size());
+  restart_scratch_.resize(raw_.size());
+  power_up_inputs(raw_);
   report_index_.fill(-1);
   for (const uint8_t id : input_.report_ids()) {
     report_index_[id] = static_cast<int16_t>(reports_.size());
@@ -72,6 +69,27 @@ HidEmulator::HidEmulator(const PanelDefinition& definition, std::size_t source, 
   for (Report& r : reports_) encode(r);
   outputs_.resize(output_.signals().size());
   decoded_.resize(output_.signals().size());
+}
+
+void HidEmulator::power_up_inputs(std::vector<int64_t>& raw) const {
+  for (std::size_t i = 0; i < raw.size(); ++i) raw[i] = resting_raw(input_.signals()[i]);
+  for (std::size_t control = 0; control < signal_of_control_.size(); ++control) {
+    const std::size_t index = signal_of_control_[control];
+    if (index == npos) continue;
+    const ControlDefinition& c = definition_.controls[control];
+    // At power-up a switch rests where it is; the script starts it safe.
+    if (c.kind == ControlKind::Switch) raw[index] = c.safe_switch;
+    if (c.kind == ControlKind::Button) raw[index] = fp::hid_raw_from_value(input_.signals()[index], 0.0);
+  }
+}
+
+void HidEmulator::restart() {
+  std::vector<int64_t>& rest = restart_scratch_;
+  power_up_inputs(rest);
+  for (std::size_t i = 0; i < rest.size(); ++i) set_raw(i, rest[i]);
+  silent_ = false;
+  ended_ = false;
+  corrupt_left_ = 0;
 }
 
 void HidEmulator::encode(Report& report) { input_.encode_report(report.id, raw_, report.bytes); }

@@ -51,6 +51,12 @@ class HidEmulator {
   /// meaning and is ignored. No allocation, no throw.
   void apply(const TimelineEvent& event);
 
+  /// A looped script starts again: every input signal back where it rests
+  /// at power-up and every directive's state undone (@silent, @corrupt,
+  /// @invalid, @end). Changed reports go out at the next tick. No
+  /// allocation, no throw.
+  void restart();
+
   /// Where reports go; false when one could not be sent.
   using ReportSink = std::function<bool(std::span<const uint8_t>)>;
   /// Sends every input report whose content changed since it was last sent,
@@ -91,6 +97,7 @@ class HidEmulator {
     bool dirty = true;
   };
   void set_raw(std::size_t signal, int64_t raw);
+  void power_up_inputs(std::vector<int64_t>& raw) const;
   void encode(Report& report);
 
   const PanelDefinition& definition_;
@@ -100,6 +107,7 @@ class HidEmulator {
   firmware_protocol::HidReportDecoder output_;
   std::vector<std::size_t> signal_of_control_;  // index into input_.signals(), or npos
   std::vector<int64_t> raw_;                     // indexed like input_.signals()
+  std::vector<int64_t> restart_scratch_;         // restart()'s power-up values, allocated once
   std::vector<Report> reports_;
   std::array<int16_t, 256> report_index_{};  // report id → index into reports_, -1 if none
   std::vector<firmware_protocol::HidSignalValue> outputs_;

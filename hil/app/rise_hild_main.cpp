@@ -24,6 +24,7 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
 #include "panels/data_path.hpp"
+#include "panels/publisher_session.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -61,6 +62,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1.0, 1000.0));
   app.add_option("--status-every", status_every_s, "log a status line every S seconds (0: on change only)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  bool allow_duplicate_id = false;
+  app.add_flag("--allow-duplicate-id", allow_duplicate_id,
+               "start even when another process already publishes rise/<id>/panel_state (by default that is "
+               "refused: two publishers on one station mix their messages)");
   std::string instructor_key_file;
   app.add_option("--instructor-key", instructor_key_file,
                  "instructor key file (hex, mode 0600; default env RISE_INSTRUCTOR_KEY): verifies signed "
@@ -237,6 +242,16 @@ int main(int argc, char** argv) {
   const std::string state_channel = rise::hil::channel(id, "panel_state");
   const std::string feedback_channel = rise::hil::channel(id, "panel_feedback");
 
+  // One publisher per station: listen before the first message.
+  const rise_msgs::Publisher self = rise::panels::init_publisher("rise-hild");
+  if (!allow_duplicate_id)
+    if (const auto other = rise::panels::probe_channel<rise_msgs::PanelState>(lcm, state_channel, rise::panels::kProbeMs)) {
+      spdlog::error("{} is already published by {}: refusing to start a second publisher for station '{}' (give "
+                    "another --id, or --allow-duplicate-id)",
+                    state_channel, rise::panels::describe(*other, wall_us()), id);
+      return 2;
+    }
+
   int64_t seq = 0;
   std::string last_reason = "-";
   rise::hil::TransportFaults transport_faults;
@@ -245,8 +260,24 @@ int main(int argc, char** argv) {
   std::mutex rejected_mutex;
   std::string rejected_note;
   int64_t rejected_until_us = 0;
+  // Why a source is down, logged once per change (the reason is also in SourceHealth.down_reason).
+  std::vector<std::string> logged_down(definition.sources.size());
+  auto log_sources = [&](const rise::hil::PanelSnapshot& snap) {
+    for (std::size_t i = 0; i < snap.sources.size() && i < logged_down.size(); ++i) {
+      const auto& s = snap.sources[i];
+      if (s.connected && !logged_down[i].empty()) {
+        spdlog::info("source '{}' up: {}", s.name, source_urls[i]);
+        logged_down[i].clear();
+      } else if (!s.connected && !s.down_reason.empty() && s.down_reason != logged_down[i]) {
+        spdlog::warn("source '{}' down: {}", s.name, s.down_reason);
+        logged_down[i] = s.down_reason;
+      }
+    }
+  };
   auto publish = [&](const rise::hil::PanelSnapshot& snap) {
+    log_sources(snap);
     auto msg = rise::hil::to_message(definition, snap, id, seq++, wall_us(), source_urls);
+    msg.publisher = self;
     if (injector)
       for (auto& f : injector->active(snap.time_us)) msg.active_faults.push_back(std::move(f));
     {
@@ -319,6 +350,27 @@ int main(int argc, char** argv) {
   lcm::Subscription* sub = lcm.subscribe(feedback_channel, &FeedbackHandler::on, &handler);
   sub->setQueueCapacity(4);  // only the newest feedback matters
 
+  // Another process publishing on this station's channel: reported once by
+  // each side; of two that started together, the later one gives way.
+  int exit_code = 0;
+  struct WatchHandler {
+    rise::panels::PublisherWatch watch;
+    std::function<void(const rise::panels::PublisherWatch::Other&)> on_other;
+    void on(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::PanelState* m) {
+      if (const auto other = watch.observe(channel, m->publisher, rise::hil::monotonic_us())) on_other(*other);
+    }
+  } watch_handler{rise::panels::PublisherWatch(self.session_id), [&](const rise::panels::PublisherWatch::Other& o) {
+    spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
+    if (!allow_duplicate_id && rise::panels::yields_to(self, o.publisher) &&
+        wall_us() - self.started_utime < 5'000'000) {
+      spdlog::error("{} started first: this rise-hild stops (give another --id, or --allow-duplicate-id)",
+                    o.publisher.program);
+      exit_code = 2;
+      g_stop = 1;
+    }
+  }};
+  lcm.subscribe(state_channel, &WatchHandler::on, &watch_handler)->setQueueCapacity(16);
+
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   bridge.start();
@@ -361,5 +413,5 @@ int main(int argc, char** argv) {
                  c.can_frames, c.modbus_lines, c.hid_reports, c.lcm_events, recorder->dir());
     if (c.write_errors > 0) spdlog::error("recorder: {} writes failed (disk full?): the recording is incomplete", c.write_errors);
   }
-  return 0;
+  return exit_code;
 }

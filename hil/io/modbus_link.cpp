@@ -2,6 +2,7 @@
 
 #include <modbus.h>
 
+#include "hil/io/posix_io.hpp"
 #include "hil/io/replay_modbus_link.hpp"
 
 #include <cerrno>
@@ -101,11 +102,20 @@ class LibmodbusLink final : public ModbusLink {
  private:
   bool connect() {
     open_ = modbus_connect(ctx_) == 0;
+    if (!open_) error_.set("%s: connect: %s", where().c_str(), modbus_strerror(errno));
     return open_;
   }
+  std::string where() const {
+    return address_.kind == ModbusAddress::Kind::Tcp ? "modbus+tcp://" + address_.host + ":" + std::to_string(address_.port)
+                                                     : "modbus+rtu://" + address_.device;
+  }
   ModbusResult finish(int rc) {
-    const ModbusResult r = count(classify(rc, errno));
-    if (r.status == ModbusStatus::Disconnected) close();
+    const int err = errno;
+    const ModbusResult r = count(classify(rc, err));
+    if (r.status == ModbusStatus::Disconnected) {
+      error_.set("%s: connection lost: %s", where().c_str(), modbus_strerror(err));
+      close();
+    }
     // A TCP answer that timed out may still arrive and be taken for the next
     // request's: drop the connection, as libmodbus' own recovery would.
     if (r.status == ModbusStatus::Timeout && address_.kind == ModbusAddress::Kind::Tcp) close();
@@ -116,6 +126,10 @@ class LibmodbusLink final : public ModbusLink {
   ModbusAddress address_;
   modbus_t* ctx_ = nullptr;
   bool open_ = false;
+  detail::ErrorText error_;
+
+ public:
+  std::string last_error() const override { return error_.get(); }
 };
 
 }  // namespace

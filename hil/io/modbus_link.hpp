@@ -66,6 +66,9 @@ class ModbusLink {
   /// Closes and connects again, once; the caller does the back-off.
   virtual ModbusStatus reopen() = 0;
   virtual void close() = 0;
+  /// Why the link is down, after a failed reopen() or a request that closed
+  /// it: the OS's or libmodbus's error with the URL ("" when it never failed).
+  virtual std::string last_error() const { return {}; }
 
   const ModbusCounters& counters() const { return counters_; }
 

@@ -35,6 +35,7 @@ class RecordingModbusLink final : public ModbusLink {
   ModbusResult write_registers(uint16_t address, std::span<const uint16_t> registers) override;
 
   bool is_open() const override { return link_->is_open(); }
+  std::string last_error() const override { return link_->last_error(); }
   ModbusStatus reopen() override;
   void close() override;
 

@@ -89,6 +89,7 @@ class ReplayModbusLink final : public ModbusLink {
   /// it was down or the replay has ended.
   ModbusStatus reopen() override;
   void close() override { open_ = false; }
+  std::string last_error() const override { return open_ ? "" : "the recorded link was down (or the replay ended)"; }
 
   /// The window in the trace's clock (µs since the epoch): its first and last instant.
   struct Window {

@@ -109,6 +109,7 @@ class FaultyModbusLink : public ModbusLink, public WireFaultSet {
   bool is_open() const override { return inner_->is_open(); }
   ModbusStatus reopen() override { return inner_->reopen(); }
   void close() override { inner_->close(); }
+  std::string last_error() const override { return inner_->last_error(); }
 
  private:
   // The fault's answer to the next request, if one hits it.

@@ -14,11 +14,13 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 
 #include "instructor/scenario.hpp"
 #include "instructor/scenario_runner.hpp"
 #include "instructor/trainee_directory.hpp"
 #include "panels/command_auth.hpp"
+#include "panels/publisher_session.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -220,7 +222,8 @@ void add_list_command(CLI::App& app) {
     lcm->subscribe("rise/[^/]+/(panel_state|robot_state|task_status)", &RawHandler::on, &h);
     handle_until(*lcm, *wait_s, [] { return false; });
     const auto rows = directory.rows();
-    std::printf("%-10s %-28s %-22s %-24s %s\n", "trainee", "panel", "robot", "task", "faults");
+    const int64_t now = panels::wall_clock_us();
+    std::printf("%-10s %-28s %-22s %-24s %-20s %s\n", "trainee", "panel", "robot", "task", "faults", "publishers");
     for (const auto& r : rows) {
       std::string panel = "-", robot = "-", task = "-", faults;
       if (r.panel) {
@@ -235,8 +238,21 @@ void add_list_command(CLI::App& app) {
         for (const auto& f : r.robot->active_faults) faults += (faults.empty() ? "" : ", ") + f;
       }
       if (r.task) task = r.task->task + " " + r.task->state + " " + std::to_string(r.task->score);
-      std::printf("%-10s %-28s %-22s %-24s %s\n", r.id.c_str(), panel.c_str(), robot.c_str(), task.c_str(),
-                  faults.empty() ? "-" : faults.c_str());
+      // Who publishes: "rise-hild 4242@lab3" per process, once.
+      std::string publishers;
+      std::set<int64_t> listed;
+      for (const auto& p : r.publishers)
+        if (listed.insert(p.publisher.session_id).second)
+          publishers += (publishers.empty() ? "" : ", ") + p.publisher.program + " " + std::to_string(p.publisher.pid) +
+                        "@" + p.publisher.host;
+      std::printf("%-10s %-28s %-22s %-24s %-20s %s\n", r.id.c_str(), panel.c_str(), robot.c_str(), task.c_str(),
+                  faults.empty() ? "-" : faults.c_str(), publishers.empty() ? "-" : publishers.c_str());
+      for (const auto& what : r.duplicated(now)) {
+        std::printf("  DUPLICATE: rise/%s/%s has more than one publisher:\n", r.id.c_str(), what.c_str());
+        for (const auto& p : r.publishers)
+          if (p.what == what && now - p.last_seen_us <= 2'000'000)
+            std::printf("    %s\n", panels::describe(p.publisher, now).c_str());
+      }
     }
     if (rows.empty()) std::printf("no trainee seen within %.1f s\n", *wait_s);
   });

@@ -13,6 +13,7 @@
 #include "instructor/web_server.hpp"
 #include "panels/command_auth.hpp"
 #include "panels/data_path.hpp"
+#include "panels/publisher_session.hpp"
 
 namespace rise::instructor {
 namespace {
@@ -72,6 +73,8 @@ int serve(const ServeOptions& o) {
   s.instructor_key_file = panels::instructor_key_path(common.key_file);
   if (s.instructor_key_file.empty()) spdlog::warn("no instructor key: the fault buttons are off (--instructor-key FILE)");
 
+  s.on_duplicate_publisher = [](const std::string& line) { spdlog::warn("{}", line); };
+  panels::init_publisher("rise-instructor");
   WebServer server(s);
   server.start();
   spdlog::info("rise-instructor serve: http://{}:{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "

@@ -50,27 +50,35 @@ class ScriptClock {
   ScriptClock(const rise::panels::Timeline& timeline, const EmulateOptions& o) : timeline_(timeline), o_(o) {}
 
   void start(int64_t now_us) { start_us_ = now_us; }
-  /// Applies the events due at now_us; false once the script is over.
-  template <typename Apply>
-  bool step(int64_t now_us, const rise::panels::PanelDefinition& definition, Apply&& apply) {
+  /// Applies the events due at now_us; false once the script is over. A
+  /// looped script restarts the emulator (`restart()`: every directive's
+  /// state undone) before its first event plays again.
+  template <typename Emulator>
+  bool step(int64_t now_us, const rise::panels::PanelDefinition& definition, Emulator& emulator) {
     const double t = static_cast<double>(now_us - start_us_) * 1e-6;
     const auto& events = timeline_.events;
     while (next_ < events.size() && events[next_].time_s <= t) {
       const auto& e = events[next_++];
-      apply(e);
+      emulator.apply(e);
       if (e.kind == rise::panels::TimelineEvent::Kind::Set)
         spdlog::debug("t={:.2f} {} set", t, definition.controls[e.control].name);
       else
         spdlog::info("t={:.2f} {}:{} directive", t, timeline_.file, e.line);
     }
     if (events.empty() || next_ < events.size()) return true;
-    if (o_.loop) {
+    // The last event holds for kTailS (a final @silent is a source loss the
+    // host must see), then a looped script starts again.
+    if (o_.loop && t > timeline_.end_time_s() + kTailS) {
       start_us_ = now_us;
       next_ = 0;
+      emulator.restart();
+      spdlog::info("{}: script restarts", timeline_.file);
       return true;
     }
-    return o_.hold || t <= timeline_.end_time_s() + 0.5;
+    return o_.loop || o_.hold || t <= timeline_.end_time_s() + kTailS;
   }
+
+  static constexpr double kTailS = 0.5;
 
  private:
   const rise::panels::Timeline& timeline_;
@@ -145,7 +153,7 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
         spdlog::info("host opened the device: script starts");
       }
     }
-    if (!script.step(now, definition, [&](const panels::TimelineEvent& e) { emulator->apply(e); })) break;
+    if (!script.step(now, definition, *emulator)) break;
     if (emulator->ended()) break;
     emulator->tick(*device, now);
     // Host events until the next millisecond tick.
@@ -222,7 +230,7 @@ int run_emulate(const EmulateOptions& o) {
         spdlog::info("host connected: script starts");
       }
     }
-    if (!script.step(now, definition, [&](const panels::TimelineEvent& e) { emulator.apply(e); })) break;
+    if (!script.step(now, definition, emulator)) break;
     if (emulator.ended()) break;
     if (server) {
       // Modbus: the firmware cycle writes the registers; the host's writes

@@ -21,6 +21,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -35,6 +36,7 @@
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/TrainingControl.hpp"
 #include "panels/command_auth.hpp"
+#include "panels/publisher_session.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
 #include "sim/laser_scanner.hpp"
@@ -290,6 +292,10 @@ int main(int argc, char** argv) {
   app.add_option("--command-window", command_window_s, "largest accepted |command time - now| (s)")
       ->capture_default_str();
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
+  bool allow_duplicate_id = false;
+  app.add_flag("--allow-duplicate-id", allow_duplicate_id,
+               "start even when another process already publishes a robot's rise/<id>/robot_state (by default "
+               "that is refused: two simulators on one station mix their messages)");
   app.add_option("--scan-dir", scan_dir, "write the first robot's laser scan (scan_NNNN.pcd + .pose) here at start");
   app.add_option("--scan-every", scan_every_s, "and every S seconds of sim time (0: only at start)")
       ->check(CLI::NonNegativeNumber);
@@ -347,6 +353,40 @@ int main(int argc, char** argv) {
     spdlog::error("cannot open LCM at {}", lcm_url);
     return 2;
   }
+  // One publisher per station: listen before the first message.
+  const rise_msgs::Publisher self = rise::panels::init_publisher("rise-sim");
+  std::vector<std::string> state_channels;
+  for (const auto& st : stations) state_channels.push_back("rise/" + st->id + "/robot_state");
+  if (!allow_duplicate_id)
+    if (const auto other =
+            rise::panels::probe_channels<rise_msgs::RobotState>(lcm, state_channels, rise::panels::kProbeMs)) {
+      spdlog::error("{} is already published by {}: refusing to start a second simulator for it (give another "
+                    "--id, or --allow-duplicate-id)",
+                    other->channel, rise::panels::describe(other->publisher, wall_us()));
+      return 2;
+    }
+  // Another process publishing a robot's state: reported once by each side;
+  // of two that started together, the later one gives way.
+  int exit_code = 0;
+  struct WatchHandler {
+    rise::panels::PublisherWatch watch;
+    std::function<void(const rise::panels::PublisherWatch::Other&)> on_other;
+    void on(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::RobotState* m) {
+      if (const auto other = watch.observe(channel, m->publisher, wall_us())) on_other(*other);
+    }
+  } watch_handler{rise::panels::PublisherWatch(self.session_id), [&](const rise::panels::PublisherWatch::Other& o) {
+    spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
+    if (!allow_duplicate_id && rise::panels::yields_to(self, o.publisher) &&
+        wall_us() - self.started_utime < 5'000'000) {
+      spdlog::error("{} started first: this rise-sim stops (give another --id, or --allow-duplicate-id)",
+                    o.publisher.program);
+      exit_code = 2;
+      g_stop = 1;
+    }
+  }};
+  for (const std::string& channel : state_channels)
+    lcm.subscribe(channel, &WatchHandler::on, &watch_handler)->setQueueCapacity(16);
+
   std::vector<std::pair<std::size_t, rise_msgs::SimControl>> pending_control;
   std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>> pending_faults;
   std::vector<std::pair<std::size_t, rise_msgs::TrainingControl>> pending_training;
@@ -431,6 +471,7 @@ int main(int argc, char** argv) {
       Station& st = *stations[i];
       const auto snap = sim->snapshot(i);
       auto msg = to_message(snap, st.spec.id);
+      msg.publisher = self;
       add_objects(msg, *sim, world);
       lcm.publish(st.state_channel, &msg);
       for (const auto& c : snap.sounds) {
@@ -660,5 +701,5 @@ int main(int argc, char** argv) {
   for (const auto& st : stations) panel_states += st->panel.count;
   spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} robot(s), {} panel states",
                sim->time_s(), wall_s, wall_s > 0 ? sim->time_s() / wall_s : 0.0, stations.size(), panel_states);
-  return 0;
+  return exit_code;
 }

@@ -30,6 +30,7 @@
 
 #include "app/child_process.hpp"
 #include "panels/data_path.hpp"
+#include "panels/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
@@ -108,7 +109,8 @@ class TaskRun {
     if (console_) {
       console_->advance(m.sim_time_s - t0_s_);
       if (!console_->silent()) {
-        const auto ps = console_->panel_state(id_, ++panel_seq_, wall_us());
+        auto ps = console_->panel_state(id_, ++panel_seq_, wall_us());
+        ps.publisher = rise::panels::this_publisher();
         lcm_.publish("rise/" + id_ + "/panel_state", &ps);
       }
     }
@@ -129,6 +131,7 @@ class TaskRun {
     rise_msgs::TaskStatus s;
     s.utime = wall_us();
     s.trainee_id = id_;
+    s.publisher = rise::panels::this_publisher();
     s.training = progress_.training;
     s.node = progress_.node;
     s.task = executor_.task().name;
@@ -208,6 +211,45 @@ void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
   lcm.subscribe("rise/" + id + "/sim_event", &Router::on_event, &router)->setQueueCapacity(2000);
 }
 
+// One trainer per station: another process on the channels this one
+// publishes (TaskStatus; PanelState too with a scripted console) is refused
+// at start-up and reported while it runs.
+struct PublisherGuard {
+  rise::panels::PublisherWatch watch{rise::panels::this_publisher().session_id};
+  void seen(const std::string& channel, const rise_msgs::Publisher& p) {
+    if (const auto other = watch.observe(channel, p, wall_us()))
+      spdlog::warn("another publisher on {}: {}", other->channel, rise::panels::describe(other->publisher, wall_us()));
+  }
+  void on_status(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::TaskStatus* m) {
+    seen(channel, m->publisher);
+  }
+  void on_panel(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::PanelState* m) {
+    seen(channel, m->publisher);
+  }
+};
+
+// False (logged) when another process already publishes there.
+bool claim_station(lcm::LCM& lcm, const std::string& id, bool scripted_console, bool allow_duplicate_id,
+                   PublisherGuard& guard) {
+  const std::string status_channel = "rise/" + id + "/task_status", panel_channel = "rise/" + id + "/panel_state";
+  if (!allow_duplicate_id) {
+    std::optional<rise::panels::ChannelPublisher> other;
+    if (scripted_console)
+      other = rise::panels::probe_channels<rise_msgs::PanelState>(lcm, {panel_channel}, rise::panels::kProbeMs);
+    if (!other)
+      other = rise::panels::probe_channels<rise_msgs::TaskStatus>(lcm, {status_channel}, rise::panels::kSlowProbeMs);
+    if (other) {
+      spdlog::error("{} is already published by {}: refusing to start a second trainer for station '{}' (give "
+                    "another --id, or --allow-duplicate-id)",
+                    other->channel, rise::panels::describe(other->publisher, wall_us()), id);
+      return false;
+    }
+  }
+  lcm.subscribe(status_channel, &PublisherGuard::on_status, &guard)->setQueueCapacity(16);
+  if (scripted_console) lcm.subscribe(panel_channel, &PublisherGuard::on_panel, &guard)->setQueueCapacity(16);
+  return true;
+}
+
 std::optional<rise::trainer::ScriptedConsole> console_for(const tr::TaskDescription& t, bool scripted) {
   if (!scripted) return std::nullopt;
   if (t.console_script.empty() || t.panel_file.empty())
@@ -238,7 +280,7 @@ void print_result(const std::string& id, const tr::TaskResult& r) {
 
 struct RunTaskOptions {
   std::string task_file, id = "t1", lcm_url = "udpm://239.255.76.67:7667?ttl=0", out_dir = ".";
-  bool scripted_console = false;
+  bool scripted_console = false, allow_duplicate_id = false;
   double sim_timeout_s = 5.0;
 };
 
@@ -259,6 +301,8 @@ int run_task(const RunTaskOptions& o) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  PublisherGuard guard;
+  if (!claim_station(lcm, o.id, o.scripted_console, o.allow_duplicate_id, guard)) return 2;
   Router router{&*run};
   subscribe(lcm, o.id, router);
   spdlog::info("{}: waiting for rise-sim on rise/{}/robot_state", o.id, o.id);
@@ -286,7 +330,7 @@ int run_task(const RunTaskOptions& o) {
 
 struct TrainOptions {
   std::string training_file, id = "t1", lcm_url = "udpm://239.255.76.67:7667?ttl=0", out_dir;
-  bool resume = false, scripted_console = false, fast = false;
+  bool resume = false, scripted_console = false, fast = false, allow_duplicate_id = false;
   double sim_timeout_s = 5.0;
   double ready_timeout_s = 20.0;
 };
@@ -345,6 +389,8 @@ int train(const TrainOptions& o) {
     spdlog::error("cannot open LCM at {}", o.lcm_url);
     return 2;
   }
+  PublisherGuard guard;
+  if (!claim_station(lcm, o.id, o.scripted_console, o.allow_duplicate_id, guard)) return 2;
   Router router;
   subscribe(lcm, o.id, router);
   const std::string bin = rise::app::executable_dir();
@@ -468,6 +514,7 @@ int train(const TrainOptions& o) {
   rise_msgs::TaskStatus s{};
   s.utime = wall_us();
   s.trainee_id = o.id;
+  s.publisher = rise::panels::this_publisher();
   s.training = graph.name;
   s.tasks_done = static_cast<int32_t>(walker.visits().size());
   s.state = "training_finished";
@@ -553,6 +600,9 @@ int main(int argc, char** argv) {
   r->add_option("--out", rt.out_dir, "where the task report goes")->capture_default_str();
   r->add_flag("--scripted-console", rt.scripted_console, "play the task's console_script as the panel");
   r->add_option("--sim-timeout", rt.sim_timeout_s, "abort when no RobotState comes for S seconds")->capture_default_str();
+  r->add_flag("--allow-duplicate-id", rt.allow_duplicate_id,
+              "start even when another process already publishes rise/<id>/task_status (or, with a scripted "
+              "console, panel_state)");
 
   TrainOptions to;
   CLI::App* t = app.add_subcommand("train", "run a training: rise-sim per task, the executor, the graph, the journal");
@@ -565,6 +615,9 @@ int main(int argc, char** argv) {
   t->add_flag("--fast", to.fast, "run the simulators as fast as possible (rise-sim --fast)");
   t->add_option("--sim-timeout", to.sim_timeout_s, "the simulator is lost when no RobotState comes for S seconds")
       ->capture_default_str();
+  t->add_flag("--allow-duplicate-id", to.allow_duplicate_id,
+              "start even when another process already publishes rise/<id>/task_status (or, with a scripted "
+              "console, panel_state)");
 
   std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
   double status_every_s = 1.0;
@@ -581,6 +634,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
+  rise::panels::init_publisher("rise-trainer");
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   if (r->parsed()) return run_task(rt);

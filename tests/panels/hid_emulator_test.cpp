@@ -246,3 +246,21 @@ TEST_CASE("hid emulator shows the definition's LEDs by name", "[panels]") {
   CHECK(emulator.on_output(std::vector<uint8_t>{0x02, 0x09}));
   CHECK(emulator.feedback_text() == "leds power=on fault=off horn=-; outputs usage_0008_0003=0 usage_0008_0004=1");
 }
+
+TEST_CASE("a restarted hid emulator undoes every directive and sends its inputs at rest", "[panels]") {
+  const PanelDefinition definition = led_pad_definition();
+  HidEmulator emulator(definition, 0, parse(rise::test::led_pad_descriptor));
+  Sent at_rest, sent;
+  emulator.tick(0, at_rest.sink());
+  REQUIRE(at_rest.reports.size() == 1);
+  play(emulator, definition, "0 drive_y 0.8\n0 deadman pressed\n0 @invalid drive_x\n0 @corrupt 100\n0 @silent\n");
+  CHECK(emulator.tick(8000, sent.sink()) == 0);
+  emulator.restart();
+  CHECK_FALSE(emulator.silent());
+  CHECK(emulator.tick(16000, sent.sink()) == 1);
+  REQUIRE(sent.reports.size() == 1);
+  CHECK(sent.reports[0] == at_rest.reports[0]);  // whole, and every signal where it rests
+  play(emulator, definition, "0 @end\n");
+  emulator.restart();
+  CHECK_FALSE(emulator.ended());
+}
