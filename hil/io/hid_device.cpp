@@ -1,7 +1,9 @@
 #include "hil/io/hid_device.hpp"
 
 #include <hidapi/hidapi.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
 #include <fstream>
@@ -9,6 +11,8 @@
 #include <mutex>
 #include <stdexcept>
 #include <utility>
+
+#include "hil/io/posix_io.hpp"
 
 namespace rise::io {
 namespace {
@@ -164,7 +168,14 @@ IoStatus HidDevice::reopen() {
   }
   device_ = hid_open_path(found.c_str());
   if (!device_) {
-    error_.set("%s: cannot open (permissions?)", found.c_str());
+    // hidapi says nothing of why; the node itself does (EACCES: the user is
+    // not in the group the udev rule gives the console's devices to).
+    const int err = ::access(found.c_str(), R_OK | W_OK) != 0 ? errno : 0;
+    if (err == EACCES)
+      error_.set("%s: permission denied: this user may not read and write it (the udev rule in packaging/udev gives "
+                 "a console's devices to group rise)", found.c_str());
+    else
+      error_.set("%s: cannot open: %s", found.c_str(), err != 0 ? detail::errno_text(err) : "hidapi refused it");
     return IoStatus::Error;
   }
   descriptor_ = read_sysfs_descriptor(found);
