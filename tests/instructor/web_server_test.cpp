@@ -284,6 +284,26 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
     CHECK(r->status == 400);
     CHECK(r->body.find("axis 'warp'") != std::string::npos);
   }
+  SECTION("a station whose PanelState another process publishes gets no virtual panel") {
+    rise_msgs::PanelState daemon{};
+    daemon.trainee_id = f.id;
+    daemon.publisher.session_id = 12345;
+    daemon.publisher.program = "rise-hild";
+    daemon.publisher.host = "lab3";
+    daemon.publisher.pid = 4242;
+    // The server has heard the daemon once its trainee list names it.
+    const auto heard = [&] {
+      const auto r = http.Get("/api/trainees", f.auth());
+      return r && r->body.find("\"pid\":4242") != std::string::npos;
+    };
+    REQUIRE(peer.wait_until(heard, 5000, [&] { peer.lcm().publish("rise/" + f.id + "/panel_state", &daemon); }));
+    const auto r = http.Post("/api/virtual/" + f.id, f.auth(), body, "application/json");
+    const std::string answer = r->body;
+    INFO(answer);
+    CHECK(r->status == 409);
+    CHECK(answer.find("rise/" + f.id + "/panel_state is already published by rise-hild pid 4242 on lab3") !=
+          std::string::npos);
+  }
   SECTION("a page sending, then stopping") {
     const auto driving = [&] {
       return !peer.panels.empty() && !peer.panels.back().failsafe && peer.panels.back().deadman;

@@ -237,7 +237,7 @@ function renderPanels() {
       el('td', {}, p ? (p.deadman ? 'dead-man held' : 'dead-man released') : ''),
       el('td', {}, axes), el('td', {}, sw), el('td', { class: 'faults' }, faults)));
     for (const s of (p ? p.sources : [])) {
-      const health = !s.connected ? el('span', { class: 'bad' }, 'disconnected') : s.stale ? el('span', { class: 'bad' }, 'stale')
+      const health = !s.connected ? el('span', { class: 'bad' }, 'down' + (s.down_reason ? ': ' + s.down_reason : '')) : s.stale ? el('span', { class: 'bad' }, 'stale')
         : el('span', { class: 'ok' }, 'ok');
       rows.push(el('tr', { class: 'source' }, el('td', {}, ''), el('td', {}, 'source ' + s.name), el('td', {}, health),
         el('td', {}, s.url), el('td', {}, 'age ' + fmt(s.age_ms, 0) + ' ms'), el('td', {}, 'ok ' + s.frames_ok + ' bad ' + s.frames_bad)));
