@@ -4,6 +4,7 @@
 
 #include "hil/feedback.hpp"
 #include "hil/panel_mapper.hpp"
+#include "hil/panel_state_message.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -422,5 +423,38 @@ TEST_CASE("a CAN bus-off makes the source failsafe until the controller reports 
     CHECK_FALSE(s.failsafe);
     CHECK(s.sources[0].error_frames == 1);
     CHECK(s.sources[0].bus_state == rise::io::CanBusState::Active);
+  }
+}
+
+TEST_CASE("a source that is down carries why until it connects, and a bus that never opened reports no state",
+          "[hil]") {
+  PanelMapper mapper(console());
+  const auto definition = mapper.definition();
+  const auto health = [&](int64_t t) {
+    return rise::hil::to_message(definition, mapper.evaluate(t), "t1", 0, t, {"socketcand://h:1/can0"}).sources.at(0);
+  };
+  SECTION("never connected") {
+    mapper.on_connection(0, false, kT0);
+    auto h = health(kT0);
+    CHECK(h.down_reason == "not connected yet");
+    CHECK(h.bus_state.empty());  // no controller state to report
+    CHECK(h.status.empty());     // no heartbeat heard
+    CHECK(h.last_frame_age_us < 0);
+    mapper.on_connection(0, false, kT0, "socketcand://h:1/can0: cannot resolve host 'h': Name or service not known");
+    h = health(kT0);
+    CHECK(h.down_reason == "socketcand://h:1/can0: cannot resolve host 'h': Name or service not known");
+    CHECK_FALSE(h.connected);
+  }
+  SECTION("connected, then lost with a reason, then back") {
+    mapper.on_connection(0, true, kT0);
+    auto h = health(kT0);
+    CHECK(h.down_reason.empty());
+    CHECK(h.bus_state == "error-active");
+    mapper.on_connection(0, false, kT0 + 1000, "socketcand://h:1/can0: recv: Connection reset by peer");
+    CHECK(health(kT0 + 1000).down_reason == "socketcand://h:1/can0: recv: Connection reset by peer");
+    mapper.on_connection(0, false, kT0 + 2000);  // a retry without a new reason keeps the old one
+    CHECK(health(kT0 + 2000).down_reason == "socketcand://h:1/can0: recv: Connection reset by peer");
+    mapper.on_connection(0, true, kT0 + 3000);
+    CHECK(health(kT0 + 3000).down_reason.empty());
   }
 }

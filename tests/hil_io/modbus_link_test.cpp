@@ -129,6 +129,8 @@ TEST_CASE("a modbus link to a server that went away reports Disconnected and reo
   CHECK((lost.status == ModbusStatus::Disconnected || lost.status == ModbusStatus::Timeout));
   CHECK_FALSE(link->is_open());
   CHECK(link->reopen() == ModbusStatus::Disconnected);  // nobody listens
+  // Why, for SourceHealth.down_reason: the address and the OS's error.
+  CHECK(link->last_error() == "modbus+tcp://127.0.0.1:" + std::to_string(port) + ": connect: Connection refused");
   CHECK(link->read_input_registers(0, regs).status == ModbusStatus::Disconnected);
 
   server = std::make_unique<ModbusServer>("modbus+tcp-listen://127.0.0.1:" + std::to_string(port) + "?unit=1",
