@@ -6,7 +6,7 @@
 #   modbus/    rise_console_modbus.yaml over Modbus TCP: console.modbus.log + panel_state.lcmlog
 #   split/     rise_console_split.yaml, sticks on socketcand + buttons on Modbus TCP
 #   hid/       hid/pad.yaml over replay:// of the HID emulator's reports of
-#              hid/session.txt (no uhid here: hil_test "[.golden]" writes them):
+#              hid/session.txt (no uhid here: hil_hid_replay_test "[.golden]" writes them):
 #              pad.hid + panel_state.lcmlog
 # Each is checked with `rise-hild verify --record-dir` before it is kept.
 # Run from anywhere after a build: bash tests/data/replay/make_goldens.sh [BUILD_DIR [NAME...]]
@@ -83,7 +83,7 @@ record split panels/definitions/rise_console_split.yaml "socketcand://127.0.0.1:
 # (reconnects=1), which the status line shows.
 if want hid; then
   input=$work/hid-input.hid
-  RISE_HID_GOLDEN_INPUT=$input "$bin/../tests/hil/hil_test" "[.golden]" > "$work/hid-input.log"
+  RISE_HID_GOLDEN_INPUT=$input "$bin/../tests/hil/hil_hid_replay_test" "[.golden]" > "$work/hid-input.log"
   "$bin/rise-hild" --panel "$here/hid/pad.yaml" --source "replay://$input" --id golden --lcm 'memq://' \
     --status-every 0.05 --record "$work/hid" > "$work/hid-hild.log" 2>&1 &
   hild=$!
