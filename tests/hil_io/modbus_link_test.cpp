@@ -80,6 +80,20 @@ TEST_CASE("modbus TCP URLs reject the ports HOST:PORT parsing rejects, naming th
   }
 }
 
+TEST_CASE("a second modbus TCP server on a busy address fails with 'address in use' while the first serves",
+          "[hil_io]") {
+  ModbusServer first("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
+  REQUIRE(first.port() != 0);
+  fill(first);
+  const std::string address = "127.0.0.1:" + std::to_string(first.port());
+  CHECK_THROWS_WITH(ModbusServer("modbus+tcp-listen://" + address + "?unit=1", {}), address + ": address in use");
+  auto link = rise::io::open_modbus_link(tcp_url(first));
+  std::array<uint16_t, 18> regs{};
+  REQUIRE(link->read_input_registers(0, regs).ok());
+  CHECK(regs[0] == 0x1000);
+  CHECK(first.requests_served() == 1);
+}
+
 TEST_CASE("a libmodbus TCP client reads the inputs our server holds and writes its feedback", "[hil_io]") {
   ModbusServer server("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
   REQUIRE(server.port() != 0);
