@@ -8,9 +8,11 @@
 #include <json/json.h>
 #include <lcm/lcm-cpp.hpp>
 #include <poll.h>
+#include <sys/socket.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -27,6 +29,7 @@
 #include <thread>
 
 #include "app/child_process.hpp"
+#include "hil/io/host_port.hpp"
 #include "hil/panel_state_message.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
@@ -985,12 +988,25 @@ void WebServer::start() {
                             self->on_message(rbuf, channel);
                           },
                           &d);
+  // cpp-httplib 0.11's default options set SO_REUSEPORT, with which a second
+  // server binds the same port and the kernel splits the connections between
+  // the two. SO_REUSEADDR only: a restart still gets its port back while old
+  // connections sit in TIME_WAIT, and a port in use fails with EADDRINUSE.
+  d.http.set_socket_options([](socket_t sock) {
+    const int on = 1;
+    ::setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
+  });
+  errno = 0;
   if (d.settings.port == 0) {
     d.bound_port = d.http.bind_to_any_port(d.settings.host);
     if (d.bound_port < 0) throw std::runtime_error("cannot bind " + d.settings.host);
   } else {
-    if (!d.http.bind_to_port(d.settings.host, d.settings.port))
-      throw std::runtime_error("cannot bind " + d.settings.host + ":" + std::to_string(d.settings.port));
+    const std::string address = io::format_host_port(d.settings.host, static_cast<uint16_t>(d.settings.port));
+    if (!d.http.bind_to_port(d.settings.host, d.settings.port)) {
+      // cpp-httplib closes the socket after the failed bind() or listen(), which keeps errno.
+      if (errno == EADDRINUSE) throw std::runtime_error(address + ": address in use");
+      throw std::runtime_error("cannot bind " + address);
+    }
     d.bound_port = d.settings.port;
   }
   d.running = true;

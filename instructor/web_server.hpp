@@ -68,7 +68,8 @@ class WebServer {
   WebServer(const WebServer&) = delete;
   WebServer& operator=(const WebServer&) = delete;
 
-  /// Binds the socket and starts the threads. Throws when it cannot bind.
+  /// Binds the socket and starts the threads. Throws std::runtime_error when
+  /// it cannot bind: "HOST:PORT: address in use" when another server listens there.
   void start();
   /// Stops the server and the threads; publishes nothing more.
   void stop();

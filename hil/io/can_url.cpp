@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hil/io/host_port.hpp"
+
 namespace rise::io {
 
 namespace {
@@ -155,18 +157,6 @@ SocketCanAddress parse_socketcan(std::string_view url, std::string_view rest) {
   return address;
 }
 
-void check_host(std::string_view url, std::string_view host, bool bracketed) {
-  if (host.empty()) fail(url, "missing host (HOST:PORT/BUS)");
-  for (char c : host) {
-    const bool ok = bracketed ? (is_hex_digit(c) || c == ':' || c == '.')
-                              : (is_alnum(c) || c == '.' || c == '-' || c == '_');
-    if (!ok) fail(url, "host '" + std::string(host) + "' has an invalid character");
-  }
-  if (!bracketed && host.find(':') != std::string_view::npos) {
-    fail(url, "an IPv6 host must be in brackets");
-  }
-}
-
 SocketcandAddress parse_socketcand(std::string_view url, std::string_view rest, bool listen) {
   SocketcandAddress address;
   address.listen = listen;
@@ -180,28 +170,12 @@ SocketcandAddress parse_socketcand(std::string_view url, std::string_view rest, 
   const std::string_view authority = rest.substr(0, slash);
   const std::string_view bus = rest.substr(slash + 1);
 
-  std::string_view host;
-  std::string_view port_text;
-  if (!authority.empty() && authority.front() == '[') {
-    const size_t close = authority.find(']');
-    if (close == std::string_view::npos) fail(url, "unterminated '[' in host");
-    host = authority.substr(1, close - 1);
-    check_host(url, host, true);
-    const std::string_view after = authority.substr(close + 1);
-    if (after.empty() || after.front() != ':') fail(url, "missing :PORT after the host");
-    port_text = after.substr(1);
-  } else {
-    const size_t colon = authority.rfind(':');
-    if (colon == std::string_view::npos) fail(url, "missing :PORT after the host");
-    host = authority.substr(0, colon);
-    check_host(url, host, false);
-    port_text = authority.substr(colon + 1);
-  }
-  const auto port = parse_decimal(port_text, 65535);
-  if (!port) fail(url, "port '" + std::string(port_text) + "' is not a number 0..65535");
-  if (*port == 0 && !listen) fail(url, "port 0 is only allowed for socketcand+listen://");
-  address.host = std::string(host);
-  address.port = static_cast<uint16_t>(*port);
+  // PORT 0 (any free port) only for a server; a client must know where to connect.
+  std::string error;
+  auto endpoint = parse_host_port(authority, &error, {.any_port = listen});
+  if (!endpoint) fail(url, error);
+  address.host = std::move(endpoint->host);
+  address.port = endpoint->port;
 
   if (bus.empty()) fail(url, "missing bus name after '/'");
   if (bus.size() > kMaxBusName) {

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include "hil/io/host_port.hpp"
+
 namespace rise::io {
 namespace {
 constexpr int kSelectTimeoutUs = 20000;  // how quickly the thread notices stop
@@ -32,12 +34,14 @@ ModbusServer::ModbusServer(std::string_view url, ModbusTableSizes sizes) : addre
     throw std::runtime_error("modbus server: cannot allocate the register map");
   }
   if (a.kind == ModbusAddress::Kind::Tcp) {
+    // libmodbus 3.1 sets SO_REUSEADDR only: a second server on the port fails with EADDRINUSE.
     listen_fd_ = modbus_tcp_listen(ctx_, 8);
     if (listen_fd_ < 0) {
-      const std::string why = modbus_strerror(errno);
+      const int listen_errno = errno;
       modbus_mapping_free(mapping_);
       modbus_free(ctx_);
-      throw std::runtime_error("modbus server: cannot listen on " + std::string(url) + ": " + why);
+      if (listen_errno == EADDRINUSE) throw std::runtime_error(format_host_port(a.host, a.port) + ": address in use");
+      throw std::runtime_error("modbus server: cannot listen on " + std::string(url) + ": " + modbus_strerror(listen_errno));
     }
     sockaddr_in bound{};
     socklen_t size = sizeof bound;

@@ -30,7 +30,8 @@ struct ModbusTableSizes {
 class ModbusServer {
  public:
   /// Binds / opens the port and starts serving. Throws std::runtime_error
-  /// (or std::invalid_argument for a bad URL) when it cannot.
+  /// (or std::invalid_argument for a bad URL) when it cannot; its message is
+  /// "HOST:PORT: address in use" when another server listens there.
   ModbusServer(std::string_view url, ModbusTableSizes sizes);
   ~ModbusServer();
   ModbusServer(const ModbusServer&) = delete;

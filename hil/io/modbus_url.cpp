@@ -2,6 +2,9 @@
 
 #include <charconv>
 #include <stdexcept>
+#include <utility>
+
+#include "hil/io/host_port.hpp"
 
 namespace rise::io {
 namespace {
@@ -43,14 +46,12 @@ ModbusAddress parse_modbus_url(std::string_view url) {
     rest = rest.substr(0, q);
   }
   if (a.kind == ModbusAddress::Kind::Tcp) {
-    const auto colon = rest.rfind(':');
-    if (colon == std::string_view::npos) {
-      a.host = std::string(rest);
-    } else {
-      a.host = std::string(rest.substr(0, colon));
-      a.port = static_cast<uint16_t>(to_int(url, "port", rest.substr(colon + 1), a.listen ? 0 : 1, 65535));
-    }
-    if (a.host.empty()) fail(url, "no host");
+    // PORT 0 (any free port) only for a server; without :PORT, 502.
+    std::string error;
+    auto endpoint = parse_host_port(rest, &error, {.any_port = a.listen, .default_port = a.port});
+    if (!endpoint) fail(url, error);
+    a.host = std::move(endpoint->host);
+    a.port = endpoint->port;
   } else {
     if (rest.empty() || rest[0] != '/') fail(url, "no device path (modbus+rtu:///dev/ttyUSB0)");
     a.device = std::string(rest);

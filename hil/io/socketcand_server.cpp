@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <system_error>
 
+#include "hil/io/host_port.hpp"
 #include "hil/io/socketcand_wire.hpp"
 
 namespace rise::io {
@@ -103,17 +104,24 @@ IoStatus SocketcandServer::reopen() {
       error_.set("%s: socket: %s", url_.c_str(), detail::errno_text(errno));
       continue;
     }
-    // A restarted server must get its port back while old connections sit in TIME_WAIT.
+    // A restarted server must get its port back while old connections sit in
+    // TIME_WAIT. SO_REUSEADDR only: with SO_REUSEPORT a second server would
+    // bind the same port and the kernel would split the clients between them.
     const int on = 1;
     ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &on, sizeof on);
-    if (::bind(fd, ai->ai_addr, ai->ai_addrlen) != 0) {
-      error_.set("%s: bind: %s", url_.c_str(), detail::errno_text(errno));
+    const char* failed = ::bind(fd, ai->ai_addr, ai->ai_addrlen) != 0 ? "bind"
+                         : ::listen(fd, SOMAXCONN) != 0              ? "listen"
+                                                                      : nullptr;
+    if (failed != nullptr) {
+      const int failed_errno = errno;
       detail::close_fd(fd);
-      continue;
-    }
-    if (::listen(fd, SOMAXCONN) != 0) {
-      error_.set("%s: listen: %s", url_.c_str(), detail::errno_text(errno));
-      detail::close_fd(fd);
+      // listen() too: two sockets with SO_REUSEADDR may both bind before either listens.
+      if (failed_errno == EADDRINUSE) {
+        // Another server holds it: not another of the host's addresses either.
+        error_.set("%s: address in use", format_host_port(address_.host, wanted).c_str());
+        break;
+      }
+      error_.set("%s: %s: %s", url_.c_str(), failed, detail::errno_text(failed_errno));
       continue;
     }
     listen_fd_ = fd;

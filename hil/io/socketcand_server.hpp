@@ -46,7 +46,8 @@ class SocketcandServer final : public CanBus {
   /// `< send >`, `< fdsend >` or `< sendrtr >`, stamped with its arrival time.
   IoStatus receive(CanFrame& frame, int timeout_ms) override;
   /// Binds and listens if not listening yet (keeping the port bound first,
-  /// so clients find it again). Ok or Error. Not for the cyclic path.
+  /// so clients find it again). Ok or Error; last_error() is "HOST:PORT:
+  /// address in use" when another server listens there. Not for the cyclic path.
   IoStatus reopen() override;
   bool is_open() const override { return listening_.load(); }
   const std::string& url() const override { return url_; }

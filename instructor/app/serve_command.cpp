@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/child_process.hpp"
+#include "hil/io/host_port.hpp"
 #include "instructor/app/instructor_commands.hpp"
 #include "instructor/web_server.hpp"
 #include "panels/command_auth.hpp"
@@ -48,10 +49,11 @@ std::string read_token(const std::string& file) {
 
 int serve(const ServeOptions& o) {
   WebServerSettings s;
-  const auto colon = o.listen.rfind(':');
-  if (colon == std::string::npos) throw std::runtime_error("--listen '" + o.listen + "': expected HOST:PORT");
-  s.host = o.listen.substr(0, colon);
-  s.port = std::stoi(o.listen.substr(colon + 1));
+  std::string error;
+  const auto listen = io::parse_host_port(o.listen, &error);
+  if (!listen) throw std::runtime_error("--listen '" + o.listen + "': " + error);
+  s.host = listen->host;
+  s.port = listen->port;
   if (s.host != "127.0.0.1" && s.host != "localhost" && s.host != "::1")
     spdlog::warn("listening on {} — not loopback: anyone who can reach it and has the token can drive", s.host);
   if (!o.token.empty() && !o.token_file.empty()) throw std::runtime_error("give --token or --token-file, not both");
@@ -77,9 +79,9 @@ int serve(const ServeOptions& o) {
   panels::init_publisher("rise-instructor");
   WebServer server(s);
   server.start();
-  spdlog::info("rise-instructor serve: http://{}:{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "
+  spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "
                "LCM {}",
-               s.host, server.port(), s.lcm_url);
+               io::format_host_port(s.host, static_cast<uint16_t>(server.port())), s.lcm_url);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   g_stop.acquire();

@@ -83,6 +83,20 @@ TEST_CASE("malformed CAN bus URLs are rejected with a message naming the URL", "
   CHECK_THROWS_AS(open_can_bus(url), std::invalid_argument);
 }
 
+TEST_CASE("socketcand URLs reject the ports HOST:PORT parsing rejects, naming the port", "[hil_io]") {
+  const std::string port = GENERATE(as<std::string>{}, "abc", "99999", "80x", "-1", "65536", "", " 1");
+  for (const std::string scheme : {"socketcand", "socketcand+listen"}) {
+    const std::string url = scheme + "://127.0.0.1:" + port + "/can0";
+    CAPTURE(url);
+    CHECK_THROWS_WITH(parse_can_url(url), Catch::Contains("'" + url + "': port '" + port + "' is not a number"));
+  }
+  SECTION("port 0 is any free port for a server only") {
+    CHECK(std::get<SocketcandAddress>(parse_can_url("socketcand+listen://127.0.0.1:0/can0")).port == 0);
+    CHECK_THROWS_WITH(parse_can_url("socketcand://127.0.0.1:0/can0"),
+                      Catch::Contains("port '0' is not a number 1..65535"));
+  }
+}
+
 TEST_CASE("every IoStatus has a name", "[hil_io]") {
   CHECK(std::string(to_string(IoStatus::Ok)) == "ok");
   CHECK(std::string(to_string(IoStatus::Timeout)) == "timeout");

@@ -64,6 +64,36 @@ TEST_CASE("modbus URLs parse into their address and reject mistakes", "[hil_io]"
   }
 }
 
+TEST_CASE("modbus TCP URLs reject the ports HOST:PORT parsing rejects, naming the port", "[hil_io]") {
+  const std::string port = GENERATE(as<std::string>{}, "abc", "99999", "80x", "-1", "65536", "", " 1");
+  for (const std::string scheme : {"modbus+tcp", "modbus+tcp-listen"}) {
+    const std::string url = scheme + "://127.0.0.1:" + port + "?unit=1";
+    CAPTURE(url);
+    CHECK_THROWS_WITH(rise::io::parse_modbus_url(url),
+                      Catch::Contains("'" + url + "': port '" + port + "' is not a number"));
+  }
+  SECTION("port 0 is any free port for a server only; no port is 502") {
+    CHECK(rise::io::parse_modbus_url("modbus+tcp-listen://127.0.0.1:0").port == 0);
+    CHECK_THROWS_WITH(rise::io::parse_modbus_url("modbus+tcp://127.0.0.1:0"),
+                      Catch::Contains("port '0' is not a number 1..65535"));
+    CHECK(rise::io::parse_modbus_url("modbus+tcp://10.0.0.5?unit=2").port == 502);
+  }
+}
+
+TEST_CASE("a second modbus TCP server on a busy address fails with 'address in use' while the first serves",
+          "[hil_io]") {
+  ModbusServer first("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
+  REQUIRE(first.port() != 0);
+  fill(first);
+  const std::string address = "127.0.0.1:" + std::to_string(first.port());
+  CHECK_THROWS_WITH(ModbusServer("modbus+tcp-listen://" + address + "?unit=1", {}), address + ": address in use");
+  auto link = rise::io::open_modbus_link(tcp_url(first));
+  std::array<uint16_t, 18> regs{};
+  REQUIRE(link->read_input_registers(0, regs).ok());
+  CHECK(regs[0] == 0x1000);
+  CHECK(first.requests_served() == 1);
+}
+
 TEST_CASE("a libmodbus TCP client reads the inputs our server holds and writes its feedback", "[hil_io]") {
   ModbusServer server("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
   REQUIRE(server.port() != 0);

@@ -107,6 +107,26 @@ TEST_CASE("the web server answers only requests that carry its token", "[instruc
   server.stop();
 }
 
+TEST_CASE("a second web server on a busy address fails with 'address in use' while the first serves",
+          "[instructor]") {
+  ServerFixture f;
+  rise::instructor::WebServer first(f.settings);
+  first.start();
+  rise::instructor::WebServerSettings busy = f.settings;
+  busy.port = first.port();
+  busy.token = "tok-second-" + f.id;
+  rise::instructor::WebServer second(busy);
+  CHECK_THROWS_WITH(second.start(), "127.0.0.1:" + std::to_string(first.port()) + ": address in use");
+  // With SO_REUSEPORT the kernel would hand some connections to the second, which wants its own token.
+  httplib::Client http("127.0.0.1", first.port());
+  for (int i = 0; i < 20; ++i) {
+    const auto r = http.Get("/api/world", f.auth());
+    REQUIRE(r);
+    CHECK(r->status == 200);
+  }
+  first.stop();
+}
+
 TEST_CASE("the web server streams the latest LCM messages of every trainee over SSE", "[instructor]") {
   ServerFixture f;
   rise::instructor::WebServer server(f.settings);
