@@ -19,6 +19,7 @@
 
 #include "app/chain_monitor.hpp"
 #include "app/child_process.hpp"
+#include "cli/command_line.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
@@ -340,7 +341,7 @@ int main(int argc, char** argv) {
   st->add_option("--lcm", status_lcm, "LCM URL")->capture_default_str();
   st->add_option("--every", status_every_s, "refresh period in seconds")->capture_default_str();
   st->add_option("--count", status_count, "stop after N tables (0: until Ctrl-C)")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise", argc, argv)) return *code;
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

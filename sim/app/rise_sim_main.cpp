@@ -34,6 +34,7 @@
 #include "rise_msgs/SimControl.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/TrainingControl.hpp"
+#include "cli/command_line.hpp"
 #include "panels/command_auth.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
@@ -296,7 +297,7 @@ int main(int argc, char** argv) {
   app.add_option("--scan-format", scan_format, "PCD DATA: ascii or binary")
       ->capture_default_str()
       ->check(CLI::IsMember({"ascii", "binary"}));
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-sim", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   std::vector<std::unique_ptr<Station>> stations;
