@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <semaphore>
@@ -37,7 +39,7 @@ void on_signal(int) { g_stop.release(); }
 
 std::string read_token(const std::string& file) {
   std::ifstream in(file);
-  if (!in) throw std::runtime_error(file + ": cannot read the token file");
+  if (!in) throw std::runtime_error(file + ": cannot open: " + std::strerror(errno));
   std::string token;
   std::getline(in, token);
   while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();

@@ -2,8 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -67,7 +69,7 @@ int run_register(const RegisterOptions& o) {
     T_initial = parse_matrix(o.init, "--init");
   } else if (!o.init_file.empty()) {
     std::ifstream in(o.init_file);
-    if (!in) throw std::runtime_error(o.init_file + ":0: cannot open");
+    if (!in) throw std::runtime_error(o.init_file + ": cannot open: " + std::strerror(errno));
     std::ostringstream s;
     s << in.rdbuf();
     T_initial = parse_matrix(s.str(), o.init_file);
