@@ -36,6 +36,7 @@
 #include "rise_msgs/TrainingControl.hpp"
 #include "cli/command_line.hpp"
 #include "panels/command_auth.hpp"
+#include "panels/data_path.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
 #include "sim/laser_scanner.hpp"
@@ -51,11 +52,8 @@ int64_t wall_us() {
       .count();
 }
 
-std::string source_file(const std::string& relative) {
-  if (std::filesystem::exists(relative)) return relative;
-  const auto p = std::filesystem::path(RISE_SOURCE_DIR) / relative;
-  return std::filesystem::exists(p) ? p.string() : relative;
-}
+// A robot or world file as given, else installed or in the source tree.
+std::string source_file(const std::string& relative) { return rise::panels::find_data_file(relative); }
 
 // The latest panel state, turned into what the robot's control mapping reads.
 struct PanelListener {
