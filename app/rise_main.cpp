@@ -23,6 +23,7 @@
 
 #include "app/chain_monitor.hpp"
 #include "app/child_process.hpp"
+#include "cli/command_line.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
@@ -469,7 +470,7 @@ int main(int argc, char** argv) {
   st->add_option("--count", status.count, "stop after N periods (0: until Ctrl-C or --timeout)")->capture_default_str();
   st->add_option("--timeout", status.timeout_s, "exit 1 when no PanelState came for S seconds (0: wait forever)")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise", argc, argv)) return *code;
 
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);

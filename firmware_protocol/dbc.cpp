@@ -491,7 +491,7 @@ std::string_view DecodedSignal::label() const {
 
 DbcDatabase DbcDatabase::load(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ":0: file: cannot open (" + std::strerror(errno) + ")");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::ostringstream text;
   text << in.rdbuf();
   return parse(text.str(), path);

@@ -360,7 +360,7 @@ HidDescriptorSource read_hid_descriptor(std::string_view content, HidTextFormat 
 
 HidDescriptorSource read_hid_descriptor_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, 0, "file", std::string("cannot open (") + std::strerror(errno) + ")");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   const std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   return read_hid_descriptor(content, detect_hid_format(content, path), path);
 }

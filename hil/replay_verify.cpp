@@ -3,8 +3,10 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
@@ -253,7 +255,7 @@ Capture capture_for(const panels::PanelDefinition& definition, const std::string
                                 "or pass SOURCE=FILE)");
   }
   const auto& source = definition.sources[c.source];
-  if (!std::filesystem::exists(file)) throw std::invalid_argument(file + ": no such capture file");
+  if (!std::filesystem::exists(file)) throw std::invalid_argument(file + ": cannot open: " + std::strerror(ENOENT));
   if (io::looks_like_hid_recording(file) != source.is_hid())
     throw std::invalid_argument(file + ": source '" + source.name + "' speaks " + source.protocol + " but the file is " +
                                 (source.is_hid() ? "not a hid-recorder file" : "a hid-recorder file"));
@@ -266,6 +268,9 @@ Capture capture_for(const panels::PanelDefinition& definition, const std::string
 }
 
 std::vector<Capture> captures_in(const panels::PanelDefinition& definition, const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::directory_iterator readable(dir, ec);
+  if (ec) throw std::invalid_argument(dir + ": cannot open: " + ec.message());
   std::vector<Capture> captures;
   for (std::size_t i = 0; i < definition.sources.size(); ++i) {
     const auto& s = definition.sources[i];
@@ -490,7 +495,7 @@ VerifyReport verify_replay(const panels::PanelDefinition& definition, std::vecto
 }
 
 PanelStateLog read_panel_state_log(const std::string& path, const std::string& channel) {
-  if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": no such LCM log");
+  if (!std::filesystem::exists(path)) throw std::runtime_error(path + ": cannot open: " + std::strerror(ENOENT));
   lcm::LogFile log(path, "r");
   if (!log.good()) throw std::runtime_error(path + ": cannot read as an LCM log");
   PanelStateLog out;

@@ -1,6 +1,8 @@
 #include "instructor/scenario.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -118,7 +120,7 @@ Scenario parse_scenario(const std::string& text, const std::string& file) {
 
 Scenario load_scenario(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ":0: cannot open");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   return parse_scenario(text.str(), path);

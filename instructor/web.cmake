@@ -12,6 +12,5 @@ target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::lcmtypes rise::
 # rise-instructor serve
 add_library(rise_instructor_serve STATIC app/serve_command.cpp)
 rise_target_options(rise_instructor_serve)
-target_compile_definitions(rise_instructor_serve PRIVATE
-  RISE_WEB_DIST_DIR="${PROJECT_SOURCE_DIR}/instructor/web/dist" RISE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+target_compile_definitions(rise_instructor_serve PRIVATE RISE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 target_link_libraries(rise_instructor_serve PUBLIC rise::instructor_web rise::panels rise::hil_io CLI11::CLI11 spdlog::spdlog)

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -61,8 +62,7 @@ void set_signature(Command& c, const InstructorKey& key) {
 InstructorKey load_instructor_key(const std::string& path) {
   if (path.empty()) throw std::runtime_error("instructor key: no file given (--instructor-key or RISE_INSTRUCTOR_KEY)");
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0)
-    throw std::runtime_error(path + ": instructor key: " + std::strerror(errno));
+  if (::stat(path.c_str(), &st) != 0) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   if (!S_ISREG(st.st_mode)) throw std::runtime_error(path + ": instructor key: not a regular file");
   if ((st.st_mode & 077) != 0) {
     char mode[8];
@@ -71,7 +71,7 @@ InstructorKey load_instructor_key(const std::string& path) {
                              " lets others read it; chmod 600 it");
   }
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": instructor key: cannot open");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   InstructorKey key;
   std::string line;
   int line_no = 0;
@@ -112,7 +112,7 @@ InstructorKey write_new_instructor_key(const std::string& path) {
   if (RAND_bytes(key.bytes.data(), static_cast<int>(key.bytes.size())) != 1)
     throw std::runtime_error("instructor key: RAND_bytes failed");
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
-  if (fd < 0) throw std::runtime_error(path + ": instructor key: " + std::strerror(errno));
+  if (fd < 0) throw std::runtime_error(path + ": cannot create: " + std::strerror(errno));
   std::string text = "# rise instructor key (HMAC-SHA256); keep it on the instructor station only\n";
   static const char* digits = "0123456789abcdef";
   for (uint8_t b : key.bytes) {

@@ -3,7 +3,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <set>
@@ -710,7 +712,7 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
 
 PanelDefinition load_panel_definition(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ":0: cannot open the panel definition");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   return parse_panel_definition(text.str(), path);

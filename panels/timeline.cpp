@@ -1,7 +1,9 @@
 #include "panels/timeline.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -134,7 +136,7 @@ Timeline parse_timeline(const std::string& text, const std::string& file,
 
 Timeline load_timeline(const std::string& path, const PanelDefinition& definition) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ":0: cannot open the timeline");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   return parse_timeline(text.str(), path, definition);

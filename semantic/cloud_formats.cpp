@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -21,10 +22,10 @@ namespace rise::semantic::formats {
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ":0: cannot open");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::ostringstream s;
   s << in.rdbuf();
-  if (in.bad()) throw std::runtime_error(path + ":0: cannot read");
+  if (in.bad()) throw std::runtime_error(path + ": cannot read: " + std::strerror(errno));
   return std::move(s).str();
 }
 

@@ -58,7 +58,7 @@ std::vector<Eigen::Isometry3d> parse_3dtk_frames(const std::string& path, std::s
 /// The simulator's `.pose` (sim/README.md, "Scan files").
 Eigen::Isometry3d parse_sim_pose(const std::string& path, std::string_view text);
 
-std::string read_file(const std::string& path);  ///< throws "path:0: cannot open"
+std::string read_file(const std::string& path);  ///< throws "path: cannot open: <strerror>"
 std::string lower_extension(const std::string& path);
 [[noreturn]] void fail_line(const std::string& path, size_t line, const std::string& message);
 [[noreturn]] void fail_byte(const std::string& path, size_t byte, const std::string& message);

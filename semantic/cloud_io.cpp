@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -87,7 +88,7 @@ PcdRead read_pcd(const std::string& path, std::string_view text) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     const std::string_view data = text.substr(std::min(h.data_offset, text.size()));
     out.write(data.data(), static_cast<std::streamsize>(data.size()));
-    if (!out) throw std::runtime_error(path + ":0: cannot write the temporary copy " + tmp.string());
+    if (!out) throw std::runtime_error(path + ": cannot write the temporary copy " + tmp.string() + ": " + std::strerror(errno));
   }
   int status = -1;
   try {
@@ -150,7 +151,7 @@ std::vector<Eigen::Isometry3d> read_3dtk_frames(const std::string& path) {
 Cloud read_cloud(const std::string& path) {
   const std::string ext = lower_extension(path);
   if (ext != ".pcd" && ext != ".ply" && ext != ".xyz" && ext != ".3d")
-    throw std::runtime_error(path + ":0: unknown extension '" + ext + "' (expected .pcd .ply .xyz .3d)");
+    throw std::runtime_error(path + ": unknown extension '" + ext + "' (expected .pcd .ply .xyz .3d)");
   const std::string text = read_file(path);
   if (ext == ".pcd") return read_pcd(path, text).cloud;
   return parse_cloud(path, text);
@@ -162,7 +163,7 @@ Cloud parse_cloud(const std::string& path, const std::string& contents) {
   if (ext == ".ply") return formats::parse_ply(path, contents);
   if (ext == ".xyz") return formats::parse_xyz(path, contents);
   if (ext == ".3d") return formats::parse_3d(path, contents);
-  throw std::runtime_error(path + ":0: unknown extension '" + ext + "' (expected .pcd .ply .xyz .3d)");
+  throw std::runtime_error(path + ": unknown extension '" + ext + "' (expected .pcd .ply .xyz .3d)");
 }
 
 Scan read_scan(const std::string& path) {
@@ -218,7 +219,7 @@ void write_cloud(const std::string& path, const Cloud& cloud) {
       out << '\n';
     }
   } else {
-    throw std::runtime_error(path + ":0: cannot write '" + ext + "' (expected .pcd .ply .xyz)");
+    throw std::runtime_error(path + ": cannot write '" + ext + "' (expected .pcd .ply .xyz)");
   }
   if (ext != ".xyz")
     for (size_t i = 0; i < cloud.size(); ++i) {
@@ -229,7 +230,7 @@ void write_cloud(const std::string& path, const Cloud& cloud) {
   std::ofstream f(path, std::ios::binary);
   const std::string s = std::move(out).str();
   f.write(s.data(), static_cast<std::streamsize>(s.size()));
-  if (!f) throw std::runtime_error(path + ":0: cannot write");
+  if (!f) throw std::runtime_error(path + ": cannot write: " + std::strerror(errno));
 }
 
 }  // namespace rise::semantic

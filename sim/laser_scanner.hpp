@@ -55,7 +55,7 @@ class LaserScanner {
 
 /// Writes `<stem>.pcd` (points in the sensor frame, VIEWPOINT = the true
 /// T_world_sensor) and `<stem>.pose` beside it (sim/README.md). Throws
-/// std::runtime_error "path:0: ..." when a file cannot be written.
+/// std::runtime_error "path: cannot write: <strerror>" when a file cannot be written.
 void write_scan(const std::string& stem, const LaserScan& scan, PcdFormat format);
 
 }  // namespace rise::sim

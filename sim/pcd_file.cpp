@@ -1,6 +1,7 @@
 #include "sim/pcd_file.hpp"
 
 #include <bit>
+#include <cerrno>
 #include <charconv>
 #include <cstring>
 #include <fstream>
@@ -24,12 +25,12 @@ void put(std::string& out, T v) {
 void write_file(const std::string& path, const std::string& bytes) {
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  if (!out) throw std::runtime_error(path + ":0: cannot write");
+  if (!out) throw std::runtime_error(path + ": cannot write: " + std::strerror(errno));
 }
 
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ":0: cannot open");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::stringstream buf;
   buf << in.rdbuf();
   return buf.str();

@@ -26,7 +26,7 @@ struct PointCloud {
 /// Writes an unorganized cloud (HEIGHT 1): FIELDS x y z, SIZE 4, TYPE F.
 /// Floats as the shortest text that reads back to the same float (ascii),
 /// or little-endian IEEE 754 (binary). Throws std::runtime_error
-/// "path:0: cannot write" when it cannot.
+/// "path: cannot write: <strerror>" when it cannot.
 void write_pcd(const std::string& path, const std::vector<Eigen::Vector3f>& points, const Eigen::Isometry3d& viewpoint,
                PcdFormat format);
 
@@ -41,7 +41,7 @@ struct PoseFile {
   Eigen::Isometry3d T_world_sensor = Eigen::Isometry3d::Identity();
 };
 
-/// Writes the `.pose` text file; throws "path:0: cannot write".
+/// Writes the `.pose` text file; throws "path: cannot write: <strerror>".
 void write_pose(const std::string& path, const Eigen::Isometry3d& T_world_sensor, double time_s);
 /// Reads it back (position_m and orientation_wxyz; the matrix line is for
 /// readers without quaternions). Throws "path:line: key: message".

@@ -5,6 +5,8 @@
 #include <fstream>
 #include <tuple>
 #include <sstream>
+#include <cerrno>
+#include <cstring>
 
 #include "sim/urdf_robot.hpp"
 #include "sim/yaml_reader.hpp"
@@ -261,7 +263,7 @@ std::vector<std::pair<double, double>> apply_urdf(const YamlReader& r, const YAM
 
 std::string read_text_file(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ":0: cannot open");
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::stringstream text;
   text << in.rdbuf();
   return text.str();

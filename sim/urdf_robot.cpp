@@ -3,7 +3,10 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -250,6 +253,8 @@ void read_arm(const urdf::ModelInterface& m, const std::string& base, const std:
 }  // namespace
 
 UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints) {
+  // liburdfdom says only "does not exist", also for a file it may not read.
+  if (!std::ifstream(path)) fail(path + ": cannot open: " + std::strerror(errno));
   urdf::ModelInterfaceSharedPtr model;
   std::string errors;
   {

@@ -79,7 +79,7 @@ class YamlReader {
   std::string file_;
 };
 
-/// Reads a whole file; throws "path:0: cannot open" when it cannot.
+/// Reads a whole file; throws "path: cannot open: <strerror>" when it cannot.
 std::string read_text_file(const std::string& path);
 
 }  // namespace rise::sim

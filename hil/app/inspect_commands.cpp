@@ -1,6 +1,8 @@
 #include "hil/app/inspect_commands.hpp"
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <ostream>
@@ -33,7 +35,7 @@ int dbc_decode(const std::string& dbc_file, const std::string& log_file, std::os
   }
   std::ifstream in(log_file);
   if (!in) {
-    err << log_file << ":0: cannot open the log\n";
+    err << log_file << ": cannot open: " << std::strerror(errno) << '\n';
     return 2;
   }
   int64_t frames = 0, decoded = 0, unknown = 0, bad_lines = 0;

@@ -14,6 +14,7 @@
 #include <optional>
 #include <poll.h>
 
+#include "cli/command_line.hpp"
 #include "hil/app/inspect_commands.hpp"
 #include "hil/app/verify_command.hpp"
 #include "hil/bridge.hpp"
@@ -117,7 +118,7 @@ int main(int argc, char** argv) {
   verify->add_option("--time-tolerance-ms", verify_options.time_tolerance_ms,
                      "a message matches the replayed state this far from its utime (frame/publish races)")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-hild", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (verify->parsed()) return rise::hil::verify_command(verify_options, std::cout, std::cerr);
   if (dbc_decode->parsed()) return rise::hil::dbc_decode(dbc_file, log_file, std::cout, std::cerr);

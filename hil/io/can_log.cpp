@@ -1,5 +1,6 @@
 #include "hil/io/can_log.hpp"
 
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 
@@ -149,7 +150,7 @@ const char* to_string(CanLogFormat format) {
 }
 
 CanLogReader::CanLogReader(const std::string& path) : path_(path), in_(path) {
-  if (!in_) throw std::runtime_error(path + ": cannot open CAN log");
+  if (!in_) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   std::error_code ec;
   size_bytes_ = static_cast<uint64_t>(std::filesystem::file_size(path, ec));
   if (ec) size_bytes_ = 0;

@@ -1,7 +1,9 @@
 #include "hil/io/hid_recording.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -184,7 +186,7 @@ void HidRecordingWriter::unplug(int64_t epoch_us, std::string_view why) { mark("
 void HidRecordingWriter::end(int64_t epoch_us) { mark("end at", epoch_us, {}); }
 
 HidRecordingReader::HidRecordingReader(const std::string& path) : path_(path), in_(path) {
-  if (!in_) throw std::runtime_error(path + ": cannot open the HID recording");
+  if (!in_) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
   HidRecordingRecord scratch;
   scratch.bytes.reserve(max_hid_report_bytes);
   while (step(scratch, Mode::Check)) {

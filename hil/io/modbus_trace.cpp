@@ -1,8 +1,10 @@
 #include "hil/io/modbus_trace.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include "hil/io/candump_log.hpp"
@@ -233,7 +235,7 @@ ModbusTraceParse parse_modbus_trace_line(std::string_view line) {
 }
 
 ModbusTraceReader::ModbusTraceReader(const std::string& path) : path_(path), in_(path) {
-  if (!in_) throw std::runtime_error(path + ": cannot open the Modbus trace");
+  if (!in_) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
 }
 
 bool ModbusTraceReader::next(ModbusTraceRecord& record) {

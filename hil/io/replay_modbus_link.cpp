@@ -1,8 +1,10 @@
 #include "hil/io/replay_modbus_link.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
@@ -235,7 +237,8 @@ std::unique_ptr<ReplayModbusLink> open_modbus_replay(std::string_view url) {
   if (!address->ids.empty() || !address->channel.empty() || address->step)
     throw std::invalid_argument("modbus replay '" + std::string(url) +
                                 "': ids=, channel= and step= are for CAN logs, not a Modbus trace");
-  if (!std::filesystem::exists(address->path)) throw std::runtime_error(address->path + ": cannot open the Modbus trace");
+  if (!std::filesystem::exists(address->path))
+    throw std::runtime_error(address->path + ": cannot open: " + std::strerror(ENOENT));
   if (!looks_like_modbus_trace(address->path))
     throw std::runtime_error(address->path + ": not a Modbus trace (a CAN log replays on a CAN source)");
   return std::make_unique<ReplayModbusLink>(std::string(url), std::move(*address));

@@ -459,6 +459,13 @@ void add_report_command(CLI::App& app) {
   sub->add_flag("--html", o->html, "print the HTML report's path instead of a summary");
   sub->callback([o] {
     setup_logging();
+    // No such folder is bad input (2); a folder without a report is "no" (1).
+    std::error_code ec;
+    fs::directory_iterator readable(o->dir, ec);
+    if (ec) {
+      std::fprintf(stderr, "%s: cannot open: %s\n", o->dir.c_str(), ec.message().c_str());
+      fail(2);
+    }
     fs::path dir = fs::path(o->dir) / o->trainee;
     if (!fs::is_directory(dir)) dir = o->dir;
     // training.json is the training's summary; the newest task report is the latest result.
@@ -478,7 +485,7 @@ void add_report_command(CLI::App& app) {
     Json::CharReaderBuilder b;
     std::string errors;
     if (!Json::parseFromStream(b, in, &v, &errors)) {
-      std::fprintf(stderr, "%s:0: %s\n", json.c_str(), errors.c_str());
+      std::fprintf(stderr, "%s: %s\n", json.c_str(), errors.c_str());
       fail(2);
     }
     std::printf("report %s\n", json.c_str());

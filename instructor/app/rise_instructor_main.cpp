@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include "cli/command_line.hpp"
 #include "instructor/app/instructor_commands.hpp"
 #include "instructor/app/serve_command.hpp"
 
@@ -20,6 +21,6 @@ int main(int argc, char** argv) {
   rise::instructor::add_task_command(app);
   rise::instructor::add_report_command(app);
   rise::instructor::add_serve_command(app);
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-instructor", argc, argv)) return *code;
   return 0;
 }

@@ -2,7 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <semaphore>
@@ -39,7 +41,7 @@ void on_signal(int) { g_stop.release(); }
 
 std::string read_token(const std::string& file) {
   std::ifstream in(file);
-  if (!in) throw std::runtime_error(file + ": cannot read the token file");
+  if (!in) throw std::runtime_error(file + ": cannot open: " + std::strerror(errno));
   std::string token;
   std::getline(in, token);
   while (!token.empty() && (token.back() == '\r' || token.back() == ' ')) token.pop_back();
@@ -59,7 +61,7 @@ int serve(const ServeOptions& o) {
   if (!o.token.empty() && !o.token_file.empty()) throw std::runtime_error("give --token or --token-file, not both");
   s.token = o.token_file.empty() ? o.token : read_token(o.token_file);
   if (s.token.empty()) throw std::runtime_error("a token is required: --token T or --token-file F");
-  s.web_dir = o.web_dir.empty() ? std::string(RISE_WEB_DIST_DIR) : o.web_dir;
+  s.web_dir = o.web_dir.empty() ? panels::find_data_file("instructor/web/dist") : o.web_dir;
   s.world_file = o.world.empty() ? "" : panels::find_data_file(o.world);
   s.robot_file = o.robot.empty() ? "" : panels::find_data_file(o.robot);
   // --lcm, --instructor-key, --issuer: rise-instructor's common options.
@@ -105,7 +107,7 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--reports-dir", o->reports_dir, "training reports to list and serve (rise-trainer --out)");
   cmd->add_option("--scenarios-dir", o->scenarios_dir, "the scenario files the console offers (\"\": none)")
       ->capture_default_str();
-  cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist of the source tree)");
+  cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist, installed or of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")
       ->capture_default_str();

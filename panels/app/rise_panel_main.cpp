@@ -8,6 +8,7 @@
 #include <csignal>
 #include <thread>
 
+#include "cli/command_line.hpp"
 #include "hil/io/can_bus.hpp"
 #include "firmware_protocol/hid_text.hpp"
 #include "hil/io/hid_device.hpp"
@@ -305,7 +306,7 @@ int main(int argc, char** argv) {
   CLI::App* rp = app.add_subcommand("replay", "play a CAN capture onto a live transport, like canplayer");
   rise::panels::add_replay_options(*rp, replay);
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-panel", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (em->parsed()) return run_emulate(emulate);
   if (rp->parsed()) {

@@ -2,8 +2,10 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -67,7 +69,7 @@ int run_register(const RegisterOptions& o) {
     T_initial = parse_matrix(o.init, "--init");
   } else if (!o.init_file.empty()) {
     std::ifstream in(o.init_file);
-    if (!in) throw std::runtime_error(o.init_file + ":0: cannot open");
+    if (!in) throw std::runtime_error(o.init_file + ": cannot open: " + std::strerror(errno));
     std::ostringstream s;
     s << in.rdbuf();
     T_initial = parse_matrix(s.str(), o.init_file);
@@ -108,12 +110,11 @@ int run_register(const RegisterOptions& o) {
 void add_register_command(CLI::App& app) {
   auto o = std::make_shared<RegisterOptions>();
   CLI::App* cmd = app.add_subcommand("register", "ICP: print the 4x4 transform that maps SOURCE onto TARGET, then rmse and iterations");
-  cmd->add_option("SOURCE", o->source, "cloud to move (.pcd .ply .xyz .3d)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("TARGET", o->target, "cloud to align to")->required()->check(CLI::ExistingFile);
+  // No CLI::ExistingFile: the readers name the file and the OS's reason.
+  cmd->add_option("SOURCE", o->source, "cloud to move (.pcd .ply .xyz .3d)")->required();
+  cmd->add_option("TARGET", o->target, "cloud to align to")->required();
   auto* init = cmd->add_option("--init", o->init, "initial guess: 16 numbers, row-major (default: from the scans' poses, else identity)");
-  cmd->add_option("--init-file", o->init_file, "initial guess from a file of 16 numbers, row-major")
-      ->check(CLI::ExistingFile)
-      ->excludes(init);
+  cmd->add_option("--init-file", o->init_file, "initial guess from a file of 16 numbers, row-major")->excludes(init);
   cmd->add_option("--metric", o->metric, "point (point-to-point) or plane (point-to-plane)")
       ->check(CLI::IsMember({"point", "plane"}))
       ->capture_default_str();
@@ -134,10 +135,10 @@ void add_register_command(CLI::App& app) {
       if (rc != 0) throw CLI::RuntimeError(rc);
     } catch (const std::runtime_error& e) {
       spdlog::error("{}", e.what());
-      throw CLI::RuntimeError(1);
+      throw CLI::RuntimeError(2);  // bad input
     } catch (const std::invalid_argument& e) {
       spdlog::error("{}", e.what());
-      throw CLI::RuntimeError(1);
+      throw CLI::RuntimeError(2);  // bad input
     }
   });
 }

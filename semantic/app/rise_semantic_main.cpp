@@ -6,6 +6,7 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include "cli/command_line.hpp"
 #include "semantic/app/map_command.hpp"
 #include "semantic/app/register_command.hpp"
 #include "semantic/app/segment_command.hpp"
@@ -27,6 +28,6 @@ int main(int argc, char** argv) {
   rise::semantic::add_segment_command(app);
   rise::semantic::add_map_command(app);
 
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-semantic", argc, argv)) return *code;
   return 0;
 }

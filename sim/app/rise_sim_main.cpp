@@ -35,7 +35,9 @@
 #include "rise_msgs/SimControl.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/TrainingControl.hpp"
+#include "cli/command_line.hpp"
 #include "panels/command_auth.hpp"
+#include "panels/data_path.hpp"
 #include "panels/publisher_session.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
@@ -52,11 +54,8 @@ int64_t wall_us() {
       .count();
 }
 
-std::string source_file(const std::string& relative) {
-  if (std::filesystem::exists(relative)) return relative;
-  const auto p = std::filesystem::path(RISE_SOURCE_DIR) / relative;
-  return std::filesystem::exists(p) ? p.string() : relative;
-}
+// A robot or world file as given, else installed or in the source tree.
+std::string source_file(const std::string& relative) { return rise::panels::find_data_file(relative); }
 
 // The latest panel state, turned into what the robot's control mapping reads.
 struct PanelListener {
@@ -302,7 +301,7 @@ int main(int argc, char** argv) {
   app.add_option("--scan-format", scan_format, "PCD DATA: ascii or binary")
       ->capture_default_str()
       ->check(CLI::IsMember({"ascii", "binary"}));
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-sim", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
 
   std::vector<std::unique_ptr<Station>> stations;

@@ -29,6 +29,7 @@
 #include <thread>
 
 #include "app/child_process.hpp"
+#include "cli/command_line.hpp"
 #include "panels/data_path.hpp"
 #include "panels/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -631,7 +632,7 @@ int main(int argc, char** argv) {
   std::string check_file;
   CLI::App* c = app.add_subcommand("check", "load and validate a training or task file");
   c->add_option("file", check_file, "training or task file")->required();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = rise::cli::parse_command_line(app, "rise-trainer", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
   rise::panels::init_publisher("rise-trainer");

@@ -265,7 +265,8 @@ TEST_CASE("descriptor readers accept hex text, recorder, JSON and binary forms",
                       Catch::StartsWith("b.hid:2: R:"));
     CHECK_THROWS_WITH(fp::read_hid_descriptor("{\"name\": \"x\"}", fp::HidTextFormat::CtsJson, "c.json"),
                       Catch::StartsWith("c.json:0: descriptor:"));
-    CHECK_THROWS_WITH(fp::load_hid_descriptor_file("/nonexistent/d.rpt"), Catch::StartsWith("/nonexistent/d.rpt:0: file:"));
+    CHECK_THROWS_WITH(fp::load_hid_descriptor_file("/nonexistent/d.rpt"),
+                      "/nonexistent/d.rpt: cannot open: No such file or directory");
   }
 }
 

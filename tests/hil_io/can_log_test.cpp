@@ -402,7 +402,7 @@ TEST_CASE("log format is detected from the content, then from the extension", "[
   SECTION("unknown content and extension, or a missing file, throw with the path") {
     const auto path = write_temp("what.bin", "hello\n");
     CHECK_THROWS_WITH(CanLogReader(path), Catch::Contains(path));
-    CHECK_THROWS_WITH(CanLogReader("/nonexistent/x.log"), Catch::Contains("/nonexistent/x.log"));
+    CHECK_THROWS_WITH(CanLogReader("/nonexistent/x.log"), "/nonexistent/x.log: cannot open: No such file or directory");
   }
 }
 

@@ -244,7 +244,8 @@ TEST_CASE("hid replay refuses CAN-only options, a missing file and a file that i
   CHECK_THROWS_WITH(HidReplayDevice("replay://" + path + "?" + option),
                     Catch::Contains("ids=, channel= and step= are for CAN logs"));
   CHECK_THROWS_AS(HidReplayDevice("replay://" + path + "?speed=0"), std::invalid_argument);
-  CHECK_THROWS_WITH(HidReplayDevice("replay:///nonexistent/x.hid"), Catch::Contains("cannot open the HID recording"));
+  CHECK_THROWS_WITH(HidReplayDevice("replay:///nonexistent/x.hid"),
+                    Catch::Contains("/nonexistent/x.hid: cannot open: No such file or directory"));
   const std::string candump = temp_path("frames.log");
   std::ofstream(candump) << "(1700000000.000000) can0 123#00\n";
   CHECK_FALSE(looks_like_hid_recording(candump));

@@ -104,7 +104,8 @@ TEST_CASE("a modbus trace file with a bad line is refused with its path and line
   CHECK(r.kind == ModbusTraceRecord::Kind::Link);
   CHECK(r.line == 2);
   CHECK_THROWS_WITH(reader.next(r), path + ":3: count=1 but 2 registers");
-  CHECK_THROWS_WITH(ModbusTraceReader(dir + "/absent.modbus.log"), Catch::Contains("cannot open"));
+  CHECK_THROWS_WITH(ModbusTraceReader(dir + "/absent.modbus.log"),
+                    dir + "/absent.modbus.log: cannot open: No such file or directory");
   std::filesystem::remove_all(dir);
 }
 

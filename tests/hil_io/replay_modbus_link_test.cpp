@@ -167,7 +167,7 @@ TEST_CASE("a Modbus replay's window, loops and URL options", "[hil_io]") {
     CHECK_THROWS_WITH(replay(file, "?speed=0"), Catch::Contains("is not a number > 0"));
     CHECK_THROWS_WITH(replay(file, "?start=5"), Catch::Contains("is past the trace's end"));
     CHECK_THROWS_WITH(open_modbus_replay("replay:///nonexistent/x.modbus.log"),
-                      "/nonexistent/x.modbus.log: cannot open the Modbus trace");
+                      "/nonexistent/x.modbus.log: cannot open: No such file or directory");
     const TraceFile can("(100.000000) can0 123#00\n", "console.log");
     CHECK_THROWS_WITH(replay(can, ""), Catch::Contains("not a Modbus trace"));
     const TraceFile two(std::string(kTrace) + "(100.800000) other unit=1 fc=04 addr=0 count=2 rtt_us=5 ok 0000 0000\n",

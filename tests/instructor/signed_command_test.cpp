@@ -237,6 +237,7 @@ TEST_CASE("rise-instructor report prints the newest task report of a trainee", "
   CHECK_THAT(text, Catch::Contains("\"approach_object\""));
   CHECK_THAT(text, Catch::Contains("score        17"));
   const std::string out2 = (keys.dir / "report2.out").string();
+  fs::create_directories(keys.dir / "empty");  // a folder without a report: "no" (1); no folder: bad input (2)
   rise::app::ChildProcess none({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t8",
                                 "--reports-dir", (keys.dir / "empty").string()},
                                out2);

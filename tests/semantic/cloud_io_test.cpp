@@ -276,7 +276,7 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     CHECK_THROWS_WITH(sem::read_3dtk_frames(frames.string()), Catch::Contains("bad.frames:2: expected 16 matrix entries"));
   }
   SECTION("missing files and unknown extensions") {
-    CHECK_THROWS_WITH(sem::read_cloud("/nonexistent/x.pcd"), Catch::Contains("/nonexistent/x.pcd:0: cannot open"));
-    CHECK_THROWS_WITH(sem::read_cloud("x.obj"), Catch::Contains("x.obj:0: unknown extension"));
+    CHECK_THROWS_WITH(sem::read_cloud("/nonexistent/x.pcd"), "/nonexistent/x.pcd: cannot open: No such file or directory");
+    CHECK_THROWS_WITH(sem::read_cloud("x.obj"), Catch::StartsWith("x.obj: unknown extension"));
   }
 }

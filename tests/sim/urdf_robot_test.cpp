@@ -141,7 +141,7 @@ TEST_CASE("a robot file whose URDF is missing or mixes in inline geometry is ref
   };
   const auto c = GENERATE_COPY(
       Case{replaced(tracked, "urdf: tracked_eod.urdf", "urdf: nope.urdf"),
-           "7: urdf: nope.urdf: liburdfdom: File " + nope + " does not exist"},
+           "7: urdf: nope.urdf: " + nope + ": cannot open: No such file or directory"},
       Case{replaced(tracked, "max_radps: 0.6,", "max_radps: 0.6, max_deg: 30,"),
            "31: control.arm.shoulder_pitch.max_deg: comes from the URDF joint's limit"},
       Case{replaced(tracked, "  joints: [shoulder_yaw,", "  upper_length_m: 0.4\n  joints: [shoulder_yaw,"),
