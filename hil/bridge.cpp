@@ -222,7 +222,9 @@ bool Bridge::report_modbus(std::size_t source, const io::ModbusResult& result) {
   const io::ModbusLink& link = *modbus_links_[source];
   const int64_t now = monotonic_us();
   if (apply_modbus_result(mapper_, source, result, link.is_open(), now)) return true;
-  mapper_.on_connection(source, false, now, link.last_error());  // why it closed
+  // Closed: say why. A timeout that closed a TCP link is judged by the
+  // source's age (apply_modbus_result leaves it connected), so not here.
+  if (result.status != io::ModbusStatus::Timeout) mapper_.on_connection(source, false, now, link.last_error());
   return false;
 }
 
