@@ -59,6 +59,10 @@ bool yields_to(const rise_msgs::Publisher& self, const rise_msgs::Publisher& oth
   return self.session_id > other.session_id;
 }
 
+bool gives_way(const rise_msgs::Publisher& self, const rise_msgs::Publisher& other, int64_t now_utime) {
+  return yields_to(self, other) && now_utime - self.started_utime < kGiveWayWindowUs;
+}
+
 PublisherWatch::PublisherWatch(int64_t own_session_id, int64_t forget_after_us)
     : own_session_id_(own_session_id), forget_after_us_(forget_after_us) {}
 

@@ -17,6 +17,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -40,6 +41,14 @@ std::string describe(const rise_msgs::Publisher& publisher, int64_t now_utime);
 /// Of two publishers on one channel, whether `self` gives way to `other`:
 /// the one that started later does; a tie goes to the lower session id.
 bool yields_to(const rise_msgs::Publisher& self, const rise_msgs::Publisher& other);
+
+/// How long after its start a process still gives way to another publisher
+/// (two started together, both past their probe); later both only report.
+inline constexpr int64_t kGiveWayWindowUs = 5'000'000;
+
+/// Whether `self`, meeting `other` on its channel at now_utime, stops: it
+/// yields_to() the other and is still within kGiveWayWindowUs of its start.
+bool gives_way(const rise_msgs::Publisher& self, const rise_msgs::Publisher& other, int64_t now_utime);
 
 /// Microseconds since the Unix epoch, the clock Publisher::started_utime uses.
 int64_t publisher_clock_us();
@@ -71,6 +80,28 @@ class PublisherWatch {
   int64_t forget_after_us_;
   mutable std::mutex mutex_;
   std::vector<Other> others_;
+};
+
+/// Feeds a PublisherWatch from an LCM subscription of `Message` (a type
+/// with a `publisher` field) and tells `on_other` each new other process.
+template <typename Message>
+class PublisherListener {
+ public:
+  using OnOther = std::function<void(const PublisherWatch::Other&)>;
+  PublisherListener(int64_t own_session_id, OnOther on_other)
+      : watch_(own_session_id), on_other_(std::move(on_other)) {}
+  /// Listens on `channel` of `lcm` (this object must outlive the subscription).
+  void listen(lcm::LCM& lcm, const std::string& channel) {
+    lcm.subscribe(channel, &PublisherListener::on, this)->setQueueCapacity(16);
+  }
+  const PublisherWatch& watch() const { return watch_; }
+
+ private:
+  void on(const lcm::ReceiveBuffer*, const std::string& channel, const Message* m) {
+    if (const auto other = watch_.observe(channel, m->publisher, publisher_clock_us())) on_other_(*other);
+  }
+  PublisherWatch watch_;
+  OnOther on_other_;
 };
 
 /// A publisher found on a channel.

@@ -367,24 +367,16 @@ int main(int argc, char** argv) {
   // Another process publishing a robot's state: reported once by each side;
   // of two that started together, the later one gives way.
   int exit_code = 0;
-  struct WatchHandler {
-    rise::panels::PublisherWatch watch;
-    std::function<void(const rise::panels::PublisherWatch::Other&)> on_other;
-    void on(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::RobotState* m) {
-      if (const auto other = watch.observe(channel, m->publisher, wall_us())) on_other(*other);
-    }
-  } watch_handler{rise::panels::PublisherWatch(self.session_id), [&](const rise::panels::PublisherWatch::Other& o) {
-    spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
-    if (!allow_duplicate_id && rise::panels::yields_to(self, o.publisher) &&
-        wall_us() - self.started_utime < 5'000'000) {
-      spdlog::error("{} started first: this rise-sim stops (give another --id, or --allow-duplicate-id)",
-                    o.publisher.program);
-      exit_code = 2;
-      g_stop = 1;
-    }
-  }};
-  for (const std::string& channel : state_channels)
-    lcm.subscribe(channel, &WatchHandler::on, &watch_handler)->setQueueCapacity(16);
+  rise::panels::PublisherListener<rise_msgs::RobotState> others(
+      self.session_id, [&](const rise::panels::PublisherWatch::Other& o) {
+        spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
+        if (allow_duplicate_id || !rise::panels::gives_way(self, o.publisher, wall_us())) return;
+        spdlog::error("{} started first: this rise-sim stops (give another --id, or --allow-duplicate-id)",
+                      o.publisher.program);
+        exit_code = 2;
+        g_stop = 1;
+      });
+  for (const std::string& channel : state_channels) others.listen(lcm, channel);
 
   std::vector<std::pair<std::size_t, rise_msgs::SimControl>> pending_control;
   std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>> pending_faults;

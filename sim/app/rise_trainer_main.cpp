@@ -216,17 +216,11 @@ void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
 // publishes (TaskStatus; PanelState too with a scripted console) is refused
 // at start-up and reported while it runs.
 struct PublisherGuard {
-  rise::panels::PublisherWatch watch{rise::panels::this_publisher().session_id};
-  void seen(const std::string& channel, const rise_msgs::Publisher& p) {
-    if (const auto other = watch.observe(channel, p, wall_us()))
-      spdlog::warn("another publisher on {}: {}", other->channel, rise::panels::describe(other->publisher, wall_us()));
+  static void report(const rise::panels::PublisherWatch::Other& o) {
+    spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
   }
-  void on_status(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::TaskStatus* m) {
-    seen(channel, m->publisher);
-  }
-  void on_panel(const lcm::ReceiveBuffer*, const std::string& channel, const rise_msgs::PanelState* m) {
-    seen(channel, m->publisher);
-  }
+  rise::panels::PublisherListener<rise_msgs::TaskStatus> status{rise::panels::this_publisher().session_id, report};
+  rise::panels::PublisherListener<rise_msgs::PanelState> panel{rise::panels::this_publisher().session_id, report};
 };
 
 // False (logged) when another process already publishes there.
@@ -246,8 +240,8 @@ bool claim_station(lcm::LCM& lcm, const std::string& id, bool scripted_console, 
       return false;
     }
   }
-  lcm.subscribe(status_channel, &PublisherGuard::on_status, &guard)->setQueueCapacity(16);
-  if (scripted_console) lcm.subscribe(panel_channel, &PublisherGuard::on_panel, &guard)->setQueueCapacity(16);
+  guard.status.listen(lcm, status_channel);
+  if (scripted_console) guard.panel.listen(lcm, panel_channel);
   return true;
 }
 

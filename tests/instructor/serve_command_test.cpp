@@ -14,6 +14,7 @@
 
 #include "app/child_process.hpp"
 #include "panels/command_auth.hpp"
+#include "tests/process_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -22,24 +23,11 @@ using rise::instructor_test::free_port;
 using rise::instructor_test::kLcm;
 
 namespace {
+using rise::test::read_file;
+using rise::test::wait_until;
+
 const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
 
-std::string read_file(const fs::path& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-template <class Condition>
-bool wait_until(Condition condition, int timeout_ms) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
-}
 
 // The pages and the key a server needs, in a folder of its own.
 struct ServeDir {

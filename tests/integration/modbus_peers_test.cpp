@@ -25,6 +25,7 @@
 
 #include "app/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
+#include "tests/process_support.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -35,6 +36,9 @@ using rise::test::kSource;
 namespace fp = rise::firmware_protocol;
 
 namespace {
+using rise::test::read_file;
+using rise::test::wait_until;
+
 const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
 
 uint16_t free_port() {
@@ -42,22 +46,6 @@ uint16_t free_port() {
   return next++;
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-template <class Condition>
-bool wait_until(Condition condition, int timeout_ms) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
-}
 
 // mbpoll's "[address]: value" lines → value by address (unsigned column).
 std::map<int, long> parse_mbpoll(const std::string& text) {

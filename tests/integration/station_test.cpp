@@ -23,36 +23,22 @@
 #include "panels/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "tests/integration/integration_support.hpp"
+#include "tests/process_support.hpp"
 
 using rise::app::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
+using rise::test::read_file;
+using rise::test::wait_for_text;
 namespace fs = std::filesystem;
 
 namespace {
 const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
 
-std::string read_text(const std::string& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 std::size_t count_of(const std::string& text, const std::string& what) {
   std::size_t n = 0;
   for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
   return n;
-}
-
-// Waits until `file` holds `text` (a child's log), up to timeout_ms.
-bool wait_for_text(const std::string& file, const std::string& text, int timeout_ms = 10000) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
-  while (std::chrono::steady_clock::now() < deadline) {
-    if (read_text(file).find(text) != std::string::npos) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return false;
 }
 
 // A temporary folder per test case, removed at the end.
@@ -82,7 +68,7 @@ int run_to_end(const std::vector<std::string>& argv, const std::string& log, std
   ChildProcess p(argv, log);
   const int rc = p.wait_for(timeout_ms);
   if (rc < 0) p.stop(1000);
-  output = read_text(log);
+  output = read_file(log);
   return rc;
 }
 
@@ -108,7 +94,7 @@ TEST_CASE("a second rise-hild on a station refuses to start and names the first 
   REQUIRE(wait_for_text(dir.file("first.log"), "rise-hild ready"));
   ChildProcess second(lone_hild(id, source), dir.file("second.log"));
   CHECK(second.wait_for(10000) == 2);
-  const std::string log = read_text(dir.file("second.log"));
+  const std::string log = read_file(dir.file("second.log"));
   INFO(log);
   CHECK(log.find("rise/" + id + "/panel_state is already published by rise-hild pid " + std::to_string(first.pid()) +
                  " on " + rise::panels::this_publisher().host) != std::string::npos);
@@ -123,7 +109,7 @@ TEST_CASE("a second rise-sim on a station refuses to start", "[integration]") {
   REQUIRE(wait_for_text(dir.file("first.log"), "rise-sim ready"));
   ChildProcess second({kBin + "/rise-sim", "--id", id, "--lcm", kLcm}, dir.file("second.log"));
   CHECK(second.wait_for(10000) == 2);
-  const std::string log = read_text(dir.file("second.log"));
+  const std::string log = read_file(dir.file("second.log"));
   INFO(log);
   CHECK(log.find("rise/" + id + "/robot_state is already published by rise-sim pid " + std::to_string(first.pid())) !=
         std::string::npos);
@@ -173,7 +159,7 @@ TEST_CASE("rise-hild says why a source is down, once per change, and rise status
     std::string status;
     CHECK(run_to_end({kBin + "/rise", "status", "--id", id, "--lcm", kLcm, "--count", "1", "--every", "1.5"},
                      dir.file("status.log"), status, 10000) == 0);
-    const std::string log = read_text(dir.file("hild.log"));
+    const std::string log = read_file(dir.file("hild.log"));
     INFO(log << status);
     CHECK(log.find("cannot resolve host 'nosuchhost.invalid'") != std::string::npos);
     CHECK(count_of(log, "source 'console' down: ") == 1);  // retried several times, said once
@@ -188,7 +174,7 @@ TEST_CASE("rise-hild says why a source is down, once per change, and rise status
     const uint16_t port = closed_port();
     ChildProcess hild(lone_hild(id, "socketcand://127.0.0.1:" + std::to_string(port) + "/can0"), dir.file("hild.log"));
     REQUIRE(wait_for_text(dir.file("hild.log"), "source 'console' down: "));
-    const std::string log = read_text(dir.file("hild.log"));
+    const std::string log = read_file(dir.file("hild.log"));
     INFO(log);
     CHECK(log.find("Connection refused") != std::string::npos);
   }
@@ -299,7 +285,7 @@ TEST_CASE("a looped console script starts again after its final @silent, with ev
   lcm.subscribe("rise/" + id + "/panel_state", &Watch::on, &watch)->setQueueCapacity(1000);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
   while (watch.recoveries < 2 && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(50);
-  INFO(read_text(dir.file("panel.log")) << read_text(dir.file("hild.log")));
+  INFO(read_file(dir.file("panel.log")) << read_file(dir.file("hild.log")));
   CHECK(watch.recoveries >= 2);
-  CHECK(read_text(dir.file("panel.log")).find("script restarts") != std::string::npos);
+  CHECK(read_file(dir.file("panel.log")).find("script restarts") != std::string::npos);
 }

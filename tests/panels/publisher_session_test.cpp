@@ -115,3 +115,11 @@ TEST_CASE("the start-up probe finds another process on a station's channel and i
     CHECK_FALSE(rise::panels::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 100));
   }
 }
+
+TEST_CASE("a publisher gives way only within its start-up window", "[panels]") {
+  const auto self = other_process(5, 10'000'000);
+  const auto earlier = other_process(3, 9'000'000);
+  CHECK(rise::panels::gives_way(self, earlier, 10'000'000 + rise::panels::kGiveWayWindowUs - 1));
+  CHECK_FALSE(rise::panels::gives_way(self, earlier, 10'000'000 + rise::panels::kGiveWayWindowUs));
+  CHECK_FALSE(rise::panels::gives_way(earlier, self, 9'000'001));  // the first one stays
+}
