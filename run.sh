@@ -10,7 +10,8 @@ cd "$(dirname "$(readlink -f "$0")")"
 root=$PWD
 build=${RISE_BUILD_DIR:-$root/build}
 
-# Debian 12 packages: toolchain, libraries, and the third-party peers the
+# Debian 12 packages: toolchain (git: `git describe` gives every program's
+# --version), libraries, and the third-party peers the
 # tests talk to (python3-can for socketcand, socat for pty pairs, clang's
 # libFuzzer runtime for the fuzz targets, Debian's own kernel + qemu +
 # can-utils for the SocketCAN tests under a real CAN stack, mbpoll and
@@ -25,7 +26,7 @@ build=${RISE_BUILD_DIR:-$root/build}
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
-  cmake ninja-build g++ pkg-config
+  cmake ninja-build g++ pkg-config git
   libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2 liburdfdom-dev
   python3 python3-can socat
   clang libclang-rt-14-dev
