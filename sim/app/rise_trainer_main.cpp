@@ -630,6 +630,10 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
   rise::panels::init_publisher("rise-trainer");
+  // A relative file is looked up as every program does (as given, $RISE_ROOT,
+  // the installed share/rise, the source tree): panels/data_path.hpp.
+  for (std::string* file : {&rt.task_file, &to.training_file, &check_file})
+    if (!file->empty()) *file = rise::panels::find_data_file(*file);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   if (r->parsed()) return run_task(rt);
