@@ -62,11 +62,12 @@ void ChainMonitor::loop() {
 void ChainMonitor::accept_only(std::vector<int32_t> pids) {
   std::lock_guard lock(mutex_);
   accepted_pids_ = std::move(pids);
+  host_ = panels::this_publisher().host;
 }
 
 bool ChainMonitor::accepted(const rise_msgs::Publisher& p) {
   if (accepted_pids_.empty()) return true;
-  if (p.host == panels::this_publisher().host &&
+  if (p.host == host_ &&
       std::find(accepted_pids_.begin(), accepted_pids_.end(), p.pid) != accepted_pids_.end())
     return true;
   ++view_.foreign_count;

@@ -86,6 +86,7 @@ class ChainMonitor {
   bool was_failsafe_ = true;
   bool was_connected_ok_ = false;
   std::vector<int32_t> accepted_pids_;
+  std::string host_;  // this host's name: accepted pids are local
   bool accepted(const rise_msgs::Publisher& p);  // caller holds mutex_
   std::atomic<bool> running_{true};
   std::thread thread_;

@@ -369,9 +369,9 @@ void Bridge::hid_source_loop(std::size_t source) {
       // has bound the new device's interface.
       if (now >= next_enumerate_us) {
         next_enumerate_us = now + (now < fast_until_us ? 20'000 : settings_.hid_enumerate_ms * 1000);
-        const io::IoStatus opened = device.reopen();
-        if (opened != io::IoStatus::Ok) down_reason = device.last_error();
-        if (opened == io::IoStatus::Ok) {
+        if (device.reopen() != io::IoStatus::Ok) {
+          down_reason = device.last_error();
+        } else {
           {
             std::lock_guard lock(mutex_);
             // A descriptor without a bound name keeps the source failsafe
