@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -13,6 +14,7 @@
 
 #include "semantic/cloud_io.hpp"
 #include "semantic/icp.hpp"
+#include "semantic/registration.hpp"
 
 namespace rise::semantic {
 namespace {
@@ -20,7 +22,11 @@ namespace {
 struct RegisterOptions {
   std::string source, target;
   std::string init, init_file;
-  std::string metric = "point";
+  std::string metric = "plane";
+  bool metric_given = false;
+  double voxel_m = 0.0, coarse_voxel_m = 0.0;
+  double min_inlier_ratio = RegistrationSettings{}.min_inlier_ratio;
+  bool plain = false;  // one ICP at the given pairing distances instead of the pyramid
   int iterations = IcpSettings{}.max_iterations;
   double max_dist_m = IcpSettings{}.max_correspondence_m;
   double min_dist_m = IcpSettings{}.min_correspondence_m;
@@ -78,30 +84,65 @@ int run_register(const RegisterOptions& o) {
     spdlog::info("initial guess from the scans' poses");
   }
 
-  IcpSettings s;
-  s.metric = o.metric == "plane" ? IcpMetric::PointToPlane : IcpMetric::PointToPoint;
-  s.max_iterations = o.iterations;
-  s.max_correspondence_m = o.max_dist_m;
-  s.min_correspondence_m = o.min_dist_m;
-  s.huber_m = o.huber_m;
-  s.threads = o.threads;
-  s.exact_neighbours = o.exact;
-  s.coarse_stride = o.coarse_stride;
-  if (s.metric == IcpMetric::PointToPlane && target.cloud.normals.size() != target.cloud.size()) {
-    const auto tn = clock::now();
-    estimate_normals(target.cloud, 10);
-    spdlog::info("estimated target normals in {:.0f} ms", std::chrono::duration<double, std::milli>(clock::now() - tn).count());
-  }
+  const IcpMetric metric = o.metric == "plane" ? IcpMetric::PointToPlane : IcpMetric::PointToPoint;
   const auto ti = clock::now();
-  const IcpResult r = icp(source.cloud, target.cloud, T_initial, s);
-  spdlog::info("icp: {} iterations in {:.1f} ms", r.iterations,
+  Eigen::Isometry3d T;
+  double rmse = 0.0, inliers = 0.0;
+  int iterations = 0;
+  std::string failure;
+  if (o.plain) {
+    IcpSettings s;
+    s.metric = metric;
+    s.max_iterations = o.iterations;
+    s.max_correspondence_m = o.max_dist_m;
+    s.min_correspondence_m = o.min_dist_m;
+    s.huber_m = o.huber_m;
+    s.threads = o.threads;
+    s.exact_neighbours = o.exact;
+    s.coarse_stride = o.coarse_stride;
+    if (s.metric == IcpMetric::PointToPlane && target.cloud.normals.size() != target.cloud.size()) {
+      const auto tn = clock::now();
+      estimate_normals(target.cloud, 10);
+      spdlog::info("estimated target normals in {:.0f} ms", std::chrono::duration<double, std::milli>(clock::now() - tn).count());
+    }
+    const IcpResult r = icp(source.cloud, target.cloud, T_initial, s);
+    T = r.T_target_source;
+    rmse = r.rmse_m;
+    inliers = r.inlier_ratio;
+    iterations = r.iterations;
+    if (!r.converged)
+      failure = "ICP did not converge in " + std::to_string(r.iterations) + " iterations";
+    else if (r.inlier_ratio < o.min_inlier_ratio)
+      failure = "the clouds did not meet: " + std::to_string(static_cast<int>(100 * r.inlier_ratio)) + " % of the source paired";
+  } else {
+    RegistrationSettings s;
+    if (o.metric_given) s.fine_metric = metric;
+    s.fine_voxel_m = o.voxel_m;
+    s.coarse_voxel_m = o.coarse_voxel_m;
+    s.min_inlier_ratio = o.min_inlier_ratio;
+    s.threads = o.threads;
+    const RegistrationResult r = register_clouds(source.cloud, target.cloud, T_initial, s);
+    for (const auto& l : r.levels)
+      spdlog::info("level {:.3g} m: {} onto {} points, pairing {:.3g} m, {} iterations, rmse {:.4f} m, {:.0f} % paired{}",
+                   l.voxel_m, l.source_points, l.target_points, l.pairing_m, l.icp.iterations, l.icp.rmse_m,
+                   100.0 * l.icp.inlier_ratio, l.icp.converged ? ", converged" : "");
+    T = r.T_target_source;
+    rmse = r.rmse_m;
+    inliers = r.inlier_ratio;
+    iterations = r.iterations;
+    failure = r.failure;
+  }
+  spdlog::info("registration: {} iterations in {:.1f} ms", iterations,
                std::chrono::duration<double, std::milli>(clock::now() - ti).count());
-
-  const Eigen::Matrix4d M = r.T_target_source.matrix();
+  if (!failure.empty() && !getenv("RISE_SHOW")) {
+    // Never a transform that looks like an answer: nothing on stdout.
+    spdlog::error("{} onto {}: {} (rmse {:.4f} m, {:.0f} % paired)", o.source, o.target, failure, rmse, 100.0 * inliers);
+    return 1;
+  }
+  const Eigen::Matrix4d M = T.matrix();
   for (int i = 0; i < 4; ++i)
     std::printf("%.9g %.9g %.9g %.9g\n", M(i, 0), M(i, 1), M(i, 2), M(i, 3));
-  std::printf("rmse_m %.9g\niterations %d\ninlier_ratio %.6f\nconverged %s\n", r.rmse_m, r.iterations, r.inlier_ratio,
-              r.converged ? "true" : "false");
+  std::printf("rmse_m %.9g\niterations %d\ninlier_ratio %.6f\nconverged true\n", rmse, iterations, inliers);
   return 0;
 }
 
@@ -115,31 +156,42 @@ void add_register_command(CLI::App& app) {
   cmd->add_option("TARGET", o->target, "cloud to align to")->required();
   auto* init = cmd->add_option("--init", o->init, "initial guess: 16 numbers, row-major (default: from the scans' poses, else identity)");
   cmd->add_option("--init-file", o->init_file, "initial guess from a file of 16 numbers, row-major")->excludes(init);
-  cmd->add_option("--metric", o->metric, "point (point-to-point) or plane (point-to-plane)")
+  auto* metric = cmd->add_option("--metric", o->metric, "point (point-to-point) or plane (point-to-plane): the pyramid's finest level, or the one ICP's")
       ->check(CLI::IsMember({"point", "plane"}))
       ->capture_default_str();
-  cmd->add_option("--iterations", o->iterations, "at most this many iterations")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--max-dist", o->max_dist_m, "first iteration's pairing distance, m")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--min-dist", o->min_dist_m, "pairing distance it shrinks to, m")->check(CLI::PositiveNumber)->capture_default_str();
-  cmd->add_option("--huber", o->huber_m, "Huber kernel width, m (0: none)")->check(CLI::NonNegativeNumber)->capture_default_str();
-  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber)->capture_default_str();
-  cmd->add_flag("--exact", o->exact, "pair every point with its exact nearest neighbour (as PCL's and Open3D's k-d trees)");
-  cmd->add_option("--coarse-stride", o->coarse_stride,
-                  "the first half of the iterations pairs every N-th source point, then halving to all (1: all points in every iteration, as PCL and Open3D)")
-      ->check(CLI::PositiveNumber)
+  cmd->add_option("--voxel", o->voxel_m, "the pyramid's finest voxel, m (0: from the clouds)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  cmd->add_option("--coarse-voxel", o->coarse_voxel_m, "the pyramid's coarsest voxel, m (0: from the clouds)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd->callback([o]() {
+  cmd->add_option("--min-inliers", o->min_inlier_ratio, "not converged when a smaller share of the source is paired")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "OpenMP threads (0: all)")->check(CLI::NonNegativeNumber)->capture_default_str();
+  // One ICP as PCL and Open3D run it, at given pairing distances: any of these selects it.
+  const char* kPlain = "One ICP instead of the pyramid (any of these options selects it)";
+  std::vector<CLI::Option*> plain{
+      cmd->add_option("--iterations", o->iterations, "at most this many iterations")->check(CLI::PositiveNumber)->capture_default_str(),
+      cmd->add_option("--max-dist", o->max_dist_m, "first iteration's pairing distance, m")->check(CLI::PositiveNumber)->capture_default_str(),
+      cmd->add_option("--min-dist", o->min_dist_m, "pairing distance it shrinks to, m")->check(CLI::PositiveNumber)->capture_default_str(),
+      cmd->add_option("--huber", o->huber_m, "Huber kernel width, m (0: none)")->check(CLI::NonNegativeNumber)->capture_default_str(),
+      cmd->add_flag("--exact", o->exact, "pair every point with its exact nearest neighbour (as PCL's and Open3D's k-d trees)"),
+      cmd->add_option("--coarse-stride", o->coarse_stride,
+                      "the first half of the iterations pairs every N-th source point, then halving to all (1: all points in every iteration, as PCL and Open3D)")
+          ->check(CLI::PositiveNumber)
+          ->capture_default_str()};
+  for (auto* opt : plain) opt->group(kPlain);
+  cmd->callback([o, plain, metric]() {
     if (o->min_dist_m > o->max_dist_m) throw CLI::ValidationError("--min-dist", "must not exceed --max-dist");
+    o->metric_given = metric->count() > 0;
+    o->plain = std::any_of(plain.begin(), plain.end(), [](const CLI::Option* opt) { return opt->count() > 0; });
+    int rc = 0;
     try {
-      const int rc = run_register(*o);
-      if (rc != 0) throw CLI::RuntimeError(rc);
-    } catch (const std::runtime_error& e) {
+      rc = run_register(*o);
+    } catch (const std::exception& e) {
       spdlog::error("{}", e.what());
-      throw CLI::RuntimeError(2);  // bad input
-    } catch (const std::invalid_argument& e) {
-      spdlog::error("{}", e.what());
-      throw CLI::RuntimeError(2);  // bad input
+      rc = 2;  // bad input
     }
+    if (rc != 0) throw CLI::RuntimeError(rc);
   });
 }
 

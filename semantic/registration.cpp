@@ -1,0 +1,165 @@
+#include "semantic/registration.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+#include "semantic/voxel_grid.hpp"
+
+namespace rise::semantic {
+namespace {
+
+// The voxel at which `cloud` keeps about `points` points: a voxel grid's
+// occupied cells fall monotonically (near enough) as its cells grow.
+double voxel_for_points(const Cloud& cloud, size_t points) {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+  for (const auto& p : cloud.points)
+    if (p.allFinite()) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  const double box = lo.x() <= hi.x() ? static_cast<double>((hi - lo).norm()) : 0.0;
+  if (!(box > 0.0)) return 1e-3;
+  // Geometric bisection between a voxel that keeps every point and the box.
+  double small = box * 1e-6, large = box;
+  for (int i = 0; i < 24 && large / small > 1.05; ++i) {
+    const double mid = std::sqrt(small * large);
+    (VoxelGrid(cloud.points, static_cast<float>(mid)).occupied_cells() > points ? small : large) = mid;
+  }
+  return large;
+}
+
+// The median distance from a point to its nearest other point, over a
+// sample: the cloud's resolution.
+double point_spacing(const Cloud& cloud) {
+  const VoxelGrid grid(cloud.points, static_cast<float>(voxel_for_points(cloud, cloud.size() / 4 + 1)));
+  const size_t step = std::max<size_t>(1, cloud.size() / 2000);
+  std::vector<float> d;
+  std::vector<VoxelGrid::Neighbour> nbs;
+  for (size_t i = 0; i < cloud.size(); i += step) {
+    grid.k_nearest(cloud.points[i], 2, nbs);
+    if (nbs.size() == 2) d.push_back(std::sqrt(nbs[1].distance2_m2));
+  }
+  if (d.empty()) return grid.cell_m();
+  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+void validate(const Cloud& source, const Cloud& target, const RegistrationSettings& s) {
+  if (source.empty()) throw std::invalid_argument("register: source cloud is empty");
+  if (target.empty()) throw std::invalid_argument("register: target cloud is empty");
+  if (!(s.fine_voxel_m >= 0.0) || !(s.coarse_voxel_m >= 0.0) || !std::isfinite(s.fine_voxel_m) ||
+      !std::isfinite(s.coarse_voxel_m))
+    throw std::invalid_argument("register: voxels must be finite and >= 0");
+  if (!(s.pairing_voxels >= 1.0)) throw std::invalid_argument("register: pairing_voxels must be at least 1");
+  if (s.iterations_per_level < 1) throw std::invalid_argument("register: iterations_per_level must be at least 1");
+  if (!(s.min_inlier_ratio >= 0.0 && s.min_inlier_ratio <= 1.0))
+    throw std::invalid_argument("register: min_inlier_ratio must be in 0..1");
+}
+
+}  // namespace
+
+std::vector<double> registration_voxels(const Cloud& source, const Cloud& target, const RegistrationSettings& s) {
+  validate(source, target, s);
+  double fine = s.fine_voxel_m;
+  if (fine == 0.0) fine = std::max(point_spacing(target), voxel_for_points(target, s.fine_points));
+  double coarse = s.coarse_voxel_m;
+  if (coarse == 0.0) coarse = voxel_for_points(target, s.coarse_points);
+  if (!(fine > 0.0)) fine = 1e-3;
+  coarse = std::max(coarse, fine);
+  // Levels about a factor of two apart, ending exactly at the fine voxel.
+  const int steps = static_cast<int>(std::ceil(std::log2(coarse / fine) - 1e-9));
+  std::vector<double> voxels;
+  for (int i = steps; i >= 0; --i) voxels.push_back(steps == 0 ? fine : fine * std::pow(coarse / fine, double(i) / steps));
+  return voxels;
+}
+
+RegistrationResult register_clouds(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
+                                   const RegistrationSettings& s) {
+  const std::vector<double> voxels = registration_voxels(source, target, s);
+  struct Level {
+    Cloud source, target;
+    IcpSettings icp;
+  };
+  std::vector<Level> levels(voxels.size());
+  double radius = 0.0;  // how far a rotation carries the source's points: their spread about the centroid
+  for (size_t l = 0; l < voxels.size(); ++l) {
+    const double v = voxels[l];
+    const bool finest = l + 1 == voxels.size();
+    Level& level = levels[l];
+    level.source = voxel_filter(source, v);
+    level.target = voxel_filter(target, v);
+    IcpSettings& icp_settings = level.icp;
+    icp_settings.metric = finest ? s.fine_metric : s.coarse_metric;
+    if (icp_settings.metric == IcpMetric::PointToPlane) estimate_normals(level.target, s.normals_k);
+    if (l == 0) {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const auto& p : level.source.points) centroid += p.cast<double>();
+      centroid /= static_cast<double>(level.source.size());
+      for (const auto& p : level.source.points) radius += (p.cast<double>() - centroid).squaredNorm();
+      radius = std::sqrt(radius / static_cast<double>(level.source.size()));
+    }
+    icp_settings.max_iterations = finest ? s.fine_iterations : s.iterations_per_level;
+    icp_settings.max_correspondence_m = icp_settings.min_correspondence_m =
+        (l == 0 ? s.coarse_pairing_voxels : s.pairing_voxels) * v;
+    icp_settings.huber_m = v;
+    icp_settings.threads = s.threads;
+    icp_settings.coarse_stride = 1;
+    // Converged once an update moves the cloud's points by less than a
+    // hundredth of the voxel: finer steps are below what the level resolves.
+    icp_settings.translation_epsilon_m = s.convergence_voxels * v;
+    icp_settings.rotation_epsilon_rad = s.convergence_voxels * v / std::max(radius, v);
+  }
+
+  // The levels from `first` on, starting at T.
+  const auto run = [&](size_t first, Eigen::Isometry3d T) {
+    RegistrationResult r;
+    for (size_t l = first; l < levels.size(); ++l) {
+      const Level& level = levels[l];
+      RegistrationLevel done;
+      done.voxel_m = voxels[l];
+      done.pairing_m = level.icp.max_correspondence_m;
+      done.source_points = level.source.size();
+      done.target_points = level.target.size();
+      done.icp = icp(level.source, level.target, T, level.icp);
+      T = done.icp.T_target_source;
+      r.iterations += done.icp.iterations;
+      r.levels.push_back(done);
+    }
+    r.T_target_source = T;
+    r.rmse_m = r.levels.back().icp.rmse_m;
+    r.inlier_ratio = r.levels.back().icp.inlier_ratio;
+    return r;
+  };
+  RegistrationResult result = run(0, T_initial);
+  // A coarse level sees a street or a corridor as a few slabs and may slide
+  // along it, out of a start that was already right (the 3DTK scans from
+  // their odometry: 1.7 m along the street). So the finer half of the
+  // pyramid also runs from the start itself, and the answer that pairs more
+  // of the source at the finest level wins.
+  if (levels.size() > 2) {
+    RegistrationResult refined = run(levels.size() / 2, T_initial);
+    if (refined.inlier_ratio > result.inlier_ratio) {
+      refined.iterations += result.iterations;
+      refined.from_start = true;
+      result = std::move(refined);
+    } else {
+      result.iterations += refined.iterations;
+    }
+  }
+  const IcpResult& last = result.levels.back().icp;
+  char why[160] = "";
+  if (last.inlier_ratio < s.min_inlier_ratio)
+    std::snprintf(why, sizeof why, "the clouds did not meet: %.0f %% of the source paired, %.0f %% needed",
+                  100.0 * last.inlier_ratio, 100.0 * s.min_inlier_ratio);
+  else if (!last.converged)
+    std::snprintf(why, sizeof why, "ICP did not converge: still moving after %d iterations at the %.3g m level",
+                  last.iterations, result.levels.back().voxel_m);
+  result.failure = why;
+  result.converged = result.failure.empty();
+  return result;
+}
+
+}  // namespace rise::semantic
