@@ -631,6 +631,33 @@ Eigen::Isometry3d parse_3dtk_pose(const std::string& path, std::string_view text
   return from_3dtk_pose(euler_3dtk({v[0], v[1], v[2]}, Eigen::Vector3d(v[3], v[4], v[5]) * kDeg));
 }
 
+Range3dtk parse_3dtk_config(const std::string& path, std::string_view text) {
+  // 3DTK's programs read their options from a config.ini in the scan folder
+  // ("key=value", '#' comments); of those only the range limits say
+  // something about the data: `max` (cm) is where its scanner writes a
+  // missing return.
+  Range3dtk range;
+  Lines lines{text};
+  std::string_view line;
+  while (lines.next(line)) {
+    if (const size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+    const size_t eq = line.find('=');
+    const auto key_words = words(line.substr(0, eq));
+    if (key_words.empty()) continue;
+    const size_t n = lines.number;
+    if (eq == std::string_view::npos) fail_line(path, n, std::string(key_words[0]) + ": expected key=value");
+    const auto value = words(line.substr(eq + 1));
+    const std::string key(key_words[0]);
+    if (key != "min" && key != "max") continue;
+    if (value.size() != 1) fail_line(path, n, key + ": expected one number");
+    const double v = number<double>(value[0], path, n, key);
+    if (!(v >= 0.0) || !std::isfinite(v)) fail_line(path, n, key + ": must be a distance >= 0 (cm)");
+    (key == "min" ? range.min_m : range.max_m) = v / 100.0;
+  }
+  if (range.max_m > 0.0 && range.min_m >= range.max_m) fail_line(path, lines.number, "min must be below max");
+  return range;
+}
+
 std::vector<Eigen::Isometry3d> parse_3dtk_frames(const std::string& path, std::string_view text) {
   std::vector<Eigen::Isometry3d> frames;
   Lines lines{text};

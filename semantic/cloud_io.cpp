@@ -182,7 +182,17 @@ Scan read_scan(const std::string& path) {
       scan.T_world_scan = r.viewpoint;
   } else {
     scan.cloud = read_cloud(path);
-    if (ext == ".3d" && std::filesystem::exists(pose)) scan.T_world_scan = read_3dtk_pose(pose.string());
+    if (ext == ".3d") {
+      if (std::filesystem::exists(pose)) scan.T_world_scan = read_3dtk_pose(pose.string());
+      const std::filesystem::path config = p.parent_path() / "config.ini";
+      if (std::filesystem::exists(config)) {
+        const auto range = formats::parse_3dtk_config(config.string(), read_file(config.string()));
+        std::erase_if(scan.cloud.points, [&](const Eigen::Vector3f& q) {
+          const double r = q.norm();
+          return r < range.min_m || (range.max_m > 0.0 && r >= range.max_m);
+        });
+      }
+    }
   }
   return scan;
 }

@@ -25,6 +25,7 @@ void check_settings(const SlamSettings& s) {
   if (s.loop_max_per_scan < 0) bad("loop_max_per_scan must be >= 0");
   if (!(s.loop_max_rmse_m > 0)) bad("loop_max_rmse_m must be > 0");
   if (s.loop_min_inlier_ratio < 0 || s.loop_min_inlier_ratio > 1) bad("loop_min_inlier_ratio must be in 0..1");
+  if (s.match_min_inlier_ratio < 0 || s.match_min_inlier_ratio > 1) bad("match_min_inlier_ratio must be in 0..1");
   if (!(s.information_sigma_min_m > 0)) bad("information_sigma_min_m must be > 0");
   if (s.relaxation_rounds < 1) bad("relaxation_rounds must be >= 1");
   if (!(s.refine_correspondence_m >= 0)) bad("refine_correspondence_m must be >= 0");
@@ -95,7 +96,8 @@ class Pipeline {
   // would pile the drift up again).
   std::vector<IcpResult> sequential(const std::vector<Cloud>& clouds, const std::vector<Cloud>& sources,
                                     const std::vector<Eigen::Isometry3d>& odometry,
-                                    std::vector<Eigen::Isometry3d>& T_world_scan, bool chain) const {
+                                    std::vector<Eigen::Isometry3d>& T_world_scan, bool chain,
+                                    std::vector<std::size_t>& refused) const {
     const std::size_t n = clouds.size();
     std::vector<IcpResult> results(n);
     IcpSettings icp_settings = s_.icp;
@@ -108,7 +110,16 @@ class Pipeline {
       const Eigen::Isometry3d guess =
           chain ? T_world_scan[i - 1] * odometry[i - 1].inverse() * odometry[i] : T_world_scan[i];
       results[i] = icp(sources[i], local_map(clouds, T_world_scan, i, guess.translation(), s_), guess, icp_settings);
-      if (chain) T_world_scan[i] = results[i].T_target_source;
+      if (chain) {
+        // A match that did not settle, or that paired almost nothing, is
+        // not built on: the scan stays where the odometry put it, and the
+        // result says so (refused).
+        if (!results[i].converged || results[i].inlier_ratio < s_.match_min_inlier_ratio) {
+          refused.push_back(i);
+          results[i].T_target_source = guess;
+        }
+        T_world_scan[i] = results[i].T_target_source;
+      }
       report(i, n - 1, "sequential icp");
     }
     return results;
@@ -226,7 +237,7 @@ SlamResult slam(std::vector<Scan> scans, const SlamSettings& settings, const Sla
   std::vector<Eigen::Isometry3d> T_world_scan(n, odometry[0]);
   for (int round = 0; round < settings.relaxation_rounds; ++round) {
     t = Clock::now();
-    result.sequential = pipeline.sequential(clouds, sources, odometry, T_world_scan, round == 0);
+    result.sequential = pipeline.sequential(clouds, sources, odometry, T_world_scan, round == 0, result.refused);
     if (round == 0) result.T_world_scan_sequential = T_world_scan;
     result.timings.sequential_s += seconds_since(t);
 

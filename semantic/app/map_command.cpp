@@ -142,6 +142,19 @@ int run_map(const MapOptions& o) {
     ProgressBar bar;
     return build_map(std::move(scans), settings, bar.callback());
   }();
+  if (!r.slam.refused.empty()) {
+    // A world built on a match that did not hold would look right and be
+    // wrong: no files, one line naming the scans.
+    std::string which;
+    for (const std::size_t i : r.slam.refused) {
+      const IcpResult& m = r.slam.sequential[i];
+      which += fmt::format("{}{} ({}, {:.0f} % paired)", which.empty() ? "" : ", ", names[i],
+                           m.converged ? "too few pairs" : "did not converge", 100.0 * m.inlier_ratio);
+    }
+    spdlog::error("map: {} of {} scans did not register onto the scans before them: {}; no map written",
+                  r.slam.refused.size(), names.size(), which);
+    return 1;
+  }
   const double export_s = write_map_files(o.out_dir, r, names, settings.exports);
 
   print_found(r, points, guesses, settings.slam.map_voxel_m);

@@ -22,7 +22,7 @@ namespace {
 struct RegisterOptions {
   std::string source, target;
   std::string init, init_file;
-  std::string metric = "plane";
+  std::string metric;
   bool metric_given = false;
   double voxel_m = 0.0, coarse_voxel_m = 0.0;
   double min_inlier_ratio = RegistrationSettings{}.min_inlier_ratio;
@@ -84,7 +84,10 @@ int run_register(const RegisterOptions& o) {
     spdlog::info("initial guess from the scans' poses");
   }
 
-  const IcpMetric metric = o.metric == "plane" ? IcpMetric::PointToPlane : IcpMetric::PointToPoint;
+  // The pyramid's finest level pairs point to plane unless told; one plain
+  // ICP point to point, as PCL's and Open3D's do.
+  const IcpMetric metric = (o.metric_given ? o.metric == "plane" : !o.plain) ? IcpMetric::PointToPlane
+                                                                            : IcpMetric::PointToPoint;
   const auto ti = clock::now();
   Eigen::Isometry3d T;
   double rmse = 0.0, inliers = 0.0;
@@ -116,7 +119,7 @@ int run_register(const RegisterOptions& o) {
       failure = "the clouds did not meet: " + std::to_string(static_cast<int>(100 * r.inlier_ratio)) + " % of the source paired";
   } else {
     RegistrationSettings s;
-    if (o.metric_given) s.fine_metric = metric;
+    s.fine_metric = metric;
     s.fine_voxel_m = o.voxel_m;
     s.coarse_voxel_m = o.coarse_voxel_m;
     s.min_inlier_ratio = o.min_inlier_ratio;
@@ -156,9 +159,8 @@ void add_register_command(CLI::App& app) {
   cmd->add_option("TARGET", o->target, "cloud to align to")->required();
   auto* init = cmd->add_option("--init", o->init, "initial guess: 16 numbers, row-major (default: from the scans' poses, else identity)");
   cmd->add_option("--init-file", o->init_file, "initial guess from a file of 16 numbers, row-major")->excludes(init);
-  auto* metric = cmd->add_option("--metric", o->metric, "point (point-to-point) or plane (point-to-plane): the pyramid's finest level, or the one ICP's")
-      ->check(CLI::IsMember({"point", "plane"}))
-      ->capture_default_str();
+  auto* metric = cmd->add_option("--metric", o->metric, "point (point-to-point) or plane (point-to-plane): the pyramid's finest level (default plane), or the one ICP's (default point)")
+      ->check(CLI::IsMember({"point", "plane"}));
   cmd->add_option("--voxel", o->voxel_m, "the pyramid's finest voxel, m (0: from the clouds)")->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->add_option("--coarse-voxel", o->coarse_voxel_m, "the pyramid's coarsest voxel, m (0: from the clouds)")
       ->check(CLI::NonNegativeNumber)

@@ -40,7 +40,7 @@ TEST_CASE("rise-semantic register prints PCL's bunny transform, rmse and iterati
     WARN("skipped: RISE_TEST_DATA/pointclouds/pcl/bun0.pcd, bun4.pcd not found");
     return;
   }
-  const Run r = run("register " + bun0 + " " + bun4 + " --max-dist 0.05 --min-dist 0.05 --iterations 50 --threads 1 --exact");
+  const Run r = run("register " + bun0 + " " + bun4 + " --max-dist 0.05 --min-dist 0.05 --iterations 50 --threads 1 --exact --coarse-stride 1");
   REQUIRE(r.status == 0);
   std::istringstream in(r.out);
   double T[4][4];

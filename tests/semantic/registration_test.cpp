@@ -7,9 +7,12 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <vector>
 
 #include "semantic/cloud_io.hpp"
 #include "semantic/icp.hpp"
+#include "semantic/registration.hpp"
 #include "tests/semantic/synthetic_room.hpp"
 
 namespace sem = rise::semantic;
@@ -102,4 +105,153 @@ TEST_CASE("icp registers 3DTK's scan001 onto scan000 where slam6d did", "[semant
                           << rotation_error_deg(p.T_target_source, slam6d) << " deg");
   CHECK(translation_error_m(p.T_target_source, slam6d) < 0.02);
   CHECK(rotation_error_deg(p.T_target_source, slam6d) < 0.3);
+}
+
+namespace {
+
+// A 4x4 row-major text file (the small_gicp / fast_gicp reference transforms).
+Eigen::Isometry3d read_matrix(const std::string& path) {
+  std::ifstream in(path);
+  Eigen::Matrix4d M;
+  for (int i = 0; i < 16; ++i) REQUIRE(in >> M(i / 4, i % 4));
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::Quaterniond(Eigen::Matrix3d(M.topLeftCorner<3, 3>())).normalized().toRotationMatrix();
+  T.translation() = M.topRightCorner<3, 1>();
+  return T;
+}
+
+// Starts 20 degrees and 1 m off `T`, about and along four different axes.
+std::vector<Eigen::Isometry3d> starts_around(const Eigen::Isometry3d& T) {
+  const Eigen::Vector3d axes[] = {{0, 0, 1}, {1, 0, 0}, {0, 1, 0}, {1, 1, 1}};
+  const Eigen::Vector3d moves[] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {-1, -1, 0}};
+  std::vector<Eigen::Isometry3d> starts;
+  for (int k = 0; k < 4; ++k) {
+    Eigen::Isometry3d P = Eigen::Isometry3d::Identity();
+    P.linear() = Eigen::AngleAxisd(20.0 * M_PI / 180.0, axes[k].normalized()).toRotationMatrix();
+    P.translation() = moves[k].normalized();
+    starts.push_back(T * P);
+  }
+  return starts;
+}
+
+}  // namespace
+
+TEST_CASE("register_clouds lands on the real lidar pair's reference from its defaults, 20 deg and 1 m off", "[semantic]") {
+  const std::string source = data_file("pointclouds/koide3_small_gicp/source.ply"),
+                    target = data_file("pointclouds/koide3_small_gicp/target.ply"),
+                    reference = data_file("pointclouds/koide3_small_gicp/T_target_source.txt");
+  if (source.empty() || target.empty() || reference.empty()) {
+    WARN("skipped: RISE_TEST_DATA/pointclouds/koide3_small_gicp/{source,target}.ply, T_target_source.txt not found");
+    return;
+  }
+  const sem::Cloud s = sem::read_cloud(source), t = sem::read_cloud(target);
+  const Eigen::Isometry3d T = read_matrix(reference);
+  std::vector<Eigen::Isometry3d> starts{Eigen::Isometry3d::Identity()};
+  for (const auto& start : starts_around(T)) starts.push_back(start);
+  for (const auto& start : starts) {
+    const sem::RegistrationResult r = sem::register_clouds(s, t, start);
+    INFO("from " << translation_error_m(start, T) << " m, " << rotation_error_deg(start, T) << " deg: "
+                 << translation_error_m(r.T_target_source, T) << " m, " << rotation_error_deg(r.T_target_source, T)
+                 << " deg, " << r.failure);
+    CHECK(r.converged);
+    CHECK(r.failure.empty());
+    CHECK(translation_error_m(r.T_target_source, T) < 0.05);
+    CHECK(rotation_error_deg(r.T_target_source, T) < 1.0);
+    CHECK(r.inlier_ratio > 0.5);
+  }
+}
+
+TEST_CASE("register_clouds lands on fast_gicp's reference for the same pair read from PCD", "[semantic]") {
+  const std::string source = data_file("pointclouds/koide3_fast_gicp/251371071.pcd"),
+                    target = data_file("pointclouds/koide3_fast_gicp/251370668.pcd"),
+                    reference = data_file("pointclouds/koide3_fast_gicp/relative.txt");
+  if (source.empty() || target.empty() || reference.empty()) {
+    WARN("skipped: RISE_TEST_DATA/pointclouds/koide3_fast_gicp/ clouds or relative.txt not found");
+    return;
+  }
+  const Eigen::Isometry3d T = read_matrix(reference);
+  const sem::RegistrationResult r =
+      sem::register_clouds(sem::read_cloud(source), sem::read_cloud(target), Eigen::Isometry3d::Identity());
+  INFO(translation_error_m(r.T_target_source, T) << " m, " << rotation_error_deg(r.T_target_source, T) << " deg");
+  CHECK(r.converged);
+  CHECK(translation_error_m(r.T_target_source, T) < 0.05);
+  CHECK(rotation_error_deg(r.T_target_source, T) < 1.0);
+}
+
+TEST_CASE("register_clouds registers 3DTK's scans where slam6d did, with 3DTK's range limits", "[semantic]") {
+  const std::string dir = data_file("pointclouds/3DTK-dat");
+  if (dir.empty()) {
+    WARN("skipped: RISE_TEST_DATA/pointclouds/3DTK-dat not found");
+    return;
+  }
+  // read_scan drops what config.ini's range limits say is no return (a
+  // sphere at 32.76 m that pulls a match towards no motion at all).
+  const sem::Scan s0 = sem::read_scan(dir + "/scan000.3d"), s1 = sem::read_scan(dir + "/scan001.3d");
+  for (const auto* s : {&s0, &s1})
+    for (const auto& p : s->cloud.points) REQUIRE(p.norm() < 32.76f);
+  const Eigen::Isometry3d odometry = s0.T_world_scan->inverse() * *s1.T_world_scan;
+  const Eigen::Isometry3d slam6d = sem::read_3dtk_frames(dir + "/scan000.frames").back().inverse() *
+                                   sem::read_3dtk_frames(dir + "/scan001.frames").back();
+  std::vector<Eigen::Isometry3d> starts{odometry};
+  for (const auto& start : starts_around(slam6d)) starts.push_back(start);
+  for (const auto& start : starts) {
+    const sem::RegistrationResult r = sem::register_clouds(s1.cloud, s0.cloud, start);
+    INFO(translation_error_m(r.T_target_source, slam6d) << " m, " << rotation_error_deg(r.T_target_source, slam6d)
+                                                        << " deg, " << r.failure);
+    CHECK(r.converged);
+    CHECK(translation_error_m(r.T_target_source, slam6d) < 0.05);
+    CHECK(rotation_error_deg(r.T_target_source, slam6d) < 1.0);
+  }
+}
+
+TEST_CASE("register_clouds finds one answer for PCL's room scans from the tutorial's guess and 20 deg / 1 m off it", "[semantic]") {
+  const std::string a = data_file("pointclouds/PointCloudLibrary_data/room_scan1.pcd"),
+                    b = data_file("pointclouds/PointCloudLibrary_data/room_scan2.pcd");
+  if (a.empty() || b.empty()) {
+    WARN("skipped: RISE_TEST_DATA/pointclouds/PointCloudLibrary_data/room_scan{1,2}.pcd not found");
+    return;
+  }
+  const sem::Cloud target = sem::read_cloud(a), source = sem::read_cloud(b);
+  // The NDT tutorial's odometry guess (no reference transform exists).
+  const Eigen::Isometry3d guess = Eigen::Translation3d(1.79387, 0.720047, 0) * Eigen::AngleAxisd(0.6931, Eigen::Vector3d::UnitZ());
+  const sem::RegistrationResult first = sem::register_clouds(source, target, guess);
+  REQUIRE(first.converged);
+  CHECK(first.inlier_ratio > 0.5);
+  for (const auto& start : starts_around(first.T_target_source)) {
+    const sem::RegistrationResult r = sem::register_clouds(source, target, start);
+    INFO(translation_error_m(r.T_target_source, first.T_target_source) << " m, "
+         << rotation_error_deg(r.T_target_source, first.T_target_source) << " deg");
+    CHECK(r.converged);
+    CHECK(translation_error_m(r.T_target_source, first.T_target_source) < 0.01);
+    CHECK(rotation_error_deg(r.T_target_source, first.T_target_source) < 0.1);
+  }
+}
+
+TEST_CASE("register_clouds says so when the clouds did not meet instead of returning a transform as if they had", "[semantic]") {
+  const sem::Cloud room = sem::test::synthetic_room(40000, 1), sample = sem::test::synthetic_room(40000, 2, 0.002);
+  // The same room 30 m away: nothing pairs at any level.
+  const Eigen::Isometry3d far(Eigen::Translation3d(30, 0, 0));
+  const sem::RegistrationResult r = sem::register_clouds(sem::transformed(sample, far), room, Eigen::Isometry3d::Identity());
+  CHECK_FALSE(r.converged);
+  CHECK(r.failure.find("did not meet") != std::string::npos);
+  CHECK(r.inlier_ratio < 0.3);
+
+  // And the room against itself from 10 degrees and 0.3 m off: found.
+  const Eigen::Isometry3d off = Eigen::Translation3d(0.3, -0.1, 0) * Eigen::AngleAxisd(0.17, Eigen::Vector3d::UnitZ());
+  const sem::RegistrationResult ok = sem::register_clouds(sem::transformed(sample, off), room, Eigen::Isometry3d::Identity());
+  CHECK(ok.converged);
+  CHECK(translation_error_m(ok.T_target_source, off.inverse()) < 0.01);
+  CHECK(rotation_error_deg(ok.T_target_source, off.inverse()) < 0.2);
+}
+
+TEST_CASE("register_clouds sizes its pyramid from the clouds and refuses bad settings", "[semantic]") {
+  const sem::Cloud room = sem::test::synthetic_room(40000, 1);
+  const std::vector<double> voxels = sem::registration_voxels(room, room);
+  REQUIRE(voxels.size() >= 2);
+  for (size_t i = 1; i < voxels.size(); ++i) CHECK(voxels[i] < voxels[i - 1]);
+  CHECK(sem::voxel_filter(room, voxels.front()).size() <= 1600);
+  sem::RegistrationSettings bad;
+  bad.pairing_voxels = 0.5;
+  CHECK_THROWS_AS(sem::register_clouds(room, room, Eigen::Isometry3d::Identity(), bad), std::invalid_argument);
+  CHECK_THROWS_AS(sem::register_clouds(sem::Cloud{}, room, Eigen::Isometry3d::Identity()), std::invalid_argument);
 }
