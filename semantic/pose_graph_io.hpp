@@ -44,7 +44,7 @@ struct PoseGraphFile {
 /// norm is not 1 (±1e-3), a duplicate vertex id, an edge to an unknown vertex
 /// (when the file has VERTEX lines), an information matrix that is not
 /// positive definite, a FIX of an unknown vertex; "path: vertex N: ..." for a
-/// node no chain reaches; and for a file without edges or vertices.
+/// node no chain reaches; "path: no edges" for a file without edges.
 PoseGraphFile read_pose_graph(const std::string& path);
 
 /// Information given to z, roll and pitch of a lifted SE(2) edge, relative
