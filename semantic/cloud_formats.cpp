@@ -61,22 +61,8 @@ T number(std::string_view s, const std::string& path, size_t line, std::string_v
   if (!parse(s, v)) fail_line(path, line, std::string(what) + ": not a number: '" + std::string(s) + "'");
   return v;
 }
-
-// Text split into lines with their 1-based numbers; '\r' dropped.
-struct Lines {
-  std::string_view text;
-  size_t pos = 0;
-  size_t number = 0;
-  bool next(std::string_view& line) {
-    if (pos >= text.size()) return false;
-    const size_t end = std::min(text.find('\n', pos), text.size());
-    line = text.substr(pos, end - pos);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos = end + 1;
-    ++number;
-    return true;
-  }
-};
+template double number<double>(std::string_view, const std::string&, size_t, std::string_view);
+template long long number<long long>(std::string_view, const std::string&, size_t, std::string_view);
 
 std::string lower_extension(const std::string& path) {
   std::string e = std::filesystem::path(path).extension().string();

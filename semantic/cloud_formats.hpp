@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -68,5 +69,27 @@ std::string read_file(const std::string& path);  ///< throws "path: cannot open:
 std::string lower_extension(const std::string& path);
 [[noreturn]] void fail_line(const std::string& path, size_t line, const std::string& message);
 [[noreturn]] void fail_byte(const std::string& path, size_t byte, const std::string& message);
+
+/// The whitespace-separated words of a line.
+std::vector<std::string_view> words(std::string_view line);
+/// `s` as a T, or "path:line: what: not a number: 's'" (double and long long).
+template <typename T>
+T number(std::string_view s, const std::string& path, size_t line, std::string_view what);
+
+/// Text split into lines with their 1-based numbers; '\r' dropped.
+struct Lines {
+  std::string_view text;
+  size_t pos = 0;
+  size_t number = 0;
+  bool next(std::string_view& line) {
+    if (pos >= text.size()) return false;
+    const size_t end = std::min(text.find('\n', pos), text.size());
+    line = text.substr(pos, end - pos);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos = end + 1;
+    ++number;
+    return true;
+  }
+};
 
 }  // namespace rise::semantic::formats

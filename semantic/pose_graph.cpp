@@ -4,6 +4,9 @@
 #include <ceres/rotation.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <Eigen/SparseCholesky>
 
 #include <array>
 #include <cmath>
@@ -127,7 +130,109 @@ void check_connected(const PoseGraph& graph, std::size_t fixed_node) {
   }
 }
 
+// One edge of a linear least-squares problem over a 3-vector per node, with
+// m right-hand sides at once: the residual P·x_to + Q·x_from − c (3×m),
+// weighed by W.
+struct LinearEdge {
+  std::size_t from, to;
+  Eigen::Matrix3d P, Q, W;
+  Eigen::MatrixXd c;
+};
+
+// The normal equations of Σ ‖P·x_to + Q·x_from − c‖²_W, solved by sparse
+// LDLᵀ with node `fixed` held at x_fixed; node k's solution in rows 3k..3k+2.
+Eigen::MatrixXd solve_linear(std::size_t nodes, std::size_t fixed, const Eigen::MatrixXd& x_fixed,
+                             const std::vector<LinearEdge>& edges) {
+  const auto column = [fixed](std::size_t k) { return static_cast<Eigen::Index>(3 * (k < fixed ? k : k - 1)); };
+  const auto n = static_cast<Eigen::Index>(3 * (nodes - 1));
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(n, x_fixed.cols());
+  const auto add = [&](std::size_t a, std::size_t b, const Eigen::Matrix3d& block) {
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) triplets.emplace_back(column(a) + r, column(b) + c, block(r, c));
+    }
+  };
+  for (const auto& e : edges) {
+    Eigen::MatrixXd c = e.c;
+    if (e.to == fixed) c -= e.P * x_fixed;
+    if (e.from == fixed) c -= e.Q * x_fixed;
+    if (e.to != fixed) {
+      add(e.to, e.to, e.P.transpose() * e.W * e.P);
+      rhs.middleRows(column(e.to), 3) += e.P.transpose() * e.W * c;
+    }
+    if (e.from != fixed) {
+      add(e.from, e.from, e.Q.transpose() * e.W * e.Q);
+      rhs.middleRows(column(e.from), 3) += e.Q.transpose() * e.W * c;
+    }
+    if (e.to != fixed && e.from != fixed) {
+      add(e.to, e.from, e.P.transpose() * e.W * e.Q);
+      add(e.from, e.to, e.Q.transpose() * e.W * e.P);
+    }
+  }
+  Eigen::SparseMatrix<double> H(n, n);
+  H.setFromTriplets(triplets.begin(), triplets.end());
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(H);
+  if (ldlt.info() != Eigen::Success) throw std::runtime_error("pose graph: chordal initialization: singular system");
+  const Eigen::MatrixXd free = ldlt.solve(rhs);
+  Eigen::MatrixXd x(3 * static_cast<Eigen::Index>(nodes), x_fixed.cols());
+  for (std::size_t k = 0; k < nodes; ++k) {
+    x.middleRows(3 * static_cast<Eigen::Index>(k), 3) = k == fixed ? x_fixed : free.middleRows(column(k), 3);
+  }
+  return x;
+}
+
+// The rotation nearest M in the Frobenius norm.
+Eigen::Matrix3d nearest_rotation(const Eigen::Matrix3d& M) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  return svd.matrixU() * d * svd.matrixV().transpose();
+}
+
 }  // namespace
+
+std::vector<Eigen::Isometry3d> chordal_initialization(const PoseGraph& graph, std::size_t fixed_node) {
+  const std::size_t nodes = graph.T_world_node.size();
+  if (fixed_node >= nodes) {
+    throw std::invalid_argument("pose graph: fixed node " + std::to_string(fixed_node) + " is not a node (the graph has " +
+                                std::to_string(nodes) + ")");
+  }
+  checked_edges(graph);
+  check_connected(graph, fixed_node);
+  std::vector<Eigen::Isometry3d> T = graph.T_world_node;
+  if (nodes == 1) return T;
+
+  // R_to − R_from·R_from_to = 0 splits by rows: with x the transpose of one
+  // row of R, x_to − R_from_toᵀ·x_from = 0; the three rows are the three
+  // right-hand-side columns.
+  std::vector<LinearEdge> rotation;
+  rotation.reserve(graph.edges.size());
+  for (const auto& e : graph.edges) {
+    const double w = e.information.bottomRightCorner<3, 3>().selfadjointView<Eigen::Lower>().eigenvalues().minCoeff();
+    rotation.push_back({e.from, e.to, Eigen::Matrix3d::Identity(), -e.T_from_to.linear().transpose(),
+                        w * Eigen::Matrix3d::Identity(), Eigen::MatrixXd::Zero(3, 3)});
+  }
+  const Eigen::MatrixXd rows =
+      solve_linear(nodes, fixed_node, graph.T_world_node[fixed_node].linear().transpose(), rotation);
+  for (std::size_t k = 0; k < nodes; ++k) {
+    if (k != fixed_node) {
+      T[k].linear() = nearest_rotation(rows.middleRows(3 * static_cast<Eigen::Index>(k), 3).transpose());
+    }
+  }
+
+  // Our translation error R_meas_ᵀ·(R_fromᵀ·(t_to − t_from) − t_meas) is
+  // linear in the translations once the rotations are set.
+  std::vector<LinearEdge> translation;
+  translation.reserve(graph.edges.size());
+  for (const auto& e : graph.edges) {
+    const Eigen::Matrix3d M = e.T_from_to.linear().transpose() * T[e.from].linear().transpose();
+    translation.push_back({e.from, e.to, M, -M, e.information.topLeftCorner<3, 3>(),
+                           e.T_from_to.linear().transpose() * e.T_from_to.translation()});
+  }
+  const Eigen::MatrixXd t = solve_linear(nodes, fixed_node, graph.T_world_node[fixed_node].translation(), translation);
+  for (std::size_t k = 0; k < nodes; ++k) T[k].translation() = t.middleRows(3 * static_cast<Eigen::Index>(k), 3);
+  return T;
+}
 
 double pose_graph_cost(const PoseGraph& graph, const std::vector<Eigen::Isometry3d>& T_world_node) {
   if (T_world_node.size() != graph.T_world_node.size()) {
@@ -164,7 +269,10 @@ PoseGraphResult relax(const PoseGraph& graph, const PoseGraphSettings& settings)
 
   std::vector<PoseBlock> blocks;
   blocks.reserve(nodes);
-  for (const auto& T : graph.T_world_node) blocks.push_back(to_block(T));
+  for (const auto& T : settings.chordal_initialization ? chordal_initialization(graph, settings.fixed_node)
+                                                       : graph.T_world_node) {
+    blocks.push_back(to_block(T));
+  }
 
   PoseGraphResult result;
   if (graph.edges.empty()) {  // one node (check_connected refused more): nothing to relax
@@ -205,7 +313,9 @@ PoseGraphResult relax(const PoseGraph& graph, const PoseGraphSettings& settings)
   result.T_world_node.reserve(nodes);
   for (const auto& b : blocks) result.T_world_node.push_back(from_block(b));
   result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
-  result.initial_cost = summary.initial_cost;
+  result.start_cost = summary.initial_cost;
+  result.initial_cost =
+      settings.chordal_initialization ? pose_graph_cost(graph, graph.T_world_node) : summary.initial_cost;
   result.final_cost = summary.final_cost;
   result.converged = summary.termination_type == ceres::CONVERGENCE;
   return result;

@@ -36,12 +36,18 @@ struct PoseGraphSettings {
   double function_tolerance = 1e-12; ///< Ceres' relative cost-change stop
   std::size_t fixed_node = 0;        ///< held at its initial pose
   int threads = 1;
+  /// Start from chordal_initialization() instead of the graph's guess:
+  /// from MIT's odometry Levenberg–Marquardt stops in a local minimum
+  /// (cost 385 after 389 iterations; from the chordal guess 20.6 after 17,
+  /// semantic/README.md "Pose graphs from files").
+  bool chordal_initialization = true;
 };
 
 struct PoseGraphResult {
   std::vector<Eigen::Isometry3d> T_world_node;  ///< the relaxed poses
   int iterations = 0;
-  double initial_cost = 0.0;  ///< ½ Σ rᵀ·Ω·r over the edges, before ...
+  double initial_cost = 0.0;  ///< ½ Σ rᵀ·Ω·r over the edges at the graph's guess, ...
+  double start_cost = 0.0;    ///< ... where Levenberg–Marquardt started (the chordal guess, if chosen) ...
   double final_cost = 0.0;    ///< ... and after
   bool converged = false;     ///< Ceres stopped on a tolerance, not on the iteration limit
 };
@@ -53,6 +59,16 @@ struct PoseGraphResult {
 /// symmetric positive definite; and for a node not connected to the fixed
 /// node through edges (its pose would be undetermined). Allocates.
 PoseGraphResult relax(const PoseGraph& graph, const PoseGraphSettings& settings = {});
+
+/// A guess that needs none: the rotations from the chordal relaxation
+/// (Martinec & Pajdla 2007; Carlone et al., "Initialization techniques for
+/// 3D SLAM", ICRA 2015): min Σ ω·‖R_to − R_from·R_from_to‖²_F over all 3×3
+/// matrices, a linear least-squares problem, each result projected onto
+/// SO(3); then the translations that best fit the edges under those
+/// rotations (linear again). ω is the smallest eigenvalue of the edge's
+/// rotation information, the translations weighed by its translation block.
+/// `fixed_node` keeps its pose from the graph. Throws as relax() does.
+std::vector<Eigen::Isometry3d> chordal_initialization(const PoseGraph& graph, std::size_t fixed_node = 0);
 
 /// Cost ½ Σ rᵀ·Ω·r of the graph's edges at the given poses (the quantity
 /// relax() minimises). Throws as relax() does for bad edges.
