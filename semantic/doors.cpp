@@ -1,9 +1,12 @@
 // Doors (seed paper, section 3): a gap of door width in a wall is a door
 // when there is wall above it (the "wall above door", a lintel) with free
-// space below, or a door panel standing in it. find_walls_and_doors()
-// (walls.cpp) finds the gaps; this looks into one.
+// space below, or a door panel standing in it. A gap with wall below it up
+// to a sill (a window) is not. find_walls_and_doors() (walls.cpp) finds the
+// gaps and checks that the floor is seen through an open one; this looks
+// into one.
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "semantic/segmentation_internal.hpp"
@@ -52,6 +55,13 @@ GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_sz, dou
   }
   const int n = std::max(1, k1 - k0);
   rep.free_below = empty >= 0.9 * n;
+  // Wall below the gap: covered layers from just above the floor's band
+  // up; ending below a door's height, it is a window's sill.
+  const int first = std::min(layers - 1, static_cast<int>(std::ceil(s.plane_band_m / cell_m)));
+  int up = first;
+  while (up < layers && coverage(up) >= 0.6) ++up;
+  rep.sill_m = up > first ? up * cell_m : 0.0;
+  rep.window = rep.sill_m > s.door_max_sill_m && rep.sill_m < s.door_min_height_m;
   if (covered >= 0.8 * n) {
     rep.panel = true;
     int j = k0;

@@ -49,8 +49,11 @@ int run_segment(const SegmentOptions& o) {
     std::printf("%s: %zu points, read %.0f ms, segmented %.0f ms\n", o.cloud.c_str(), cloud.size(), ms(t0, t1), ms(t1, t2));
     std::printf("floor %.3f m", seg.floor.height_m);
     if (seg.ceiling.found) std::printf(", ceiling %.3f m", seg.ceiling.height_m);
-    std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles\n", seg.walls.size(), seg.doors.size(),
+    std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles", seg.walls.size(), seg.doors.size(),
                 seg.stairs.size(), seg.obstacles.size());
+    if (seg.oversize_clusters_dropped > 0)
+      std::printf(" (%d clusters over %.1f m dropped)", seg.oversize_clusters_dropped, SegmentationSettings{}.obstacle_max_size_m);
+    std::printf("\n");
     for (const auto& e : net.entities()) {
       std::printf("  %-16s at (%7.3f, %7.3f, %6.3f) size %.3f x %.3f x %.3f yaw %6.1f deg", e.name.c_str(),
                   e.position_m.x(), e.position_m.y(), e.position_m.z(), e.size_m.x(), e.size_m.y(), e.size_m.z(),
@@ -71,10 +74,12 @@ int run_segment(const SegmentOptions& o) {
     const std::filesystem::path dir(o.out_dir);
     ExportSettings st;
     st.world_name = o.name;
-    write_text_file((dir / "world.yaml").string(), world_yaml(net, st));
+    st.floor_plan = std::make_shared<OccupancyGrid>(floor_plan_of(cloud, net.segmentation(), st));
+    // The map first: it shows why, when the world file has no start.
+    write_map_png((dir / "map.png").string(), net, &cloud, st);
     write_text_file((dir / "world.sdf").string(), sdf_world(net, st));
     write_text_file((dir / "model.obj").string(), obj_mesh(net, st));
-    write_map_png((dir / "map.png").string(), net, &cloud, st);
+    write_text_file((dir / "world.yaml").string(), world_yaml(net, st));
     logger()->info("wrote world.yaml, world.sdf, model.obj, map.png to {}", o.out_dir);
   }
   return 0;
