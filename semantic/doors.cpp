@@ -6,7 +6,6 @@
 // into one.
 
 #include <algorithm>
-#include <cmath>
 #include <vector>
 
 #include "semantic/segmentation_internal.hpp"
@@ -55,13 +54,11 @@ GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_sz, dou
   }
   const int n = std::max(1, k1 - k0);
   rep.free_below = empty >= 0.9 * n;
-  // Wall below the gap: covered layers from just above the floor's band
-  // up; ending below a door's height, it is a window's sill.
-  const int first = std::min(layers - 1, static_cast<int>(std::ceil(s.plane_band_m / cell_m)));
-  int up = first;
-  while (up < layers && coverage(up) >= 0.6) ++up;
-  rep.sill_m = up > first ? up * cell_m : 0.0;
-  rep.window = rep.sill_m > s.door_max_sill_m && rep.sill_m < s.door_min_height_m;
+  // Something across the gap between a threshold's height and a door's (a
+  // window's sill, seen from above or from the side): not an open doorway.
+  for (int j = std::max(0, static_cast<int>(s.door_max_sill_m / cell_m)); j < k1; ++j)
+    if (coverage(j) >= 0.6) rep.sill_m = (j + 1) * cell_m;
+  rep.window = rep.sill_m > 0 && covered < 0.8 * n;
   if (covered >= 0.8 * n) {
     rep.panel = true;
     int j = k0;

@@ -35,7 +35,7 @@ struct SegmentationSettings {
   double door_min_width_m = 0.6;
   double door_max_width_m = 1.2;
   double door_min_height_m = 1.6;      ///< lintel underside / panel top above the floor
-  double door_max_sill_m = 0.3;        ///< an open gap must be open from this low (higher: a window)
+  double door_max_sill_m = 0.3;        ///< an open gap is clear from this height up (else: a window's sill)
   int door_min_floor_cells = 3;        ///< 10 cm floor cells seen on each side of an open doorway
   double stairs_min_riser_m = 0.1, stairs_max_riser_m = 0.25;
   double stairs_min_tread_m = 0.2, stairs_max_tread_m = 0.45;

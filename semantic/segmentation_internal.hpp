@@ -39,8 +39,8 @@ struct GapReport {
   bool lintel = false;      ///< wall above the door: covered layers down from the wall's top
   bool panel = false;       ///< a door panel: covered layers from 0.3 m to the door's minimum height
   bool free_below = false;  ///< nothing between 0.3 m and the door's minimum height
-  bool window = false;      ///< wall below the gap up to a sill above door_max_sill_m
-  double lintel_bottom_m = 0, panel_top_m = 0, sill_m = 0;  ///< above the floor
+  bool window = false;      ///< no panel, but something across the gap above door_max_sill_m (a sill)
+  double lintel_bottom_m = 0, panel_top_m = 0, sill_m = 0;  ///< above the floor; sill_m 0: none
 };
 
 /// The points of a wall's slab (along the wall, height above the floor)
