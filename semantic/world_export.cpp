@@ -252,7 +252,7 @@ Eigen::Vector3d robot_start(const SemanticNet& net, const ExportSettings& st) {
                   "%.2f m at (%.2f, %.2f)",
                   need, st.robot_half_width_m, st.robot_margin_m, st.known_poses.empty() ? "" : ", nor at any scan pose",
                   std::max(0.0, most), p.x(), p.y());
-    throw std::runtime_error(msg);
+    throw NoRobotStart(msg);
   }
   cv::Point best(-1, -1);
   for (int r = 0; r < grid.height; ++r)

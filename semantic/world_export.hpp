@@ -11,6 +11,7 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -59,13 +60,18 @@ struct ModelBox {
 /// the ceiling slab, obstacles, and a 5 cm floor slab under the floor.
 std::vector<ModelBox> model_boxes(const SemanticNet& net, const ExportSettings& settings = {});
 
+/// robot_start()'s refusal: no place with room for the robot.
+struct NoRobotStart : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 /// Where the robot starts, x, y, yaw: settings.robot_start; or the first
 /// of the known poses with robot_half_width_m + robot_margin_m clear of the
 /// solids (model_boxes below robot_height_m) and the floor plan's occupied
 /// cells; or the point with the most clearance in the largest region of the
 /// floor plan (free cells, without the solids) where that clearance fits,
 /// clear of unknown space too, facing the nearest door. Throws
-/// std::runtime_error when no place has the clearance.
+/// NoRobotStart when no place has the clearance.
 Eigen::Vector3d robot_start(const SemanticNet& net, const ExportSettings& settings = {});
 
 /// The floor plan of `cloud` as `seg` found it, in cells of

@@ -93,12 +93,16 @@ void add_segment_command(CLI::App& app) {
   sub->add_option("CLOUD", opts->cloud, "registered cloud, world frame, z up (.pcd .ply .xyz .3d)")->required();
   sub->add_flag("--json", opts->json, "print the entities and relations as JSON");
   sub->add_flag("--level", opts->level, "level the cloud first (its floor made horizontal)");
-  sub->add_option("--out-dir,-o", opts->out_dir, "also write world.yaml, world.sdf, model.obj and map.png here");
+  sub->add_option("--out-dir,-o", opts->out_dir,
+                  "also write map.png, world.sdf, model.obj and world.yaml here (exit 1 when the robot has no room to start)");
   sub->add_option("--name", opts->name, "world name in the files written")->capture_default_str();
   sub->callback([opts] {
     int rc = 0;
     try {
       rc = run_segment(*opts);
+    } catch (const NoRobotStart& e) {  // the world cannot be driven: no right answer
+      logger()->error("segment: {}", e.what());
+      rc = 1;
     } catch (const std::exception& e) {
       logger()->error("segment: {}", e.what());
       rc = 2;
