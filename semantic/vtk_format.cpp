@@ -142,7 +142,7 @@ class VtkReader {
         while (read < arrays) {
           const KeyLine a = next_key();
           if (a.key.empty())
-            fail_line(path_, line_at(pos_), "FIELD: file ends after " + std::to_string(read) + " of " + std::to_string(arrays) + " arrays");
+            fail_line(path_, last_line(), "FIELD: file ends after " + std::to_string(read) + " of " + std::to_string(arrays) + " arrays");
           if (a.key == "metadata") {
             skip_metadata();
             continue;
@@ -159,7 +159,7 @@ class VtkReader {
       }
     }
 
-    if (xyz.empty() && !saw_points_) fail_line(path_, line_at(pos_), "POINTS: missing");
+    if (!saw_points_) fail_line(path_, last_line(), "POINTS: missing");
     const size_t n = xyz.size() / 3;
     if (!normals.empty() && normals.size() != xyz.size())
       fail_line(path_, normals_line_, "NORMALS: " + std::to_string(normals.size() / 3) + " normals for " +
@@ -182,9 +182,18 @@ class VtkReader {
   }
 
  private:
+  // The 1-based line of byte `at`, counting on from the last question (the
+  // reader asks in file order, so the file is counted through once).
   size_t line_at(size_t at) const {
-    return 1 + static_cast<size_t>(std::count(text_.begin(), text_.begin() + static_cast<std::ptrdiff_t>(std::min(at, text_.size())), '\n'));
+    at = std::min(at, text_.size());
+    if (at < counted_to_) counted_to_ = 0, counted_lines_ = 0;
+    const auto from = text_.begin() + static_cast<std::ptrdiff_t>(counted_to_);
+    counted_lines_ += static_cast<size_t>(std::count(from, text_.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+    counted_to_ = at;
+    return 1 + counted_lines_;
   }
+
+  size_t last_line() const { return line_at(text_.size()) - (text_.ends_with('\n') ? 1 : 0); }
 
   void skip_space() {
     while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
@@ -231,7 +240,7 @@ class VtkReader {
   void array_after(const KeyLine& cells, const char* name, uint64_t n) {
     const KeyLine k = next_key();
     if (k.key != lower(name) || k.args.size() != 1)
-      fail_line(path_, k.key.empty() ? line_at(pos_) : k.line, cells.name + ": expected '" + name + " <type>' next");
+      fail_line(path_, k.key.empty() ? last_line() : k.line, cells.name + ": expected '" + name + " <type>' next");
     values(k, n, 1, k.args[0], nullptr);
   }
 
@@ -258,7 +267,7 @@ class VtkReader {
         const size_t b = pos_;
         while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
         if (pos_ == b)
-          fail_line(path_, line_at(b), k.name + ": file ends after " + std::to_string(i) + " of " + std::to_string(n) + " values");
+          fail_line(path_, k.line, k.name + ": file ends after " + std::to_string(i) + " of " + std::to_string(n) + " values");
         const double v = number<double>(text_.substr(b, pos_ - b), path_, line_at(b), k.name);
         if (out != nullptr) out->push_back(v);
       }
@@ -288,6 +297,7 @@ class VtkReader {
   int major_ = 0;
   bool saw_points_ = false;
   size_t normals_line_ = 0;
+  mutable size_t counted_to_ = 0, counted_lines_ = 0;
 };
 
 }  // namespace
