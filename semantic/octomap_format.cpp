@@ -28,6 +28,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <sstream>
 #include <stdexcept>
 
 #include "semantic/cloud_formats.hpp"
@@ -219,10 +220,12 @@ OctoMap parse_octomap(const std::string& path, std::string_view bytes) {
 
 Cloud octomap_cloud(const std::string& path, std::string_view bytes, uint64_t max_points) {
   const OctoMap map = parse_octomap(path, bytes);
-  if (map.occupied_cells > max_points)
-    throw std::runtime_error(path + ": " + std::to_string(map.occupied_cells) + " occupied cells of " +
-                             std::to_string(map.resolution_m) + " m, more than the " + std::to_string(max_points) +
-                             " points a cloud may have");
+  if (map.occupied_cells > max_points) {
+    std::ostringstream m;
+    m << path << ": " << map.occupied_cells << " occupied cells of " << map.resolution_m << " m, more than the "
+      << max_points << " points a cloud may have";
+    throw std::runtime_error(m.str());
+  }
   return occupied_voxels(map);
 }
 
