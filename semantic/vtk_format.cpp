@@ -12,8 +12,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstring>
-#include <optional>
 
 #include "semantic/cloud_formats.hpp"
 
@@ -72,15 +70,15 @@ class VtkReader {
 
     const KeyLine dataset = next_key();
     if (dataset.key != "dataset" || dataset.args.size() != 1)
-      fail_line(path_, dataset.line, "expected 'DATASET <type>'");
+      fail_line(path_, dataset.key.empty() ? last_line() : dataset.line, "expected 'DATASET <type>'");
     const std::string type = lower(dataset.args[0]);
     if (type != "polydata" && type != "unstructured_grid" && type != "structured_grid")
       fail_line(path_, dataset.line, "DATASET: '" + std::string(dataset.args[0]) +
                                          "' has no point list (expected POLYDATA, UNSTRUCTURED_GRID or STRUCTURED_GRID)");
 
     std::vector<double> xyz, normals;
-    std::optional<uint64_t> point_data;  // POINT_DATA's count while in that section
-    uint64_t tuples = 0;                 // the current attribute section's count
+    bool point_data = false;  // in POINT_DATA (NORMALS there are the points')
+    uint64_t tuples = 0;      // the current attribute section's count
     while (true) {
       const KeyLine k = next_key();
       if (k.key.empty()) break;
@@ -107,8 +105,7 @@ class VtkReader {
       } else if (k.key == "point_data" || k.key == "cell_data") {
         expect_args(k, 1);
         tuples = count(0);
-        point_data.reset();
-        if (k.key == "point_data") point_data = tuples;
+        point_data = k.key == "point_data";
       } else if (k.key == "scalars") {
         if (k.args.size() != 2 && k.args.size() != 3) fail_line(path_, k.line, "SCALARS: expected a name, a type and optionally a count");
         const uint64_t components = k.args.size() == 3 ? count(2) : 1;

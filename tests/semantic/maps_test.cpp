@@ -424,6 +424,7 @@ TEST_CASE("VTK reader reads PCL's saveVTKFile and refuses bad files with the lin
     const std::string head = "# vtk DataFile Version 3.0\ntitle\n";
     CHECK_THAT(error_of("t.vtk", "# vtk DataFile\n"), Catch::Contains("t.vtk:1: not a legacy VTK file"));
     CHECK_THAT(error_of("t.vtk", head + "TEXT\n"), Catch::Contains("t.vtk:3: expected ASCII or BINARY"));
+    CHECK_THAT(error_of("t.vtk", head + "ASCII\n"), Catch::Contains("t.vtk:3: expected 'DATASET <type>'"));
     CHECK_THAT(error_of("t.vtk", head + "ASCII\nDATASET STRUCTURED_POINTS\n"),
                Catch::Contains("t.vtk:4: DATASET: 'STRUCTURED_POINTS' has no point list"));
     CHECK_THAT(error_of("t.vtk", head + "ASCII\nDATASET POLYDATA\nPOINTS 2 float\n1 2 3\n4 5\n"),
