@@ -90,7 +90,7 @@ int run_segment(const SegmentOptions& o) {
 void add_segment_command(CLI::App& app) {
   auto opts = std::make_shared<SegmentOptions>();
   CLI::App* sub = app.add_subcommand("segment", "find floor, ceiling, walls, doors, stairs and obstacles in one registered cloud");
-  sub->add_option("CLOUD", opts->cloud, "registered cloud, world frame, z up (.pcd .ply .xyz .3d)")->required();
+  sub->add_option("CLOUD", opts->cloud, "registered cloud, world frame, z up (.pcd .ply .xyz .3d .vtk .bt .ot)")->required();
   sub->add_flag("--json", opts->json, "print the entities and relations as JSON");
   sub->add_flag("--level", opts->level, "level the cloud first (its floor made horizontal)");
   sub->add_option("--out-dir,-o", opts->out_dir,
