@@ -463,13 +463,12 @@ struct LegendItem {
 
 std::vector<LegendItem> legend_items(const SemanticNet& net, const ExportSettings& st) {
   const auto& seg = net.segmentation();
-  std::vector<LegendItem> items = {
+  return {
       {nullptr, st.world_name + "  floor " + num(seg.floor.height_m) + " m  ceiling " +
                     (seg.ceiling.found ? num(seg.ceiling.height_m) + " m" : "-")},
       {map_colour::kFree, "free"},         {map_colour::kUnknown, "unknown"}, {map_colour::kOccupied, "occupied"},
       {map_colour::kWall, "wall"},         {map_colour::kDoor, "door"},       {map_colour::kStairs, "stairs"},
       {map_colour::kObstacle, "obstacle"}};
-  return items;
 }
 
 // A nice round length for the scale bar: about a fifth of the map's width.
@@ -571,10 +570,9 @@ void place_labels(const SemanticNet& net, const cv::Mat1b& drawn, MapLayout& l, 
   }
 }
 
-// Labels, legend and scale bar laid out on the base map.
-void lay_out(const SemanticNet& net, const ExportSettings& st, BaseMap& m) {
+// Labels, legend and scale bar laid out on the base map; the legend's own layout.
+LegendGeometry lay_out(const SemanticNet& net, const std::vector<LegendItem>& items, BaseMap& m) {
   MapLayout& l = m.layout;
-  const auto items = legend_items(net, st);
   const LegendGeometry g = legend_geometry(items, m.text_scale, std::max(80, l.cols - 8));
   l.scale_bar_m = scale_length_m(l.max_m.x() - l.min_m.x());
   const int bar_px = static_cast<int>(std::lround(l.scale_bar_m * l.px_per_m));
@@ -599,19 +597,21 @@ void lay_out(const SemanticNet& net, const ExportSettings& st, BaseMap& m) {
   l.scale_bar_x1 = l.scale_bar_x0 + bar_px;
   l.scale_bar_y = l.legend_y + g.size.height - g.pad - g.line_h / 2;
   place_labels(net, drawn, l, m.text_scale);
+  return g;
 }
 
 }  // namespace
 
 MapLayout map_layout(const SemanticNet& net, const Cloud* cloud, const ExportSettings& st) {
   BaseMap m = draw_base(net, cloud, st, "map");
-  lay_out(net, st, m);
+  lay_out(net, legend_items(net, st), m);
   return m.layout;
 }
 
 void write_map_png(const std::string& path, const SemanticNet& net, const Cloud* cloud, const ExportSettings& st) {
   BaseMap m = draw_base(net, cloud, st, path);
-  lay_out(net, st, m);
+  const auto items = legend_items(net, st);
+  const LegendGeometry g = lay_out(net, items, m);
   const MapLayout& l = m.layout;
   const double scale = m.text_scale;
   const auto text = [&](const std::string& s, cv::Point at, const cv::Scalar& colour) {
@@ -629,8 +629,6 @@ void write_map_png(const std::string& path, const SemanticNet& net, const Cloud*
     text(lab.text, {lab.x + 1, lab.y + 1}, colour);
   }
   // The legend: a white box, the title, the swatches, the scale bar.
-  const auto items = legend_items(net, st);
-  const LegendGeometry g = legend_geometry(items, scale, std::max(80, l.cols - 8));
   const cv::Rect box(l.legend_x, l.legend_y, l.legend_width, l.legend_height);
   cv::rectangle(m.img, box, cv::Scalar(255, 255, 255), cv::FILLED);
   cv::rectangle(m.img, box, cv::Scalar(0, 0, 0), 1);
