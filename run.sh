@@ -17,7 +17,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # can-utils for the SocketCAN tests under a real CAN stack, mbpoll and
 # pymodbus as Modbus peers, hidapi + libusb for HID devices, udev's
 # systemd-udevd for the USB hot-plug test inside the VM, PCL + OpenCV +
-# Ceres for the semantic engine and Open3D as its benchmark peer, jsoncpp for
+# Ceres for the semantic engine and Open3D as its benchmark peer (liboctomap
+# as the OctoMap reader's peer in its test), jsoncpp for
 # the training reports and journal, Chromium to render the HTML report in its
 # test, and to run the instructor console's browser tests), cpp-httplib for
 # the instructor's web server, Node.js + npm to build its pages from the
@@ -33,7 +34,7 @@ packages=(
   qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
   libhidapi-dev libusb-1.0-0-dev udev
-  libpcl-dev libopencv-dev libceres-dev libopen3d-dev
+  libpcl-dev libopencv-dev libceres-dev libopen3d-dev liboctomap-dev
   libjsoncpp-dev chromium
   libssl-dev libcpp-httplib-dev nodejs npm
 )

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -47,6 +48,10 @@ PcdHeader check_pcd(const std::string& path, std::string_view text);
 /// PLY (ascii, binary little/big endian): the vertex element's x y z and,
 /// if all three are there, nx ny nz; other properties and elements skipped.
 Cloud parse_ply(const std::string& path, std::string_view text);
+/// Legacy VTK (`# vtk DataFile Version x.y`, ASCII or BINARY big endian):
+/// the POINTS of a POLYDATA, UNSTRUCTURED_GRID or STRUCTURED_GRID and, if
+/// there, POINT_DATA's NORMALS; cells and every other attribute read past.
+Cloud parse_vtk(const std::string& path, std::string_view text);
 /// "x y z" or "x y z nx ny nz" per line; '#' lines are comments.
 Cloud parse_xyz(const std::string& path, std::string_view text);
 /// 3DTK's uos `.3d`: an optional "W x H" header line, then x y z in cm,
@@ -56,12 +61,6 @@ Cloud parse_3d(const std::string& path, std::string_view text);
 Eigen::Isometry3d parse_3dtk_pose(const std::string& path, std::string_view text);
 /// 3DTK's `.frames`: one column-major 4x4 and a colour code per line, converted to ours.
 std::vector<Eigen::Isometry3d> parse_3dtk_frames(const std::string& path, std::string_view text);
-/// 3DTK's `config.ini` beside its scans: the range limits `min` and `max`
-/// (cm; 0 for max: none). A point at or beyond max is a missing return.
-struct Range3dtk {
-  double min_m = 0.0, max_m = 0.0;
-};
-Range3dtk parse_3dtk_config(const std::string& path, std::string_view text);
 /// The simulator's `.pose` (sim/README.md, "Scan files").
 Eigen::Isometry3d parse_sim_pose(const std::string& path, std::string_view text);
 
@@ -70,13 +69,29 @@ std::string lower_extension(const std::string& path);
 [[noreturn]] void fail_line(const std::string& path, size_t line, const std::string& message);
 [[noreturn]] void fail_byte(const std::string& path, size_t byte, const std::string& message);
 
+// The text readers' shared pieces (also the OctoMap header and VTK readers').
+
 /// The whitespace-separated words of a line.
 std::vector<std::string_view> words(std::string_view line);
-/// `s` as a T, or "path:line: what: not a number: 's'" (double and long long).
-template <typename T>
-T number(std::string_view s, const std::string& path, size_t line, std::string_view what);
 
-/// Text split into lines with their 1-based numbers; '\r' dropped.
+/// from_chars over the whole of `s` (a leading '+' allowed); false if any is left.
+template <typename T>
+bool parse(std::string_view s, T& v) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc{} && p == s.data() + s.size();
+}
+
+/// `s` as a number, else "path:line: what: not a number: 's'".
+template <typename T>
+T number(std::string_view s, const std::string& path, size_t line, std::string_view what) {
+  T v{};
+  if (!parse(s, v)) fail_line(path, line, std::string(what) + ": not a number: '" + std::string(s) + "'");
+  return v;
+}
+
+/// Text split into lines with their 1-based numbers; '\r' dropped. `pos` is
+/// the first byte after the last line returned (where binary data starts).
 struct Lines {
   std::string_view text;
   size_t pos = 0;

@@ -1,9 +1,10 @@
 #pragma once
 
 // Point-cloud files in and out: PCD (ASCII, binary, binary_compressed; read
-// with PCL's reader), PLY (ascii and binary little/big endian), XYZ text, and
-// 3DTK's `.3d` scans with their `.pose` (centimetres, left-handed y up,
-// converted to the engine's metres, right-handed z up). Errors throw
+// with PCL's reader), PLY (ascii and binary little/big endian), XYZ text,
+// legacy VTK, OctoMap's .bt/.ot (the occupied cells' centres), and 3DTK's
+// `.3d` scans with their `.pose` (centimetres, left-handed y up, converted
+// to the engine's metres, right-handed z up). Errors throw
 // std::runtime_error naming the file and the line or byte offset.
 
 #include "semantic/cloud.hpp"
@@ -13,7 +14,8 @@
 
 namespace rise::semantic {
 
-/// Reads a cloud, the format from the extension (.pcd .ply .xyz .3d).
+/// Reads a cloud, the format from the extension (.pcd .ply .xyz .3d .vtk .bt
+/// .ot; an OctoMap gives one point per occupied cell of its resolution).
 Cloud read_cloud(const std::string& path);
 
 /// Parses `contents` as the file `path` would be read (format from its

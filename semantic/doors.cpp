@@ -1,7 +1,9 @@
 // Doors (seed paper, section 3): a gap of door width in a wall is a door
 // when there is wall above it (the "wall above door", a lintel) with free
-// space below, or a door panel standing in it. find_walls_and_doors()
-// (walls.cpp) finds the gaps; this looks into one.
+// space below, or a door panel standing in it. A gap with wall below it up
+// to a sill (a window) is not. find_walls_and_doors() (walls.cpp) finds the
+// gaps and checks that the floor is seen through an open one; this looks
+// into one.
 
 #include <algorithm>
 #include <vector>
@@ -52,6 +54,11 @@ GapReport inspect_gap(const std::vector<std::pair<double, double>>& slab_sz, dou
   }
   const int n = std::max(1, k1 - k0);
   rep.free_below = empty >= 0.9 * n;
+  // Something across the gap between a threshold's height and a door's (a
+  // window's sill, seen from above or from the side): not an open doorway.
+  for (int j = std::max(0, static_cast<int>(s.door_max_sill_m / cell_m)); j < k1; ++j)
+    if (coverage(j) >= 0.6) rep.sill_m = (j + 1) * cell_m;
+  rep.window = rep.sill_m > 0 && covered < 0.8 * n;
   if (covered >= 0.8 * n) {
     rep.panel = true;
     int j = k0;

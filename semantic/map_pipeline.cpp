@@ -1,8 +1,10 @@
 #include "semantic/map_pipeline.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 
 #include "semantic/cloud_io.hpp"
@@ -57,12 +59,20 @@ double write_map_files(const std::string& dir, const MapResult& result, const st
   std::filesystem::create_directories(dir, ec);
   if (ec) throw std::runtime_error(dir + ": cannot create the output directory: " + ec.message());
   const std::filesystem::path d(dir);
-  write_text_file((d / "world.yaml").string(), world_yaml(result.net, settings));
-  write_text_file((d / "world.sdf").string(), sdf_world(result.net, settings));
-  write_text_file((d / "mesh.obj").string(), obj_mesh(result.net, settings));
+  // The robot stood at the scan poses; the floor plan is the map's.
+  ExportSettings st = settings;
+  if (st.known_poses.empty())
+    for (const auto& T : result.T_map_scan) {
+      const Eigen::Vector3d x = T.linear().col(0);
+      st.known_poses.emplace_back(T.translation().x(), T.translation().y(), std::atan2(x.y(), x.x()));
+    }
+  if (!st.floor_plan) st.floor_plan = std::make_shared<OccupancyGrid>(floor_plan_of(result.map, result.net.segmentation(), st));
+  write_text_file((d / "world.yaml").string(), world_yaml(result.net, st));
+  write_text_file((d / "world.sdf").string(), sdf_world(result.net, st));
+  write_text_file((d / "mesh.obj").string(), obj_mesh(result.net, st));
   write_text_file((d / "entities.json").string(), to_json(result.net));
   write_text_file((d / "poses.txt").string(), poses_text(names, result.T_map_scan));
-  write_map_png((d / "map.png").string(), result.net, &result.map, settings);
+  write_map_png((d / "map.png").string(), result.net, &result.map, st);
   write_cloud((d / "map.pcd").string(), result.map);
   return seconds_since(t0);
 }

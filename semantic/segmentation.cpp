@@ -172,7 +172,7 @@ Segmentation segment(const Cloud& cloud, const SegmentationSettings& settings) {
   detail::find_floor_and_ceiling(c, settings, out.floor, out.ceiling);
   detail::find_walls_and_doors(c, settings, out.floor, out.ceiling, out.walls, out.doors);
   detail::find_stairs_and_obstacles(c, settings, out.floor, out.ceiling, out.walls, out.doors, out.stairs,
-                                    out.obstacles);
+                                    out.obstacles, out.oversize_clusters_dropped);
   return out;
 }
 

@@ -32,15 +32,21 @@ struct SegmentationSettings {
   double default_wall_thickness_m = 0.15;  ///< for a wall seen from one side only
   double corner_gap_m = 0.35;          ///< wall ends this close to another wall's face meet it
   double parallel_tolerance_rad = 2.0 * 3.14159265358979 / 180.0;
-  double door_min_width_m = 0.7;
+  double door_min_width_m = 0.6;
   double door_max_width_m = 1.2;
   double door_min_height_m = 1.6;      ///< lintel underside / panel top above the floor
+  double door_max_sill_m = 0.3;        ///< an open gap is clear from this height up (else: a window's sill)
+  int door_min_floor_cells = 3;        ///< 10 cm floor cells seen on each side of an open doorway
   double stairs_min_riser_m = 0.1, stairs_max_riser_m = 0.25;
   double stairs_min_tread_m = 0.2, stairs_max_tread_m = 0.45;
   int stairs_min_steps = 3;
   double obstacle_cell_m = 0.05;       ///< clusters: connected cells of this size
   int obstacle_min_points = 40;
   double obstacle_min_height_m = 0.05;
+  /// Obstacles are bounded things (furniture, clutter): a cluster larger
+  /// than this in any direction is split on a finer grid, and what is
+  /// still larger (structure the wall finder missed) is dropped.
+  double obstacle_max_size_m = 3.0;
 };
 
 struct Floor {
@@ -126,6 +132,8 @@ struct Segmentation {
   std::vector<Door> doors;
   std::vector<Stairs> stairs;
   std::vector<Obstacle> obstacles;
+  /// Clusters larger than obstacle_max_size_m that were dropped, not obstacles.
+  int oversize_clusters_dropped = 0;
 };
 
 /// Finds the entities in `cloud` (world frame, z up, metres; levelled: the

@@ -39,7 +39,8 @@ struct GapReport {
   bool lintel = false;      ///< wall above the door: covered layers down from the wall's top
   bool panel = false;       ///< a door panel: covered layers from 0.3 m to the door's minimum height
   bool free_below = false;  ///< nothing between 0.3 m and the door's minimum height
-  double lintel_bottom_m = 0, panel_top_m = 0;  ///< above the floor
+  bool window = false;      ///< no panel, but something across the gap above door_max_sill_m (a sill)
+  double lintel_bottom_m = 0, panel_top_m = 0, sill_m = 0;  ///< above the floor; sill_m 0: none
 };
 
 /// The points of a wall's slab (along the wall, height above the floor)
@@ -52,10 +53,10 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
                           const Ceiling& ceiling, std::vector<Wall>& walls, std::vector<Door>& doors);
 
 /// Clusters what is left (not floor, ceiling, walls, doors): stairs, and
-/// the rest as obstacles.
+/// the rest as obstacles; `dropped` counts the clusters too large for one.
 void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
                                const Ceiling& ceiling, const std::vector<Wall>& walls,
                                const std::vector<Door>& doors, std::vector<Stairs>& stairs,
-                               std::vector<Obstacle>& obstacles);
+                               std::vector<Obstacle>& obstacles, int& dropped);
 
 }  // namespace rise::semantic::detail

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
 
 #include "semantic/segmentation_internal.hpp"
@@ -189,12 +190,63 @@ Obstacle box_of(const std::vector<Point3>& pts, double floor_z) {
   return o;
 }
 
+bool oversize(const Obstacle& o, const SegmentationSettings& s) {
+  return o.size_m.maxCoeff() > s.obstacle_max_size_m;
+}
+
+// Clusters of `pts`: connected cells of cell_m after a dilation by a
+// `dilate` cells wide disc (scan lines a few cells apart on a far surface
+// are one cluster). Clusters in no particular order.
+std::vector<std::vector<Point3>> connected(const std::vector<Point3>& pts, double cell, int dilate) {
+  if (pts.empty()) return {};
+  Eigen::Vector2d lo = pts[0].xy, hi = pts[0].xy;
+  for (const auto& p : pts) {
+    lo = lo.cwiseMin(p.xy);
+    hi = hi.cwiseMax(p.xy);
+  }
+  check_grid(hi - lo, cell, "what stands on the floor");
+  const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
+  cv::Mat1b image(ny, nx, uchar{0});
+  const auto rc = [&](const Eigen::Vector2d& xy) {
+    return cv::Point(static_cast<int>((xy.x() - lo.x()) / cell), static_cast<int>((xy.y() - lo.y()) / cell));
+  };
+  for (const auto& p : pts) image(rc(p.xy)) = 255;
+  cv::dilate(image, image, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(dilate, dilate)));
+  cv::Mat1i labels;
+  const int n = cv::connectedComponents(image, labels, 8, CV_32S);
+  std::vector<std::vector<Point3>> clusters(static_cast<std::size_t>(n));
+  for (const auto& p : pts) clusters[static_cast<std::size_t>(labels(rc(p.xy)))].push_back(p);
+  clusters.erase(clusters.begin());  // the background
+  return clusters;
+}
+
+// The points outside cells of obstacle_cell_m whose points spread over a
+// wall's height (wall_min_tall_m): walls and pillars, not things.
+std::vector<Point3> without_tall_columns(const std::vector<Point3>& pts, const SegmentationSettings& s) {
+  const double cell = s.obstacle_cell_m;
+  const auto key = [&](const Eigen::Vector2d& xy) {
+    return std::pair<long long, long long>(static_cast<long long>(std::floor(xy.x() / cell)),
+                                           static_cast<long long>(std::floor(xy.y() / cell)));
+  };
+  std::map<std::pair<long long, long long>, std::pair<double, double>> span;
+  for (const auto& p : pts) {
+    auto [it, fresh] = span.try_emplace(key(p.xy), p.z, p.z);
+    if (!fresh) it->second = {std::min(it->second.first, p.z), std::max(it->second.second, p.z)};
+  }
+  std::vector<Point3> out;
+  for (const auto& p : pts) {
+    const auto& [z0, z1] = span.at(key(p.xy));
+    if (z1 - z0 < s.wall_min_tall_m) out.push_back(p);
+  }
+  return out;
+}
+
 }  // namespace
 
 void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
                                const Ceiling& ceiling, const std::vector<Wall>& walls,
                                const std::vector<Door>& doors, std::vector<Stairs>& stairs,
-                               std::vector<Obstacle>& obstacles) {
+                               std::vector<Obstacle>& obstacles, int& dropped) {
   const double z0 = floor.height_m + 0.04;
   const double z1 = ceiling.found ? ceiling.height_m - 0.04 : std::numeric_limits<double>::infinity();
   // Slabs to leave out: each wall and each door gap, widened by the inlier distance.
@@ -232,35 +284,16 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
     }
     if (!in_wall) rest.push_back({xy, p.z() - floor.height_m});
   }
-  if (rest.empty()) return;
-  Eigen::Vector2d lo = rest[0].xy, hi = rest[0].xy;
-  for (const auto& p : rest) {
-    lo = lo.cwiseMin(p.xy);
-    hi = hi.cwiseMax(p.xy);
-  }
-  const double cell = s.obstacle_cell_m;
-  check_grid(hi - lo, cell, "what stands on the floor");
-  const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
-  cv::Mat1b image(ny, nx, uchar{0});
-  const auto rc = [&](const Eigen::Vector2d& xy) {
-    return cv::Point(static_cast<int>((xy.x() - lo.x()) / cell), static_cast<int>((xy.y() - lo.y()) / cell));
-  };
-  for (const auto& p : rest) image(rc(p.xy)) = 255;
-  // Scan lines a few cells apart on a far surface are one cluster.
-  cv::dilate(image, image, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
-  cv::Mat1i labels;
-  const int n = cv::connectedComponents(image, labels, 8, CV_32S);
-  std::vector<std::vector<Point3>> clusters(static_cast<std::size_t>(n));
-  for (const auto& p : rest) clusters[static_cast<std::size_t>(labels(rc(p.xy)))].push_back(p);
+  const std::vector<std::vector<Point3>> clusters = connected(rest, s.obstacle_cell_m, 5);
   std::vector<std::size_t> others;
-  for (int k = 1; k < n; ++k) {
-    auto& pts = clusters[static_cast<std::size_t>(k)];
+  for (std::size_t k = 0; k < clusters.size(); ++k) {
+    const auto& pts = clusters[k];
     if (static_cast<int>(pts.size()) < s.obstacle_min_points) continue;
     if (auto st = fit_stairs(pts, s)) {
       stairs.push_back(*st);
       continue;
     }
-    others.push_back(static_cast<std::size_t>(k));
+    others.push_back(k);
   }
   for (std::size_t k : others) {
     const auto& pts = clusters[k];
@@ -288,9 +321,25 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
       break;
     }
     if (landing) continue;
-    Obstacle o = box_of(pts, floor.height_m);
-    if (o.size_m.z() < s.obstacle_min_height_m) continue;
-    obstacles.push_back(o);
+    const auto keep = [&](const Obstacle& o) {
+      if (o.size_m.z() >= s.obstacle_min_height_m) obstacles.push_back(o);
+    };
+    const Obstacle o = box_of(pts, floor.height_m);
+    if (!oversize(o, s)) {
+      keep(o);
+      continue;
+    }
+    // Too large for a thing: structure the wall finder missed (columns of
+    // points over a wall's height) or several things touching. Without the
+    // tall columns, on a finer grid, it falls apart into the things.
+    for (const auto& part : connected(without_tall_columns(pts, s), s.obstacle_cell_m, 3)) {
+      if (static_cast<int>(part.size()) < s.obstacle_min_points) continue;
+      const Obstacle b = box_of(part, floor.height_m);
+      if (oversize(b, s))
+        ++dropped;
+      else
+        keep(b);
+    }
   }
 }
 

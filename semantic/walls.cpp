@@ -224,6 +224,24 @@ std::pair<int, int> floor_beside(const Face& f, const std::vector<Eigen::Vector2
   return {pos, neg};
 }
 
+// Whether the floor is seen on both sides of the wall (centre line `line`,
+// faces `half_m` from it) through the gap g0..g1: in 10 cm cells up to 1 m
+// from each face.
+bool floor_through(const Line2& line, double half_m, double g0, double g1, const std::vector<Eigen::Vector2d>& floor_xy,
+                   const SegmentationSettings& s) {
+  std::vector<std::pair<long long, long long>> cells[2];
+  for (const auto& p : floor_xy) {
+    const double a = line.along(p), o = line.offset(p);
+    if (a < g0 + 0.05 || a > g1 - 0.05 || std::abs(o) < half_m + 0.05 || std::abs(o) > half_m + 1.0) continue;
+    cells[o > 0].push_back({static_cast<long long>(std::floor(a / 0.1)), static_cast<long long>(std::floor(o / 0.1))});
+  }
+  for (auto& c : cells) {
+    std::sort(c.begin(), c.end());
+    if (std::unique(c.begin(), c.end()) - c.begin() < s.door_min_floor_cells) return false;
+  }
+  return true;
+}
+
 // Whether the stretch `runs` of `line` lies within the wall's slab and extent.
 bool contains(const WallLine& w, const Line2& line, const std::vector<Run>& runs, double inlier_m) {
   const double half = w.thickness_m / 2 + 2 * inlier_m;  // the noise tails of its faces too
@@ -425,7 +443,10 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
         if (g1 - g0 >= s.door_min_width_m && g1 - g0 <= s.door_max_width_m) rep = inspect_gap(slab, g0, g1, top_m, cell_m, s);
       }
       const double gap = g1 - g0;
-      const bool door = (rep.lintel && (rep.panel || rep.free_below)) || (rep.panel && !rep.lintel);
+      // An open doorway: the floor is seen through it, on both sides (a
+      // gap in a face shadowed by something in front of it has none beyond).
+      const bool open = rep.free_below && !rep.panel && floor_through(w.line, half, g0, g1, floor_xy, s);
+      const bool door = !rep.window && ((rep.lintel && (rep.panel || open)) || (rep.panel && !rep.lintel));
       if (door) {
         Door d;
         const Eigen::Vector2d c = w.line.point + w.line.direction * ((g0 + g1) / 2);

@@ -4,10 +4,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -39,15 +42,6 @@ Panel panel_of(const Door& d) {
   const Eigen::Vector2d dir(std::cos(d.yaw_rad), std::sin(d.yaw_rad));
   const double width = d.wall < 0 ? d.width_m + d.wall_thickness_m : d.width_m;
   return {d.center_m - dir * width / 2, width, std::max(0.5, d.height_m - kDoorGapM), d.yaw_rad};
-}
-
-// Distance from p to a box's footprint (0 inside).
-double distance_to(const ModelBox& b, const Eigen::Vector2d& p) {
-  const double c = std::cos(b.yaw_rad), s = std::sin(b.yaw_rad);
-  const Eigen::Vector2d d = p - b.center_m.head<2>();
-  const Eigen::Vector2d local(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
-  const Eigen::Vector2d q = local.cwiseAbs() - b.size_m.head<2>() / 2;
-  return q.cwiseMax(0.0).norm();
 }
 
 std::array<Eigen::Vector3d, 8> corners(const ModelBox& b) {
@@ -119,40 +113,160 @@ std::vector<ModelBox> model_boxes(const SemanticNet& net, const ExportSettings& 
   return out;
 }
 
+namespace {
+
+// The solids a robot's footprint runs into: model boxes reaching below its
+// height (not a lintel over a doorway), other than floor and ceiling.
+std::vector<ModelBox> footprint_solids(const SemanticNet& net, const ExportSettings& st) {
+  const double top = net.segmentation().floor.height_m + st.robot_height_m;
+  std::vector<ModelBox> out;
+  for (auto& b : model_boxes(net, st))
+    if (b.kind != "floor" && b.kind != "ceiling" && b.center_m.z() - b.size_m.z() / 2 < top) out.push_back(b);
+  return out;
+}
+
+// Sets the cells of `mask` (one pixel per cell of `grid`) whose centres lie
+// in a solid's footprint to 0.
+void clear_solids(cv::Mat1b& mask, const OccupancyGrid& grid, const std::vector<ModelBox>& solids) {
+  constexpr int kShift = 4;  // sub-cell corners
+  for (const auto& b : solids) {
+    const auto c = corners(b);
+    std::vector<cv::Point> poly;
+    for (const int i : {0, 1, 3, 2}) {
+      const Eigen::Vector2d q = (c[static_cast<std::size_t>(i)].head<2>() - grid.origin_m) / grid.resolution_m -
+                                Eigen::Vector2d(0.5, 0.5);
+      poly.emplace_back(static_cast<int>(std::lround(q.x() * (1 << kShift))),
+                        static_cast<int>(std::lround(q.y() * (1 << kShift))));
+    }
+    cv::fillConvexPoly(mask, poly, cv::Scalar(0), cv::LINE_8, kShift);
+  }
+}
+
+// Metres from each cell of `mask` (255: passable) to the nearest cell that
+// is not, less half a cell: the free radius around the cell's centre.
+cv::Mat1f clearance_m(const cv::Mat1b& mask, double cell_m) {
+  cv::Mat1f d;
+  cv::distanceTransform(mask, d, cv::DIST_L2, cv::DIST_MASK_PRECISE);
+  d.convertTo(d, CV_32F, cell_m, -0.5 * cell_m);
+  return d;
+}
+
+}  // namespace
+
+OccupancyGrid floor_plan_of(const Cloud& cloud, const Segmentation& seg, const ExportSettings& st) {
+  constexpr double kFloorBandM = 0.03, kAboveFloorM = 0.05;
+  const double z0 = seg.floor.height_m;
+  Eigen::Vector2d lo = seg.floor.min_m, hi = seg.floor.max_m;
+  for (const auto& p : cloud.points)
+    if (p.allFinite() && p.z() > z0 - kFloorBandM && p.z() < z0 + st.robot_height_m) {
+      lo = lo.cwiseMin(p.head<2>().cast<double>());
+      hi = hi.cwiseMax(p.head<2>().cast<double>());
+    }
+  OccupancyGrid g;
+  g.resolution_m = st.floor_plan_cell_m;
+  g.origin_m = lo;
+  const Eigen::Vector2d cells = (hi - lo) / g.resolution_m;
+  if (!(cells.x() * cells.y() < 16e6))
+    throw std::runtime_error("floor plan: " + num(hi.x() - lo.x()) + " x " + num(hi.y() - lo.y()) +
+                             " m is more than 16 million cells of " + num(g.resolution_m) + " m");
+  g.width = static_cast<int>(cells.x()) + 1;
+  g.height = static_cast<int>(cells.y()) + 1;
+  cv::Mat1b floor(g.height, g.width, uchar{0});
+  cv::Mat1f above(g.height, g.width, 0.0f);
+  for (const auto& p : cloud.points) {
+    if (!p.allFinite()) continue;
+    const Eigen::Vector2i c = g.cell_of(p.head<2>().cast<double>());
+    if (!g.contains(c.x(), c.y())) continue;
+    const double h = p.z() - z0;
+    if (std::abs(h) < kFloorBandM) floor(c.y(), c.x()) = 255;
+    else if (h > kAboveFloorM && h < st.robot_height_m) above(c.y(), c.x()) += 1.0f;
+  }
+  // A far floor is seen on scan lines some cells apart.
+  cv::morphologyEx(floor, floor, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+  // Occupied: a point with another in the cells around it (a lone one is noise).
+  cv::Mat1f around;
+  cv::boxFilter(above, around, -1, cv::Size(3, 3), cv::Point(-1, -1), false);
+  cv::Mat1b occupied;
+  cv::bitwise_and(cv::Mat(above > 0.0f), cv::Mat(around >= 2.0f), occupied);
+  g.cells.assign(static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height), CellState::Unknown);
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c)
+      g.at(c, r) = occupied(r, c) ? CellState::Occupied : floor(r, c) ? CellState::Free : CellState::Unknown;
+  return g;
+}
+
 Eigen::Vector3d robot_start(const SemanticNet& net, const ExportSettings& st) {
   if (st.robot_start) return *st.robot_start;
   const auto& seg = net.segmentation();
-  std::vector<ModelBox> solids;
-  for (auto& b : model_boxes(net, st))
-    if (b.kind != "floor" && b.kind != "ceiling") solids.push_back(b);
-  const auto clearance = [&](const Eigen::Vector2d& p) {
-    double c = std::numeric_limits<double>::infinity();
-    for (const auto& b : solids) c = std::min(c, distance_to(b, p));
-    return c;
-  };
-  const auto on_floor = [&](const Eigen::Vector2d& p) {
-    return p.x() > seg.floor.min_m.x() && p.x() < seg.floor.max_m.x() && p.y() > seg.floor.min_m.y() &&
-           p.y() < seg.floor.max_m.y();
-  };
-  for (const auto& d : seg.doors) {
-    const Eigen::Vector2d along(std::cos(d.yaw_rad), std::sin(d.yaw_rad)), n(-along.y(), along.x());
-    for (const double r : {1.0, 1.5, 2.0, 2.5})
-      for (const double side : {1.0, -1.0}) {
-        const Eigen::Vector2d p = d.center_m + n * side * r;
-        if (!on_floor(p) || clearance(p) < st.robot_clearance_m) continue;
-        const Eigen::Vector2d to_door = d.center_m - p;
-        return {p.x(), p.y(), std::atan2(to_door.y(), to_door.x())};
-      }
+  const double need = st.robot_half_width_m + st.robot_margin_m;
+  OccupancyGrid fallback;
+  if (!st.floor_plan) {
+    // No floor plan: the floor's extent is free.
+    fallback.resolution_m = st.floor_plan_cell_m;
+    fallback.origin_m = seg.floor.min_m;
+    fallback.width = static_cast<int>((seg.floor.max_m.x() - seg.floor.min_m.x()) / fallback.resolution_m) + 1;
+    fallback.height = static_cast<int>((seg.floor.max_m.y() - seg.floor.min_m.y()) / fallback.resolution_m) + 1;
+    fallback.cells.assign(static_cast<std::size_t>(fallback.width) * static_cast<std::size_t>(fallback.height),
+                          CellState::Free);
   }
-  // No door (or none with room in front): the clearest point of a 10 cm grid.
-  Eigen::Vector2d best = (seg.floor.min_m + seg.floor.max_m) / 2;
-  double best_c = -1;
-  for (double x = seg.floor.min_m.x(); x <= seg.floor.max_m.x(); x += 0.1)
-    for (double y = seg.floor.min_m.y(); y <= seg.floor.max_m.y(); y += 0.1) {
-      const double c = clearance({x, y});
-      if (c > best_c) best_c = c, best = {x, y};
+  const OccupancyGrid& grid = st.floor_plan ? *st.floor_plan : fallback;
+  const auto solids = footprint_solids(net, st);
+  // Free: seen free, off the solids; with a border of unknown around the grid.
+  cv::Mat1b free(grid.height + 2, grid.width + 2, uchar{0}), unoccupied(grid.height, grid.width, uchar{255});
+  for (int r = 0; r < grid.height; ++r)
+    for (int c = 0; c < grid.width; ++c) {
+      free(r + 1, c + 1) = grid.at(c, r) == CellState::Free ? 255 : 0;
+      unoccupied(r, c) = grid.at(c, r) == CellState::Occupied ? 0 : 255;
     }
-  return {best.x(), best.y(), 0.0};
+  cv::Mat1b inner = free(cv::Rect(1, 1, grid.width, grid.height));
+  clear_solids(inner, grid, solids);
+  clear_solids(unoccupied, grid, solids);
+  // Where the robot stood: the floor under it is out of the scanner's
+  // sight, so only what is occupied counts there.
+  if (!st.known_poses.empty()) {
+    const cv::Mat1f room = clearance_m(unoccupied, grid.resolution_m);
+    for (const auto& pose : st.known_poses) {
+      const Eigen::Vector2i c = grid.cell_of(pose.head<2>());
+      if (grid.contains(c.x(), c.y()) && room(c.y(), c.x()) >= need) return pose;
+    }
+  }
+  // The largest region with room for the robot, at its clearest point.
+  const cv::Mat1f room = clearance_m(free, grid.resolution_m)(cv::Rect(1, 1, grid.width, grid.height));
+  cv::Mat1b fits;
+  cv::compare(room, need, fits, cv::CMP_GE);
+  cv::Mat1i labels, stats;
+  cv::Mat centroids;
+  const int n = cv::connectedComponentsWithStats(fits, labels, stats, centroids, 8, CV_32S);
+  int largest = 0;
+  for (int k = 1; k < n; ++k)
+    if (largest == 0 || stats(k, cv::CC_STAT_AREA) > stats(largest, cv::CC_STAT_AREA)) largest = k;
+  if (largest == 0) {
+    double most = 0;
+    cv::Point at(0, 0);
+    cv::minMaxLoc(room, nullptr, &most, nullptr, &at);
+    const Eigen::Vector2d p = grid.center(at.x, at.y);
+    char msg[384];
+    std::snprintf(msg, sizeof msg,
+                  "robot start: no free place on the floor plan with %.2f m clearance (robot_half_width_m %.2f + "
+                  "robot_margin_m %.2f) from walls, doors, stairs, obstacles and unknown space%s; the most is "
+                  "%.2f m at (%.2f, %.2f)",
+                  need, st.robot_half_width_m, st.robot_margin_m, st.known_poses.empty() ? "" : ", nor at any scan pose",
+                  std::max(0.0, most), p.x(), p.y());
+    throw NoRobotStart(msg);
+  }
+  cv::Point best(-1, -1);
+  for (int r = 0; r < grid.height; ++r)
+    for (int c = 0; c < grid.width; ++c)
+      if (labels(r, c) == largest && (best.x < 0 || room(r, c) > room(best.y, best.x))) best = {c, r};
+  const Eigen::Vector2d p = grid.center(best.x, best.y);
+  // Facing the nearest door.
+  double yaw = 0.0, nearest = std::numeric_limits<double>::infinity();
+  for (const auto& d : seg.doors)
+    if ((d.center_m - p).norm() < nearest) {
+      nearest = (d.center_m - p).norm();
+      yaw = std::atan2(d.center_m.y() - p.y(), d.center_m.x() - p.x());
+    }
+  return {p.x(), p.y(), yaw};
 }
 
 std::string world_yaml(const SemanticNet& net, const ExportSettings& st) {
@@ -266,78 +380,273 @@ std::string obj_mesh(const SemanticNet& net, const ExportSettings& st) {
   return o.str();
 }
 
-void write_map_png(const std::string& path, const SemanticNet& net, const Cloud* cloud, const ExportSettings& st) {
+namespace {
+
+cv::Scalar bgr(const unsigned char (&c)[3]) { return cv::Scalar(c[0], c[1], c[2]); }
+cv::Vec3b vec(const unsigned char (&c)[3]) { return cv::Vec3b(c[0], c[1], c[2]); }
+
+// The map without its labels and legend, and where things are on it.
+struct BaseMap {
+  cv::Mat3b img;
+  MapLayout layout;
+  double text_scale = 0.5;
+};
+
+BaseMap draw_base(const SemanticNet& net, const Cloud* cloud, const ExportSettings& st, const std::string& what) {
   const auto& seg = net.segmentation();
   const auto boxes = model_boxes(net, st);
+  BaseMap m;
+  MapLayout& l = m.layout;
   Eigen::Vector2d lo = seg.floor.min_m, hi = seg.floor.max_m;
   for (const auto& b : boxes)
     for (const auto& c : corners(b)) {
       lo = lo.cwiseMin(c.head<2>());
       hi = hi.cwiseMax(c.head<2>());
     }
-  lo -= Eigen::Vector2d(0.5, 0.5);
-  hi += Eigen::Vector2d(0.5, 0.5);
-  const double k = st.map_px_per_m;
-  const int cols = static_cast<int>((hi.x() - lo.x()) * k) + 1, rows = static_cast<int>((hi.y() - lo.y()) * k) + 1;
-  if (cols > 20000 || rows > 20000) throw std::runtime_error(path + ": map too large (" + std::to_string(cols) + " x " + std::to_string(rows) + " px)");
-  cv::Mat3b img(rows, cols, cv::Vec3b(255, 255, 255));
-  const auto px = [&](const Eigen::Vector2d& p) {
-    return cv::Point(static_cast<int>((p.x() - lo.x()) * k), static_cast<int>((hi.y() - p.y()) * k));
-  };
-  if (cloud) {
-    const double z0 = seg.floor.height_m + 0.05;
-    const double z1 = seg.ceiling.found ? seg.ceiling.height_m - 0.05 : std::numeric_limits<double>::infinity();
-    for (const auto& p : cloud->points) {
-      const cv::Point q = px(p.head<2>().cast<double>());
-      if (q.x < 0 || q.y < 0 || q.x >= cols || q.y >= rows) continue;
-      if (p.z() < seg.floor.height_m + 0.03) {
-        if (img(q) == cv::Vec3b(255, 255, 255)) img(q) = cv::Vec3b(235, 235, 235);  // seen floor
-      } else if (p.z() > z0 && p.z() < z1) {
-        img(q) = cv::Vec3b(160, 160, 160);  // occupied
+  l.min_m = lo - Eigen::Vector2d(0.5, 0.5);
+  l.max_m = hi + Eigen::Vector2d(0.5, 0.5);
+  const double k = l.px_per_m = st.map_px_per_m;
+  l.cols = static_cast<int>((l.max_m.x() - l.min_m.x()) * k) + 1;
+  l.rows = static_cast<int>((l.max_m.y() - l.min_m.y()) * k) + 1;
+  if (l.cols > 20000 || l.rows > 20000)
+    throw std::runtime_error(what + ": map too large (" + std::to_string(l.cols) + " x " + std::to_string(l.rows) + " px)");
+  m.text_scale = std::clamp(k / 100.0, 0.35, 1.0);
+  std::shared_ptr<const OccupancyGrid> plan = st.floor_plan;
+  if (!plan && cloud) plan = std::make_shared<OccupancyGrid>(floor_plan_of(*cloud, seg, st));
+  m.img = cv::Mat3b(l.rows, l.cols, vec(plan ? map_colour::kUnknown : map_colour::kFree));
+  if (plan)
+    for (int r = 0; r < l.rows; ++r)
+      for (int c = 0; c < l.cols; ++c) {
+        const Eigen::Vector2i cell = plan->cell_of({l.min_m.x() + (c + 0.5) / k, l.max_m.y() - (r + 0.5) / k});
+        if (!plan->contains(cell.x(), cell.y())) continue;
+        const CellState v = plan->at(cell.x(), cell.y());
+        if (v != CellState::Unknown) m.img(r, c) = vec(v == CellState::Free ? map_colour::kFree : map_colour::kOccupied);
       }
-    }
-  }
+  const auto px = [&](const Eigen::Vector2d& p) {
+    return cv::Point(static_cast<int>((p.x() - l.min_m.x()) * k), static_cast<int>((l.max_m.y() - p.y()) * k));
+  };
   const auto fill = [&](const ModelBox& b, const cv::Scalar& colour) {
     const auto c = corners(b);
     std::vector<cv::Point> poly = {px(c[0].head<2>()), px(c[1].head<2>()), px(c[3].head<2>()), px(c[2].head<2>())};
-    cv::fillConvexPoly(img, poly, colour, cv::LINE_AA);
+    cv::fillConvexPoly(m.img, poly, colour, cv::LINE_8);
     return poly;
   };
   for (const auto& b : boxes) {
     if (b.kind == "stairs") {
-      const auto poly = fill(b, cv::Scalar(230, 160, 90));  // BGR: blue
-      cv::polylines(img, poly, true, cv::Scalar(140, 60, 0), 1, cv::LINE_AA);
+      const auto poly = fill(b, bgr(map_colour::kStairs));
+      cv::polylines(m.img, poly, true, cv::Scalar(140, 60, 0), 1, cv::LINE_8);
     } else if (b.kind == "obstacle") {
-      fill(b, cv::Scalar(60, 60, 220));
+      fill(b, bgr(map_colour::kObstacle));
     }
   }
   for (const auto& b : boxes)
-    if (b.kind == "wall") fill(b, cv::Scalar(30, 30, 30));
+    if (b.kind == "wall") fill(b, bgr(map_colour::kWall));
   for (const auto& d : seg.doors) {
     const Eigen::Vector2d dir(std::cos(d.yaw_rad), std::sin(d.yaw_rad));
-    cv::line(img, px(d.center_m - dir * d.width_m / 2), px(d.center_m + dir * d.width_m / 2), cv::Scalar(40, 170, 40),
-             std::max(2, static_cast<int>(0.06 * k)), cv::LINE_AA);
+    cv::line(m.img, px(d.center_m - dir * d.width_m / 2), px(d.center_m + dir * d.width_m / 2), bgr(map_colour::kDoor),
+             std::max(2, static_cast<int>(0.06 * k)), cv::LINE_8);
   }
-  const double scale = std::clamp(k / 100.0, 0.35, 1.0);
-  for (const auto& e : net.entities()) {
-    if (e.kind == EntityKind::Floor || e.kind == EntityKind::Ceiling || e.kind == EntityKind::Step) continue;
-    const cv::Scalar colour = e.kind == EntityKind::Door ? cv::Scalar(0, 120, 0)
-                              : e.kind == EntityKind::Stairs ? cv::Scalar(140, 60, 0)
-                              : e.kind == EntityKind::Obstacle ? cv::Scalar(0, 0, 180)
-                                                              : cv::Scalar(90, 90, 90);
+  return m;
+}
+
+// "door_3" → "d3", "wall_a_step_1" → "w1".
+std::string abbreviation(const std::string& name) {
+  std::size_t digits = name.size();
+  while (digits > 0 && std::isdigit(static_cast<unsigned char>(name[digits - 1]))) --digits;
+  return name.empty() ? name : name.substr(0, 1) + name.substr(digits);
+}
+
+struct LegendItem {
+  const unsigned char* colour;  // none: text only
+  std::string text;
+};
+
+std::vector<LegendItem> legend_items(const SemanticNet& net, const ExportSettings& st) {
+  const auto& seg = net.segmentation();
+  return {
+      {nullptr, st.world_name + "  floor " + num(seg.floor.height_m) + " m  ceiling " +
+                    (seg.ceiling.found ? num(seg.ceiling.height_m) + " m" : "-")},
+      {map_colour::kFree, "free"},         {map_colour::kUnknown, "unknown"}, {map_colour::kOccupied, "occupied"},
+      {map_colour::kWall, "wall"},         {map_colour::kDoor, "door"},       {map_colour::kStairs, "stairs"},
+      {map_colour::kObstacle, "obstacle"}};
+}
+
+// A nice round length for the scale bar: about a fifth of the map's width.
+double scale_length_m(double width_m) {
+  double best = 0.1;
+  for (const double v : {0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0})
+    if (v <= width_m / 5) best = v;
+  return best;
+}
+
+struct LegendGeometry {
+  int line_h = 0, swatch = 0, pad = 0;
+  std::vector<cv::Point> at;  // each item's top-left, relative to the legend's box
+  cv::Size size;
+};
+
+LegendGeometry legend_geometry(const std::vector<LegendItem>& items, double scale, int max_width) {
+  LegendGeometry g;
+  int baseline = 0;
+  const cv::Size m = cv::getTextSize("Mg", cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+  g.line_h = m.height + baseline + 4;
+  g.swatch = m.height + 2;
+  g.pad = 4;
+  int x = g.pad, y = g.pad, width = 0;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const int w = cv::getTextSize(items[i].text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline).width +
+                  (items[i].colour ? g.swatch + 4 : 0);
+    // The title on a line of its own; the swatches wrap.
+    if (x > g.pad && (i == 1 || x + w > max_width)) {
+      x = g.pad;
+      y += g.line_h;
+    }
+    g.at.emplace_back(x, y);
+    width = std::max(width, x + w + g.pad);
+    x += w + 12;
+  }
+  g.size = {width, y + 2 * g.line_h + g.pad};  // and the scale bar's line
+  return g;
+}
+
+// Drawn on: neither free nor unknown.
+cv::Mat1b drawn_mask(const cv::Mat3b& img) {
+  cv::Mat1b drawn(img.rows, img.cols, uchar{0});
+  for (int r = 0; r < img.rows; ++r)
+    for (int c = 0; c < img.cols; ++c)
+      drawn(r, c) = img(r, c) != vec(map_colour::kFree) && img(r, c) != vec(map_colour::kUnknown);
+  return drawn;
+}
+
+void place_labels(const SemanticNet& net, const cv::Mat1b& drawn, MapLayout& l, double scale) {
+  cv::Mat1i sum;
+  cv::integral(drawn, sum, CV_32S);
+  const auto cover = [&](const cv::Rect& b) {
+    return sum(b.y + b.height, b.x + b.width) - sum(b.y, b.x + b.width) - sum(b.y + b.height, b.x) + sum(b.y, b.x);
+  };
+  std::vector<cv::Rect> taken = {cv::Rect(l.legend_x, l.legend_y, l.legend_width, l.legend_height)};
+  const cv::Rect image(0, 0, drawn.cols, drawn.rows);
+  // Doors and stairs first, then obstacles, then walls.
+  const auto rank = [](EntityKind k) {
+    return k == EntityKind::Door ? 0 : k == EntityKind::Stairs ? 1 : k == EntityKind::Obstacle ? 2 : 3;
+  };
+  std::vector<const Entity*> order;
+  for (const auto& e : net.entities())
+    if (e.kind == EntityKind::Wall || e.kind == EntityKind::Door || e.kind == EntityKind::Stairs ||
+        e.kind == EntityKind::Obstacle)
+      order.push_back(&e);
+  std::stable_sort(order.begin(), order.end(), [&](const Entity* a, const Entity* b) { return rank(a->kind) < rank(b->kind); });
+  for (const Entity* e : order) {
+    const cv::Point a(static_cast<int>((e->position_m.x() - l.min_m.x()) * l.px_per_m),
+                      static_cast<int>((l.max_m.y() - e->position_m.y()) * l.px_per_m));
+    std::optional<MapLabel> best;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (const std::string& text : {e->name, abbreviation(e->name)}) {
+      int baseline = 0;
+      const cv::Size t = cv::getTextSize(text, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
+      const int w = t.width + 2, h = t.height + baseline + 2;
+      // Around the entity, near first: right, left, above, below, the corners; then farther.
+      for (const int d : {4, 4 + h, 4 + 3 * h}) {
+        const cv::Point offsets[] = {{d, -h / 2},      {-d - w, -h / 2}, {-w / 2, -d - h}, {-w / 2, d},
+                                     {d, -d - h},      {-d - w, -d - h}, {d, d},           {-d - w, d}};
+        for (const auto& o : offsets) {
+          const cv::Rect box(a + o, cv::Size(w, h));
+          if ((box & image) != box) continue;
+          bool clear = true;
+          for (const auto& r : taken) clear = clear && (box & r).empty();
+          if (!clear) continue;
+          // What it hides, the distance from its entity, and abbreviating, all cost.
+          const double cost = static_cast<double>(cover(box)) / (w * h) + 0.02 * d / h + (text == e->name ? 0.0 : 0.3);
+          if (cost < best_cost) {
+            best_cost = cost;
+            best = MapLabel{e->id, text, box.x, box.y, w, h};
+          }
+        }
+      }
+    }
+    if (!best) continue;
+    taken.emplace_back(best->x, best->y, best->width, best->height);
+    l.labels.push_back(*best);
+  }
+}
+
+// Labels, legend and scale bar laid out on the base map; the legend's own layout.
+LegendGeometry lay_out(const SemanticNet& net, const std::vector<LegendItem>& items, BaseMap& m) {
+  MapLayout& l = m.layout;
+  const LegendGeometry g = legend_geometry(items, m.text_scale, std::max(80, l.cols - 8));
+  l.scale_bar_m = scale_length_m(l.max_m.x() - l.min_m.x());
+  const int bar_px = static_cast<int>(std::lround(l.scale_bar_m * l.px_per_m));
+  int baseline = 0;
+  const int bar_w = bar_px + 6 + cv::getTextSize(num(l.scale_bar_m) + " m", cv::FONT_HERSHEY_SIMPLEX, m.text_scale, 1, &baseline).width;
+  l.legend_width = std::min(std::max(g.size.width, 2 * g.pad + bar_w), l.cols);
+  l.legend_height = std::min(g.size.height, l.rows);
+  // The corner with the least drawn on it.
+  const cv::Mat1b drawn = drawn_mask(m.img);
+  int best = -1;
+  for (const auto& [x, y] : {std::pair{2, l.rows - l.legend_height - 2}, std::pair{l.cols - l.legend_width - 2, l.rows - l.legend_height - 2},
+                             std::pair{2, 2}, std::pair{l.cols - l.legend_width - 2, 2}}) {
+    const cv::Rect r = cv::Rect(x, y, l.legend_width, l.legend_height) & cv::Rect(0, 0, l.cols, l.rows);
+    const int busy = cv::countNonZero(drawn(r));
+    if (best < 0 || busy < best) {
+      best = busy;
+      l.legend_x = r.x;
+      l.legend_y = r.y;
+    }
+  }
+  l.scale_bar_x0 = l.legend_x + g.pad;
+  l.scale_bar_x1 = l.scale_bar_x0 + bar_px;
+  l.scale_bar_y = l.legend_y + g.size.height - g.pad - g.line_h / 2;
+  place_labels(net, drawn, l, m.text_scale);
+  return g;
+}
+
+}  // namespace
+
+MapLayout map_layout(const SemanticNet& net, const Cloud* cloud, const ExportSettings& st) {
+  BaseMap m = draw_base(net, cloud, st, "map");
+  lay_out(net, legend_items(net, st), m);
+  return m.layout;
+}
+
+void write_map_png(const std::string& path, const SemanticNet& net, const Cloud* cloud, const ExportSettings& st) {
+  BaseMap m = draw_base(net, cloud, st, path);
+  const auto items = legend_items(net, st);
+  const LegendGeometry g = lay_out(net, items, m);
+  const MapLayout& l = m.layout;
+  const double scale = m.text_scale;
+  const auto text = [&](const std::string& s, cv::Point at, const cv::Scalar& colour) {
     int baseline = 0;
-    const cv::Size text = cv::getTextSize(e.name, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline);
-    cv::Point at = px(e.position_m.head<2>());
-    at.x = std::clamp(at.x + 4, 2, std::max(2, cols - text.width - 2));
-    at.y = std::clamp(at.y - 4, text.height + 2, std::max(text.height + 2, rows - 30));
-    cv::putText(img, e.name, at, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
+    at.y += cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, 1, &baseline).height;
+    cv::putText(m.img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, colour, 1, cv::LINE_AA);
+  };
+  for (const auto& lab : l.labels) {
+    const EntityKind kind = net.entity(lab.entity).kind;
+    const cv::Scalar colour = kind == EntityKind::Door ? cv::Scalar(0, 110, 0)
+                              : kind == EntityKind::Stairs ? cv::Scalar(140, 60, 0)
+                              : kind == EntityKind::Obstacle ? cv::Scalar(0, 40, 170)
+                                                             : cv::Scalar(0, 0, 0);
+    cv::rectangle(m.img, cv::Rect(lab.x, lab.y, lab.width, lab.height), cv::Scalar(255, 255, 255), cv::FILLED);
+    text(lab.text, {lab.x + 1, lab.y + 1}, colour);
   }
-  char legend[96];
-  std::snprintf(legend, sizeof legend, "%s  1 m = %.0f px  floor %.2f m  ceiling %s", st.world_name.c_str(), k,
-                seg.floor.height_m, seg.ceiling.found ? (num(seg.ceiling.height_m) + " m").c_str() : "-");
-  cv::putText(img, legend, cv::Point(5, rows - 6), cv::FONT_HERSHEY_SIMPLEX, scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  cv::line(img, cv::Point(5, rows - 24), cv::Point(5 + static_cast<int>(k), rows - 24), cv::Scalar(0, 0, 0), 2);
-  if (!cv::imwrite(path, img)) throw std::runtime_error(path + ": cannot write the PNG map");
+  // The legend: a white box, the title, the swatches, the scale bar.
+  const cv::Rect box(l.legend_x, l.legend_y, l.legend_width, l.legend_height);
+  cv::rectangle(m.img, box, cv::Scalar(255, 255, 255), cv::FILLED);
+  cv::rectangle(m.img, box, cv::Scalar(0, 0, 0), 1);
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    cv::Point at(l.legend_x + g.at[i].x, l.legend_y + g.at[i].y);
+    if (items[i].colour) {
+      const cv::Rect sw(at, cv::Size(g.swatch, g.swatch));
+      cv::rectangle(m.img, sw, cv::Scalar(items[i].colour[0], items[i].colour[1], items[i].colour[2]), cv::FILLED);
+      cv::rectangle(m.img, sw, cv::Scalar(0, 0, 0), 1);
+      at.x += g.swatch + 4;
+    }
+    text(items[i].text, at, cv::Scalar(0, 0, 0));
+  }
+  cv::line(m.img, {l.scale_bar_x0, l.scale_bar_y}, {l.scale_bar_x1, l.scale_bar_y}, cv::Scalar(0, 0, 0), 2);
+  for (const int x : {l.scale_bar_x0, l.scale_bar_x1})
+    cv::line(m.img, {x, l.scale_bar_y - 4}, {x, l.scale_bar_y + 4}, cv::Scalar(0, 0, 0), 1);
+  text(num(l.scale_bar_m) + " m", {l.scale_bar_x1 + 6, l.scale_bar_y - g.line_h / 2 + 2}, cv::Scalar(0, 0, 0));
+  if (!cv::imwrite(path, m.img)) throw std::runtime_error(path + ": cannot write the PNG map");
 }
 
 void write_text_file(const std::string& path, const std::string& text) {

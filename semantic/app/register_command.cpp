@@ -155,7 +155,7 @@ void add_register_command(CLI::App& app) {
   auto o = std::make_shared<RegisterOptions>();
   CLI::App* cmd = app.add_subcommand("register", "ICP: print the 4x4 transform that maps SOURCE onto TARGET, then rmse and iterations");
   // No CLI::ExistingFile: the readers name the file and the OS's reason.
-  cmd->add_option("SOURCE", o->source, "cloud to move (.pcd .ply .xyz .3d)")->required();
+  cmd->add_option("SOURCE", o->source, "cloud to move (.pcd .ply .xyz .3d .vtk .bt .ot)")->required();
   cmd->add_option("TARGET", o->target, "cloud to align to")->required();
   auto* init = cmd->add_option("--init", o->init, "initial guess: 16 numbers, row-major (default: from the scans' poses, else identity)");
   cmd->add_option("--init-file", o->init_file, "initial guess from a file of 16 numbers, row-major")->excludes(init);

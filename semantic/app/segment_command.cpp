@@ -49,8 +49,11 @@ int run_segment(const SegmentOptions& o) {
     std::printf("%s: %zu points, read %.0f ms, segmented %.0f ms\n", o.cloud.c_str(), cloud.size(), ms(t0, t1), ms(t1, t2));
     std::printf("floor %.3f m", seg.floor.height_m);
     if (seg.ceiling.found) std::printf(", ceiling %.3f m", seg.ceiling.height_m);
-    std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles\n", seg.walls.size(), seg.doors.size(),
+    std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles", seg.walls.size(), seg.doors.size(),
                 seg.stairs.size(), seg.obstacles.size());
+    if (seg.oversize_clusters_dropped > 0)
+      std::printf(" (%d clusters over %.1f m dropped)", seg.oversize_clusters_dropped, SegmentationSettings{}.obstacle_max_size_m);
+    std::printf("\n");
     for (const auto& e : net.entities()) {
       std::printf("  %-16s at (%7.3f, %7.3f, %6.3f) size %.3f x %.3f x %.3f yaw %6.1f deg", e.name.c_str(),
                   e.position_m.x(), e.position_m.y(), e.position_m.z(), e.size_m.x(), e.size_m.y(), e.size_m.z(),
@@ -71,10 +74,12 @@ int run_segment(const SegmentOptions& o) {
     const std::filesystem::path dir(o.out_dir);
     ExportSettings st;
     st.world_name = o.name;
-    write_text_file((dir / "world.yaml").string(), world_yaml(net, st));
+    st.floor_plan = std::make_shared<OccupancyGrid>(floor_plan_of(cloud, net.segmentation(), st));
+    // The map first: it shows why, when the world file has no start.
+    write_map_png((dir / "map.png").string(), net, &cloud, st);
     write_text_file((dir / "world.sdf").string(), sdf_world(net, st));
     write_text_file((dir / "model.obj").string(), obj_mesh(net, st));
-    write_map_png((dir / "map.png").string(), net, &cloud, st);
+    write_text_file((dir / "world.yaml").string(), world_yaml(net, st));
     logger()->info("wrote world.yaml, world.sdf, model.obj, map.png to {}", o.out_dir);
   }
   return 0;
@@ -85,15 +90,19 @@ int run_segment(const SegmentOptions& o) {
 void add_segment_command(CLI::App& app) {
   auto opts = std::make_shared<SegmentOptions>();
   CLI::App* sub = app.add_subcommand("segment", "find floor, ceiling, walls, doors, stairs and obstacles in one registered cloud");
-  sub->add_option("CLOUD", opts->cloud, "registered cloud, world frame, z up (.pcd .ply .xyz .3d)")->required();
+  sub->add_option("CLOUD", opts->cloud, "registered cloud, world frame, z up (.pcd .ply .xyz .3d .vtk .bt .ot)")->required();
   sub->add_flag("--json", opts->json, "print the entities and relations as JSON");
   sub->add_flag("--level", opts->level, "level the cloud first (its floor made horizontal)");
-  sub->add_option("--out-dir,-o", opts->out_dir, "also write world.yaml, world.sdf, model.obj and map.png here");
+  sub->add_option("--out-dir,-o", opts->out_dir,
+                  "also write map.png, world.sdf, model.obj and world.yaml here (exit 1 when the robot has no room to start)");
   sub->add_option("--name", opts->name, "world name in the files written")->capture_default_str();
   sub->callback([opts] {
     int rc = 0;
     try {
       rc = run_segment(*opts);
+    } catch (const NoRobotStart& e) {  // the world cannot be driven: no right answer
+      logger()->error("segment: {}", e.what());
+      rc = 1;
     } catch (const std::exception& e) {
       logger()->error("segment: {}", e.what());
       rc = 2;

@@ -3,7 +3,7 @@
 # inputs from a seed corpus this script writes itself (nothing binary is kept
 # in the repository).
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
-# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d or pcd; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd or maps; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -16,6 +16,7 @@ case "$target" in
   # The semantic readers: PLY/XYZ and 3DTK/sim poses without PCL; the PCD
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
   ply | scan3d) sources=("$root"/semantic/cloud{,_formats}.cpp) ;;
+  maps) sources=("$root"/semantic/{cloud,cloud_formats,octomap_format,vtk_format}.cpp) ;;
   pcd) sources=("$root"/semantic/cloud{,_formats,_io}.cpp) ;;
   *) echo "run_fuzz.sh: unknown target $target" >&2; exit 2 ;;
 esac
@@ -33,7 +34,7 @@ if [ $rebuild -eq 1 ]; then
   echo "run_fuzz.sh: compiling $binary"
   flags=() libs=()
   case "$target" in
-    ply | scan3d) flags=(-isystem /usr/include/eigen3) ;;
+    ply | scan3d | maps) flags=(-isystem /usr/include/eigen3) ;;
     pcd)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/pcl-1.13)
       libs=(-lpcl_io -lpcl_common -lboost_filesystem)
@@ -101,6 +102,17 @@ case "$target" in
     if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/pointclouds/3DTK-dat" ]; then
       for f in "$RISE_TEST_DATA"/pointclouds/3DTK-dat/scan00{0,1}.{pose,frames}; do cp "$f" "$corpus/"; done
       head -c 4000 "$RISE_TEST_DATA/pointclouds/3DTK-dat/scan000.3d" >"$corpus/scan000-head.3d"
+    fi
+    ;;
+  maps)
+    # A .bt root whose inner child has a free and an occupied child, a
+    # ColorOcTree .ot of two nodes, VTK ASCII (version 5.1) and BINARY (4.2).
+    printf '# Octomap OcTree binary file\nid OcTree\nsize 4\nres 0.1\ndata\n\x03\x00\x09\x00' >"$corpus/tree.bt"
+    printf '# Octomap OcTree file\nid ColorOcTree\nsize 2\nres 0.05\ndata\n\x00\x00\x60\x40\x01\x02\x03\x80\x00\x00\x60\x40\x01\x02\x03\x00' >"$corpus/tree.ot"
+    printf '# vtk DataFile Version 5.1\nvtk output\nASCII\nDATASET POLYDATA\nPOINTS 2 float\n0 0 0 1 2 3\nVERTICES 3 2\nOFFSETS vtktypeint64\n0 1 2\nCONNECTIVITY vtktypeint64\n0 1\nPOINT_DATA 2\nSCALARS s int 1\nLOOKUP_TABLE default\n1 2\nNORMALS n float\n0 0 1 0 1 0\nFIELD FieldData 1\nf 2 2 double\n1 2 3 4\nMETADATA\nINFORMATION 0\n\n' >"$corpus/ascii.vtk"
+    printf '# vtk DataFile Version 4.2\nt\nBINARY\nDATASET UNSTRUCTURED_GRID\nPOINTS 1 float\n\x3f\x80\x00\x00\x40\x00\x00\x00\x40\x40\x00\x00\nCELLS 1 2\n\x00\x00\x00\x01\x00\x00\x00\x00\nCELL_TYPES 1\n\x00\x00\x00\x01\n' >"$corpus/binary.vtk"
+    if [ -n "${RISE_TEST_DATA:-}" ] && [ -f "$RISE_TEST_DATA/pointclouds/ANYbotics_grid_map/freiburg1_360.bt" ]; then
+      head -c 3000 "$RISE_TEST_DATA/pointclouds/ANYbotics_grid_map/freiburg1_360.bt" >"$corpus/freiburg-head.bt"
     fi
     ;;
   pcd)

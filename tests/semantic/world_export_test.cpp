@@ -179,3 +179,115 @@ TEST_CASE("the PNG map shows walls in black, doors in green and stairs in blue w
 TEST_CASE("writing an export where it cannot be written fails with the path", "[semantic]") {
   CHECK_THROWS_WITH(write_text_file("/nonexistent/dir/world.yaml", "x"), Catch::Contains("/nonexistent/dir/world.yaml"));
 }
+
+namespace {
+// Metres from p to a box's footprint (0 inside).
+double footprint_distance(const ModelBox& b, const Eigen::Vector2d& p) {
+  const double c = std::cos(b.yaw_rad), s = std::sin(b.yaw_rad);
+  const Eigen::Vector2d d = p - b.center_m.head<2>();
+  const Eigen::Vector2d local(c * d.x() + s * d.y(), -s * d.x() + c * d.y());
+  return (local.cwiseAbs() - b.size_m.head<2>() / 2).cwiseMax(0.0).norm();
+}
+
+std::shared_ptr<const OccupancyGrid> building_plan() {
+  static const auto plan = std::make_shared<const OccupancyGrid>(floor_plan_of(building_cloud(), building_segmentation()));
+  return plan;
+}
+}  // namespace
+
+TEST_CASE("the start is a known pose with room around it, else the floor plan's clearest free place", "[semantic]") {
+  ExportSettings st;
+  st.floor_plan = building_plan();
+  const double need = st.robot_half_width_m + st.robot_margin_m;
+  const auto& plan = *st.floor_plan;
+  const Eigen::Vector3d start = robot_start(building_net(), st);
+  // Free around it: seen floor, nothing at the robot's height, no solid.
+  for (double dx = -need; dx <= need; dx += plan.resolution_m)
+    for (double dy = -need; dy <= need; dy += plan.resolution_m) {
+      if (std::hypot(dx, dy) > need - plan.resolution_m) continue;
+      const Eigen::Vector2i c = plan.cell_of(start.head<2>() + Eigen::Vector2d(dx, dy));
+      REQUIRE(plan.contains(c.x(), c.y()));
+      CHECK(plan.at(c.x(), c.y()) == CellState::Free);
+    }
+  for (const auto& b : model_boxes(building_net(), st))
+    if (b.kind != "floor" && b.kind != "ceiling" && b.center_m.z() - b.size_m.z() / 2 < st.robot_height_m) {
+      INFO(b.name);
+      CHECK(footprint_distance(b, start.head<2>()) >= need - 0.05);
+    }
+  // Scan poses: the first with room around it (not the one against the west wall).
+  st.known_poses = {{-3.7, 0.0, 0.0}, {0.0, 0.0, 0.5}, {6.0, -1.0, 3.1}};
+  CHECK(robot_start(building_net(), st).isApprox(Eigen::Vector3d(0.0, 0.0, 0.5)));
+}
+
+TEST_CASE("no start where nothing is known to be free, nor inside a box over the whole building", "[semantic]") {
+  ExportSettings st;
+  auto unknown = std::make_shared<OccupancyGrid>(*building_plan());
+  std::fill(unknown->cells.begin(), unknown->cells.end(), CellState::Unknown);
+  st.floor_plan = unknown;
+  CHECK_THROWS_WITH(robot_start(building_net(), st), Catch::Contains("no free place") && Catch::Contains("0.60 m clearance"));
+  // The issue's "obstacle" over the whole building: no start inside it, a clear refusal.
+  Segmentation seg = building_segmentation();
+  Obstacle all;
+  all.center_m = {2.5, 1.25, 1.3};
+  all.size_m = {14.0, 9.5, 2.6};
+  seg.obstacles.push_back(all);
+  st.floor_plan = building_plan();
+  CHECK_THROWS_WITH(robot_start(SemanticNet(seg), st), Catch::Contains("no free place"));
+}
+
+TEST_CASE("the PNG map: each entity in its colour, free and unknown apart, labels apart, a true scale bar", "[semantic]") {
+  const auto path = temp_file("map_layout.png");
+  ExportSettings st;
+  st.map_px_per_m = 40;
+  const MapLayout l = map_layout(building_net(), &building_cloud(), st);
+  write_map_png(path.string(), building_net(), &building_cloud(), st);
+  const cv::Mat img = cv::imread(path.string(), cv::IMREAD_COLOR);
+  REQUIRE(img.cols == l.cols);
+  REQUIRE(img.rows == l.rows);
+  const cv::Rect legend(l.legend_x, l.legend_y, l.legend_width, l.legend_height);
+  std::vector<cv::Rect> boxes;
+  for (const auto& b : l.labels) boxes.emplace_back(b.x, b.y, b.width, b.height);
+  // Labels: inside the image, apart from each other and from the legend.
+  for (std::size_t i = 0; i < boxes.size(); ++i) {
+    INFO(l.labels[i].text);
+    CHECK((boxes[i] & cv::Rect(0, 0, l.cols, l.rows)) == boxes[i]);
+    CHECK((boxes[i] & legend).empty());
+    for (std::size_t j = i + 1; j < boxes.size(); ++j) CHECK((boxes[i] & boxes[j]).empty());
+  }
+  // Every door, the stairs and the obstacle have their label.
+  int named = 0;
+  for (const auto& b : l.labels) {
+    const EntityKind k = building_net().entity(b.entity).kind;
+    named += k == EntityKind::Door || k == EntityKind::Stairs || k == EntityKind::Obstacle;
+  }
+  const auto& seg = building_net().segmentation();
+  CHECK(named == static_cast<int>(seg.doors.size() + seg.stairs.size() + seg.obstacles.size()));
+  // Colours where the entities are (where no label or legend lies over them).
+  const auto colour_at = [&](const Eigen::Vector2d& p) {
+    const cv::Point q(static_cast<int>((p.x() - l.min_m.x()) * l.px_per_m), static_cast<int>((l.max_m.y() - p.y()) * l.px_per_m));
+    bool covered = legend.contains(q);
+    for (const auto& b : boxes) covered = covered || b.contains(q);
+    INFO("at " << p.transpose());
+    REQUIRE_FALSE(covered);
+    return img.at<cv::Vec3b>(q);
+  };
+  const auto is = [](const cv::Vec3b& v, const unsigned char (&c)[3]) {
+    return std::abs(v[0] - c[0]) < 10 && std::abs(v[1] - c[1]) < 10 && std::abs(v[2] - c[2]) < 10;
+  };
+  CHECK(is(colour_at({-4.0, -1.0}), map_colour::kWall));
+  CHECK(is(colour_at({3.0, -0.2}), map_colour::kDoor));
+  CHECK(is(colour_at({1.2, 4.0}), map_colour::kStairs));
+  REQUIRE_FALSE(seg.obstacles.empty());
+  CHECK(is(colour_at(seg.obstacles[0].center_m.head<2>()), map_colour::kObstacle));
+  ExportSettings with_plan = st;
+  with_plan.floor_plan = building_plan();
+  CHECK(is(colour_at(robot_start(building_net(), with_plan).head<2>()), map_colour::kFree));
+  CHECK(is(colour_at({-4.35, 1.0}), map_colour::kUnknown));  // beyond the west wall
+  // The scale bar: scale_bar_m long at map_px_per_m, drawn black.
+  CHECK(l.scale_bar_m > 0);
+  CHECK(l.scale_bar_x1 - l.scale_bar_x0 == static_cast<int>(std::lround(l.scale_bar_m * st.map_px_per_m)));
+  int dark = 0;
+  for (int x = l.scale_bar_x0; x <= l.scale_bar_x1; ++x) dark += img.at<cv::Vec3b>(l.scale_bar_y, x)[1] < 60;
+  CHECK(dark >= l.scale_bar_x1 - l.scale_bar_x0);
+  std::filesystem::remove(path);
+}
