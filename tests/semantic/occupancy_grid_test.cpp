@@ -10,6 +10,7 @@
 #include <functional>
 #include <fstream>
 #include <map>
+#include <optional>
 
 #include "semantic/occupancy_grid.hpp"
 #include "tests/test_data.hpp"
@@ -218,4 +219,72 @@ TEST_CASE("grid_from_scans makes intel's floor, about 39 x 36 m", "[semantic][gr
   CHECK(g.width * g.resolution_m == Approx(39).margin(5));
   CHECK(g.height * g.resolution_m == Approx(36).margin(6));
   CHECK(count(g, CellState::Free) > 5 * count(g, CellState::Occupied));
+}
+
+namespace {
+
+// The grid a truth file was drawn on: the map_server map it names, or the
+// grid of the CARMEN log at its resolution.
+std::optional<OccupancyGrid> truth_grid(const Json::Value& truth) {
+  const std::string source = rise::test::data_file(truth["source"].asString());
+  if (source.empty()) return std::nullopt;
+  if (truth.isMember("image")) {
+    const std::string image = rise::test::data_file(truth["image"].asString());
+    if (image.empty()) return std::nullopt;
+    return read_ros_map(source, image);
+  }
+  return grid_from_scans(read_carmen_log(source), truth["resolution_m"].asDouble());
+}
+
+bool occupied_near(const OccupancyGrid& g, const Eigen::Vector2d& p, double radius_m) {
+  const int r = static_cast<int>(std::ceil(radius_m / g.resolution_m));
+  const Eigen::Vector2i c = g.cell_of(p);
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx)
+      if (g.contains(c.x() + dx, c.y() + dy) && g.at(c.x() + dx, c.y() + dy) == CellState::Occupied &&
+          (g.center(c.x() + dx, c.y() + dy) - p).norm() <= radius_m + 0.5 * g.resolution_m)
+        return true;
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("each building's truth file lies on its map: walls on occupied cells, doors in free space", "[semantic][grid]") {
+  const fs::path dir = fs::path(RISE_SOURCE_DIR) / "tests/data/buildings";
+  size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    ++files;
+    INFO(entry.path().filename().string());
+    std::ifstream in(entry.path());
+    Json::Value truth;
+    Json::CharReaderBuilder rb;
+    std::string errors;
+    REQUIRE(Json::parseFromStream(rb, in, &truth, &errors));
+    REQUIRE(truth["note"].asString().size() > 100);
+    REQUIRE(truth["walls"].size() > 0);
+    const auto grid = truth_grid(truth);
+    if (!grid) {
+      WARN("skipped: " << truth["source"].asString() << " not in RISE_TEST_DATA");
+      continue;
+    }
+    for (const auto& w : truth["walls"]) {
+      REQUIRE(w.size() == 4);
+      const Eigen::Vector2d a(w[0].asDouble(), w[1].asDouble()), b(w[2].asDouble(), w[3].asDouble());
+      const int n = std::max(2, static_cast<int>((b - a).norm() / 0.05));
+      int near = 0;
+      for (int i = 0; i <= n; ++i) near += occupied_near(*grid, a + (b - a) * i / n, 0.15);
+      INFO("wall " << w.toStyledString());
+      CHECK(near >= 0.8 * (n + 1));
+    }
+    for (const auto& d : truth["doors"]) {
+      INFO("door " << d.toStyledString());
+      CHECK(d["width"].asDouble() >= 0.6);
+      CHECK(d["width"].asDouble() <= 1.2);
+      const Eigen::Vector2i c = grid->cell_of({d["center"][0].asDouble(), d["center"][1].asDouble()});
+      REQUIRE(grid->contains(c.x(), c.y()));
+      CHECK(grid->at(c.x(), c.y()) == CellState::Free);
+    }
+  }
+  CHECK(files >= 1);
 }
