@@ -263,6 +263,10 @@ TEST_CASE("each building's truth file lies on its map: walls on occupied cells, 
     REQUIRE(Json::parseFromStream(rb, in, &truth, &errors));
     REQUIRE(truth["note"].asString().size() > 100);
     REQUIRE(truth["walls"].size() > 0);
+    if (truth["source"].asString().ends_with(".bt")) {
+      WARN("not checked against its map: " << entry.path().filename().string() << " (an OctoMap; the 2D grid of a .bt is not built here)");
+      continue;
+    }
     const auto grid = truth_grid(truth);
     if (!grid) {
       WARN("skipped: " << truth["source"].asString() << " not in RISE_TEST_DATA");
