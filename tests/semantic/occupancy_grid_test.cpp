@@ -182,6 +182,10 @@ TEST_CASE("a bad CARMEN log is refused with its file and line", "[semantic][grid
     const std::string p = s.write("b.log", "FLASER 2 1.0 x 0 0 0 0 0 0 5.0 h 5.0\n");
     CHECK_THAT(error_of([&] { read_carmen_log(p); }), Catch::Contains("b.log:1: range: not a number: 'x'"));
   }
+  SECTION("a pose that is not a finite number") {
+    const std::string p = s.write("e.log", "FLASER 2 1.0 2.0 nan 0 0 0 0 0 5.0 h 5.0\n");
+    CHECK_THAT(error_of([&] { read_carmen_log(p); }), Catch::Contains("e.log:1: x: not a finite number: 'nan'"));
+  }
   SECTION("a truncated gzip") {
     const std::string intel = rise::test::data_file("pointclouds/acschaefer_ple/intel-corrected.log.gz");
     if (intel.empty()) return;
