@@ -61,6 +61,12 @@ Cloud parse_3d(const std::string& path, std::string_view text);
 Eigen::Isometry3d parse_3dtk_pose(const std::string& path, std::string_view text);
 /// 3DTK's `.frames`: one column-major 4x4 and a colour code per line, converted to ours.
 std::vector<Eigen::Isometry3d> parse_3dtk_frames(const std::string& path, std::string_view text);
+/// 3DTK's `config.ini` beside its scans: the range limits `min` and `max`
+/// (cm; 0 for max: none). A point at or beyond max is a missing return.
+struct Range3dtk {
+  double min_m = 0.0, max_m = 0.0;
+};
+Range3dtk parse_3dtk_config(const std::string& path, std::string_view text);
 /// The simulator's `.pose` (sim/README.md, "Scan files").
 Eigen::Isometry3d parse_sim_pose(const std::string& path, std::string_view text);
 
