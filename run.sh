@@ -19,8 +19,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # systemd-udevd for the USB hot-plug test inside the VM, PCL + OpenCV +
 # Ceres for the semantic engine and Open3D as its benchmark peer, jsoncpp for
 # the training reports and journal, Chromium to render the HTML report in its
-# test, and to run the instructor console's browser tests), cpp-httplib for
-# the instructor's web server, Node.js + npm to build its pages from the
+# test, and to run the instructor console's browser tests), zlib for the
+# gzip'd CARMEN logs, cpp-httplib for the instructor's web server, Node.js + npm to build its pages from the
 # locked npm packages in instructor/web (three.js, esbuild, playwright-core)
 # at set-up. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
@@ -34,7 +34,7 @@ packages=(
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
   libhidapi-dev libusb-1.0-0-dev udev
   libpcl-dev libopencv-dev libceres-dev libopen3d-dev
-  libjsoncpp-dev chromium
+  libjsoncpp-dev chromium zlib1g-dev
   libssl-dev libcpp-httplib-dev nodejs npm
 )
 

@@ -48,36 +48,6 @@ std::vector<std::string_view> words(std::string_view line) {
   return w;
 }
 
-template <typename T>
-bool parse(std::string_view s, T& v) {
-  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
-  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  return ec == std::errc{} && p == s.data() + s.size();
-}
-
-template <typename T>
-T number(std::string_view s, const std::string& path, size_t line, std::string_view what) {
-  T v{};
-  if (!parse(s, v)) fail_line(path, line, std::string(what) + ": not a number: '" + std::string(s) + "'");
-  return v;
-}
-
-// Text split into lines with their 1-based numbers; '\r' dropped.
-struct Lines {
-  std::string_view text;
-  size_t pos = 0;
-  size_t number = 0;
-  bool next(std::string_view& line) {
-    if (pos >= text.size()) return false;
-    const size_t end = std::min(text.find('\n', pos), text.size());
-    line = text.substr(pos, end - pos);
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    pos = end + 1;
-    ++number;
-    return true;
-  }
-};
-
 std::string lower_extension(const std::string& path) {
   std::string e = std::filesystem::path(path).extension().string();
   std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });

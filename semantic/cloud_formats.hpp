@@ -8,6 +8,8 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <charconv>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -62,5 +64,39 @@ std::string read_file(const std::string& path);  ///< throws "path: cannot open:
 std::string lower_extension(const std::string& path);
 [[noreturn]] void fail_line(const std::string& path, size_t line, const std::string& message);
 [[noreturn]] void fail_byte(const std::string& path, size_t byte, const std::string& message);
+
+// Text helpers shared by the readers of text formats (here and occupancy_grid.cpp).
+/// The whitespace-separated words of `line`.
+std::vector<std::string_view> words(std::string_view line);
+
+template <typename T>
+bool parse(std::string_view s, T& v) {
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  return ec == std::errc{} && p == s.data() + s.size();
+}
+
+template <typename T>
+T number(std::string_view s, const std::string& path, size_t line, std::string_view what) {
+  T v{};
+  if (!parse(s, v)) fail_line(path, line, std::string(what) + ": not a number: '" + std::string(s) + "'");
+  return v;
+}
+
+// Text split into lines with their 1-based numbers; '\r' dropped.
+struct Lines {
+  std::string_view text;
+  size_t pos = 0;
+  size_t number = 0;
+  bool next(std::string_view& line) {
+    if (pos >= text.size()) return false;
+    const size_t end = std::min(text.find('\n', pos), text.size());
+    line = text.substr(pos, end - pos);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos = end + 1;
+    ++number;
+    return true;
+  }
+};
 
 }  // namespace rise::semantic::formats

@@ -41,4 +41,57 @@ struct OccupancyGrid {
   }
 };
 
+/// ROS map_server's map: its YAML (image, resolution, origin [x, y, yaw],
+/// negate, occupied_thresh, free_thresh, mode trinary|scale|raw; wiki.ros.org/map_server)
+/// and the image it names (PGM P5/P2 8 or 16 bit, PNG, anything OpenCV reads),
+/// relative to the YAML's folder; `image_path`, when given, replaces it (a map
+/// saved under another name). Cells as map_server's trinary mode makes them:
+/// p = (max - v) / max (v / max with negate), occupied when p > occupied_thresh,
+/// free when p < free_thresh, unknown between. "scale" gives the same three
+/// states (its grey levels between the thresholds are unknown here); "raw"
+/// reads v as the occupancy percentage (0 free .. 100 occupied, above 100
+/// unknown) against the same thresholds. A yaw other than 0 is refused:
+/// map_server itself ignores it, so a rotated map would be silently wrong.
+/// Image row 0 is the top (highest y): the grid's row 0 is the image's last.
+OccupancyGrid read_ros_map(const std::string& yaml_path, const std::string& image_path = "");
+
+/// One 2D laser scan with the laser's pose in the map frame.
+struct LaserScan2D {
+  double time_s = 0;
+  Eigen::Vector3d pose{0, 0, 0};  ///< x, y (m), theta (rad) of the laser in the map frame
+  double start_angle_rad = 0;     ///< bearing of ranges[0] in the laser frame
+  double angle_step_rad = 0;      ///< bearing increment from one beam to the next
+  double max_range_m = 0;         ///< readings >= this are no-returns
+  std::vector<float> ranges;      ///< m
+};
+
+/// The laser scans of a CARMEN log (carmen.sourceforge.net, "logger" file
+/// format), plain or gzip: FLASER lines (`FLASER n r1..rn x y theta odom_x
+/// odom_y odom_theta ipc_timestamp hostname logger_timestamp`, `x y theta`
+/// the laser's pose; CARMEN's bearings: n = 180/360 beams at 1/0.5 deg from
+/// -90 deg, n = 181/361 over -90..+90 deg inclusive, other n over 180 deg) and
+/// ROBOTLASER1 lines (their own start, step and max range); other messages
+/// skipped. A FLASER's max range is PARAM robot_front_laser_max when the log
+/// has it, otherwise the log's largest reading: the SICK writes its
+/// no-return code there (81.83, 81.91 or a configured 50 m).
+std::vector<LaserScan2D> read_carmen_log(const std::string& path);
+
+/// How scans become a grid: log-odds per cell, a hit where a beam ends, a
+/// miss in each cell it crosses (Thrun, Burgard, Fox, "Probabilistic
+/// Robotics", 9.2), clamped, then thresholded into the three states.
+struct ScanGridSettings {
+  double hit_logodds = 0.85;       ///< p = 0.7
+  double miss_logodds = -0.4;      ///< p = 0.4
+  double clamp_logodds = 3.5;      ///< |L| never exceeds this: a cell can change its mind
+  double occupied_logodds = 0.5;   ///< L above this is occupied
+  double free_logodds = -0.5;      ///< L below this is free
+  double max_hit_range_m = 40;     ///< longer readings only clear space (their bearing error smears walls)
+  double no_return_free_m = 8;     ///< a no-return clears free space this far along its beam
+};
+
+/// A trinary grid, `resolution_m` per cell, covering the laser poses and
+/// every cell a beam touched; cells no beam touched are unknown.
+OccupancyGrid grid_from_scans(const std::vector<LaserScan2D>& scans, double resolution_m = 0.05,
+                              const ScanGridSettings& settings = {});
+
 }  // namespace rise::semantic

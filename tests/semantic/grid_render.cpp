@@ -1,0 +1,110 @@
+// grid_render: a debug program to look at 2D maps and at the truth files
+// drawn over them (tests/data/buildings/README.md). Not installed.
+//
+//   grid_render IN OUT.png [--image PGM] [--res M] [--region X0 Y0 X1 Y1]
+//               [--px N] [--truth FILE.json]
+//
+// IN is a map_server .yaml or a CARMEN log. Free cells white, occupied
+// black, unknown grey; a thin line every metre, a darker one with its
+// coordinate every 5 m; truth walls red, doors green (a bar as wide as the
+// door, across the wall).
+
+#include <json/json.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "semantic/occupancy_grid.hpp"
+
+using rise::semantic::CellState;
+using rise::semantic::OccupancyGrid;
+
+int main(int argc, char** argv) try {
+  if (argc < 3) {
+    std::cerr << "usage: grid_render IN OUT.png [--image PGM] [--res M] [--region X0 Y0 X1 Y1] [--px N] [--truth F]\n";
+    return 2;
+  }
+  const std::string in = argv[1], out = argv[2];
+  std::string image, truth;
+  double res = 0.05;
+  int px = 2;
+  bool region = false;
+  double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  for (int i = 3; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--image") image = argv[++i];
+    else if (a == "--res") res = std::atof(argv[++i]);
+    else if (a == "--px") px = std::atoi(argv[++i]);
+    else if (a == "--truth") truth = argv[++i];
+    else if (a == "--region") {
+      region = true;
+      x0 = std::atof(argv[++i]), y0 = std::atof(argv[++i]), x1 = std::atof(argv[++i]), y1 = std::atof(argv[++i]);
+    } else throw std::runtime_error("unknown option " + a);
+  }
+  const bool ros = in.size() > 5 && in.substr(in.size() - 5) == ".yaml";
+  const OccupancyGrid g = ros ? rise::semantic::read_ros_map(in, image)
+                              : rise::semantic::grid_from_scans(rise::semantic::read_carmen_log(in), res);
+  size_t occ = 0, fre = 0;
+  for (auto c : g.cells) occ += c == CellState::Occupied, fre += c == CellState::Free;
+  std::printf("%d x %d cells of %.3f m, origin %.3f %.3f, extent %.2f x %.2f m, occupied %zu, free %zu\n", g.width,
+              g.height, g.resolution_m, g.origin_m.x(), g.origin_m.y(), g.width * g.resolution_m,
+              g.height * g.resolution_m, occ, fre);
+  if (!region) {
+    x0 = g.origin_m.x(), y0 = g.origin_m.y();
+    x1 = x0 + g.width * g.resolution_m, y1 = y0 + g.height * g.resolution_m;
+  }
+  const double s = px / g.resolution_m;  // pixels per metre
+  const int W = static_cast<int>((x1 - x0) * s), H = static_cast<int>((y1 - y0) * s);
+  cv::Mat img(H, W, CV_8UC3, cv::Scalar(160, 160, 160));
+  auto to_px = [&](double x, double y) { return cv::Point(static_cast<int>((x - x0) * s), static_cast<int>((y1 - y) * s)); };
+  for (int v = 0; v < H; ++v)
+    for (int u = 0; u < W; ++u) {
+      const Eigen::Vector2d p(x0 + (u + 0.5) / s, y1 - (v + 0.5) / s);
+      const Eigen::Vector2i c = g.cell_of(p);
+      if (!g.contains(c.x(), c.y())) continue;
+      const CellState st = g.at(c.x(), c.y());
+      if (st == CellState::Free) img.at<cv::Vec3b>(v, u) = {255, 255, 255};
+      else if (st == CellState::Occupied) img.at<cv::Vec3b>(v, u) = {0, 0, 0};
+    }
+  for (int m = static_cast<int>(std::floor(x0)); m <= x1; ++m) {
+    const bool five = m % 5 == 0;
+    cv::line(img, to_px(m, y0), to_px(m, y1), five ? cv::Scalar(200, 120, 0) : cv::Scalar(240, 200, 150), 1);
+    if (five) cv::putText(img, std::to_string(m), to_px(m + 0.05, y1 - 0.6), cv::FONT_HERSHEY_SIMPLEX, 0.4, {200, 60, 0}, 1);
+  }
+  for (int m = static_cast<int>(std::floor(y0)); m <= y1; ++m) {
+    const bool five = m % 5 == 0;
+    cv::line(img, to_px(x0, m), to_px(x1, m), five ? cv::Scalar(200, 120, 0) : cv::Scalar(240, 200, 150), 1);
+    if (five) cv::putText(img, std::to_string(m), to_px(x0 + 0.1, m + 0.1), cv::FONT_HERSHEY_SIMPLEX, 0.4, {200, 60, 0}, 1);
+  }
+  if (!truth.empty()) {
+    std::ifstream f(truth);
+    Json::Value j;
+    f >> j;
+    int n = 0;
+    for (const auto& w : j["walls"]) {
+      cv::line(img, to_px(w[0].asDouble(), w[1].asDouble()), to_px(w[2].asDouble(), w[3].asDouble()), {0, 0, 255}, 1);
+      cv::putText(img, std::to_string(n++), to_px((w[0].asDouble() + w[2].asDouble()) / 2, (w[1].asDouble() + w[3].asDouble()) / 2),
+                  cv::FONT_HERSHEY_PLAIN, 0.8, {0, 0, 200}, 1);
+    }
+    for (const auto& d : j["doors"]) {
+      const double cx = d["center"][0].asDouble(), cy = d["center"][1].asDouble(), h = d["width"].asDouble() / 2;
+      const double a = d["wall_angle_deg"].asDouble() * 3.14159265358979 / 180;
+      const Eigen::Vector2d t(std::cos(a), std::sin(a));
+      cv::line(img, to_px(cx - h * t.x(), cy - h * t.y()), to_px(cx + h * t.x(), cy + h * t.y()), {0, 200, 0}, 3);
+      cv::circle(img, to_px(cx, cy), 3, {0, 150, 0}, -1);
+    }
+  }
+  cv::imwrite(out, img);
+  return 0;
+} catch (const std::exception& e) {
+  std::cerr << "grid_render: " << e.what() << "\n";
+  return 1;
+}
