@@ -9,7 +9,6 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
-#include <cstdio>
 
 namespace rise::semantic {
 namespace {
@@ -326,7 +325,6 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
   seg.floor.max_m = grid.origin_m + grid.resolution_m * Eigen::Vector2d(box.x + box.width, box.y + box.height);
 
   std::vector<Piece> pieces;
-  for (const double theta : wall_directions(masks.occupied, s)) fprintf(stderr, "dir %.2f\n", theta * 180 / kPi);
   for (const double theta : wall_directions(masks.occupied, s)) walls_of(grid, turned(grid, masks, theta), s, pieces);
 
   // Ends meet the crossing wall's centre line; a free end stops half a
