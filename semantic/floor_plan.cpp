@@ -31,25 +31,31 @@ Masks masks_of(const OccupancyGrid& g) {
   return m;
 }
 
-// The building's wall directions in [0, pi): peaks of the histogram of the
-// blurred occupancy's gradient angles (1° bins), each at least
-// min_direction_share of the strongest; a peak's neighbours within twice
-// the angle tolerance belong to it.
+// The building's wall directions in [0, pi): peaks of the histogram (1°
+// bins) of the occupancy's local orientation, each at least
+// min_direction_share of the strongest. The orientation is the structure
+// tensor's (gradient products averaged over a few cells), weighted by its
+// anisotropy: a single cell's gradient snaps to the grid's axes and
+// diagonals on a staircase-aliased line, the averaged tensor does not.
 std::vector<double> wall_directions(const cv::Mat& occupied, const FloorPlanSettings& s) {
   cv::Mat f, gx, gy;
   occupied.convertTo(f, CV_32F, 1.0 / 255.0);
-  cv::GaussianBlur(f, f, cv::Size(0, 0), 1.5);
+  cv::GaussianBlur(f, f, cv::Size(0, 0), 1.0);
   cv::Sobel(f, gx, CV_32F, 1, 0, 3);
   cv::Sobel(f, gy, CV_32F, 0, 1, 3);
+  cv::Mat jxx = gx.mul(gx), jxy = gx.mul(gy), jyy = gy.mul(gy);
+  for (cv::Mat* j : {&jxx, &jxy, &jyy}) cv::GaussianBlur(*j, *j, cv::Size(0, 0), 3.0);
   constexpr int kBins = 180;
   std::vector<double> hist(kBins, 0.0);
   for (int r = 0; r < f.rows; ++r)
     for (int c = 0; c < f.cols; ++c) {
-      const double x = gx.at<float>(r, c), y = gy.at<float>(r, c), m = std::hypot(x, y);
-      if (m < 0.05) continue;
-      double a = std::atan2(y, x) + kPi / 2;  // the edge runs across its gradient
+      const double xx = jxx.at<float>(r, c), xy = jxy.at<float>(r, c), yy = jyy.at<float>(r, c);
+      const double anisotropy = std::hypot(xx - yy, 2 * xy);
+      if (anisotropy < 1e-3) continue;
+      // The dominant gradient's angle; the wall runs across it.
+      double a = 0.5 * std::atan2(2 * xy, xx - yy) + kPi / 2;
       a = std::fmod(a + 2 * kPi, kPi);
-      hist[static_cast<std::size_t>(static_cast<int>(a / kPi * kBins) % kBins)] += m;
+      hist[static_cast<std::size_t>(static_cast<int>(a / kPi * kBins) % kBins)] += anisotropy;
     }
   const auto wrap = [](int i) { return static_cast<std::size_t>(((i % kBins) + kBins) % kBins); };
   std::vector<double> smooth(kBins, 0.0);
@@ -132,7 +138,7 @@ std::vector<Face> faces_of(const Frame& f, const FloorPlanSettings& s) {
   cv::morphologyEx(strips, strips, cv::MORPH_CLOSE,
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.noise_gap_m) + 1, 1)));
   cv::morphologyEx(strips, strips, cv::MORPH_OPEN,
-                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.min_wall_length_m), 1)));
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.min_face_length_m), 1)));
   cv::Mat labels, stats, centroids;
   const int n = cv::connectedComponentsWithStats(strips, labels, stats, centroids, 8, CV_32S);
   std::vector<Face> out;
@@ -204,8 +210,10 @@ double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eig
 // One wall line from the occupied cells of its faces (world xy): its centre
 // line fitted through them, its thickness their spread across it, split at
 // gaps along it that are neither narrower than a door nor a doorway (free
-// space through the gap's middle on both sides).
-void split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& xy, bool both_faces,
+// space in the gap's middle and on both sides of it). False, adding nothing,
+// when the cells spread wider than a wall's thickness across the line
+// (unless they are a single face: a face is straight by construction).
+bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& xy, bool both_faces, bool single_face,
                 const FloorPlanSettings& s, std::vector<Piece>& out) {
   const detail::Line2 line = detail::fit_line(xy);
   std::vector<double> along, across;
@@ -215,6 +223,7 @@ void split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
   proto.d = line.direction, proto.n = line.normal;
   proto.offset = line.normal.dot(line.point) + (lo + hi) / 2;
   proto.thickness = std::max(s.min_wall_thickness_m, hi - lo + grid.resolution_m);
+  if (!single_face && proto.thickness > s.max_wall_thickness_m) return false;
   proto.both_faces = both_faces;
   proto.cells = static_cast<int>(xy.size());
   const double base = line.direction.dot(line.point), res = grid.resolution_m;
@@ -228,7 +237,8 @@ void split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
       if (gap < s.door_min_width_m) continue;
       if (gap <= s.door_max_width_m) {
         const double m0 = prev + gap / 5, m1 = next - gap / 5, t = proto.thickness / 2;
-        if (free_share(grid, proto.d, proto.n, m0, m1, proto.offset - t - s.door_clearance_m, proto.offset - t - res) >=
+        if (free_share(grid, proto.d, proto.n, m0, m1, proto.offset - t, proto.offset + t) >= s.door_min_free &&
+            free_share(grid, proto.d, proto.n, m0, m1, proto.offset - t - s.door_clearance_m, proto.offset - t - res) >=
                 s.door_min_free &&
             free_share(grid, proto.d, proto.n, m0, m1, proto.offset + t + res, proto.offset + t + s.door_clearance_m) >=
                 s.door_min_free) {
@@ -244,6 +254,7 @@ void split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
       cur.a0 = base + along[k] - res / 2;
     }
   }
+  return true;
 }
 
 // The walls of one direction: faces joined into walls (the two faces of
@@ -271,16 +282,25 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
   std::vector<std::vector<int>> groups(faces.size());
   for (std::size_t i = 0; i < faces.size(); ++i)
     groups[static_cast<std::size_t>(find_root(parent, static_cast<int>(i)))].push_back(static_cast<int>(i));
+  const auto cells_of = [&](const Face& face, std::vector<Eigen::Vector2d>& xy) {
+    for (const auto& c : face.cells) xy.push_back(f.world(f.along_of_col(c.x + 0.5), f.offset_of_row(c.y + 0.5)));
+  };
   for (const auto& group : groups) {
     if (group.empty()) continue;
     std::vector<Eigen::Vector2d> xy;
     bool both = false;
     for (const int i : group) {
       const Face& face = faces[static_cast<std::size_t>(i)];
-      for (const auto& c : face.cells) xy.push_back(f.world(f.along_of_col(c.x + 0.5), f.offset_of_row(c.y + 0.5)));
+      cells_of(face, xy);
       for (const int j : group) both = both || face.r1 < faces[static_cast<std::size_t>(j)].r0;
     }
-    split_wall(grid, xy, both, s, out);
+    if (split_wall(grid, xy, both, group.size() == 1, s, out)) continue;
+    // Joined faces that do not make one straight slab: each on its own.
+    for (const int i : group) {
+      xy.clear();
+      cells_of(faces[static_cast<std::size_t>(i)], xy);
+      split_wall(grid, xy, false, true, s, out);
+    }
   }
 }
 
@@ -338,7 +358,7 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     met[i].a1 = std::isnan(m1) ? p.a1 - p.thickness / 2 : m1;
   }
   for (const Piece& p : met) {
-    if (p.a1 - p.a0 < s.min_wall_length_m / 2) continue;
+    if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
     Wall w;
     w.from_m = p.d * p.a0 + p.n * p.offset;
     w.to_m = p.d * p.a1 + p.n * p.offset;

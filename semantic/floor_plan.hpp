@@ -26,10 +26,11 @@ struct FloorPlanSettings {
   double door_height_m = 2.0;          ///< a doorway's lintel underside
   double door_min_width_m = 0.6;       ///< narrower gaps in a wall line are closed
   double door_max_width_m = 1.2;       ///< wider gaps (not doorways) split the wall
-  double min_wall_length_m = 0.5;      ///< shorter runs of occupied cells are not wall faces
+  double min_face_length_m = 0.5;      ///< shorter runs of occupied cells are not wall faces
+  double min_wall_length_m = 1.0;      ///< shorter walls are furniture, jambs, recesses: left out
   double min_wall_thickness_m = 0.1;   ///< a thinner measured slab is given this
   double max_wall_thickness_m = 0.5;   ///< faces up to this apart, nothing free between: one wall
-  double noise_gap_m = 0.1;            ///< gaps up to this in a face are noise
+  double noise_gap_m = 0.3;            ///< gaps up to this in a face are noise
   double collinear_offset_m = 0.15;    ///< collinear faces: centre lines at most this apart ...
   double angle_tolerance_rad = 6.0 * 3.14159265358979 / 180.0;  ///< directions closer than this are one
   double min_direction_share = 0.08;   ///< a direction holds this share of the strongest one's edges
