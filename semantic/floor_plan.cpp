@@ -207,6 +207,15 @@ double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eig
   return all == 0 ? 0.0 : free / static_cast<double>(all);
 }
 
+// A doorway along g0..g1 of wall `p`'s line: free cells in the gap's
+// middle, and on both sides of the wall in front of it.
+bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, const FloorPlanSettings& s) {
+  const double m0 = g0 + (g1 - g0) / 5, m1 = g1 - (g1 - g0) / 5, t = p.thickness / 2, res = grid.resolution_m;
+  return free_share(grid, p.d, p.n, m0, m1, p.offset - t, p.offset + t) >= s.door_min_free &&
+         free_share(grid, p.d, p.n, m0, m1, p.offset - t - s.door_clearance_m, p.offset - t - res) >= s.door_min_free &&
+         free_share(grid, p.d, p.n, m0, m1, p.offset + t + res, p.offset + t + s.door_clearance_m) >= s.door_min_free;
+}
+
 // One wall line from the occupied cells of its faces (world xy): its centre
 // line fitted through them, its thickness their spread across it, split at
 // gaps along it that are neither narrower than a door nor a doorway (free
@@ -235,13 +244,8 @@ bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
     if (k < along.size()) {
       const double next = base + along[k] - res / 2, gap = next - prev;
       if (gap < s.door_min_width_m) continue;
-      if (gap <= s.door_max_width_m) {
-        const double m0 = prev + gap / 5, m1 = next - gap / 5, t = proto.thickness / 2;
-        if (free_share(grid, proto.d, proto.n, m0, m1, proto.offset - t, proto.offset + t) >= s.door_min_free &&
-            free_share(grid, proto.d, proto.n, m0, m1, proto.offset - t - s.door_clearance_m, proto.offset - t - res) >=
-                s.door_min_free &&
-            free_share(grid, proto.d, proto.n, m0, m1, proto.offset + t + res, proto.offset + t + s.door_clearance_m) >=
-                s.door_min_free) {
+      if (gap <= s.door_max_width_m + 2 * res) {
+        if (doorway(grid, proto, prev, next, s)) {
           cur.doorways.emplace_back(prev, next);
           continue;
         }
@@ -304,23 +308,48 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
   }
 }
 
-// Where wall `p`'s end at along `a` meets a wall that crosses its line
-// within corner_gap_m of it (and passes the end within its own length):
-// the along of the crossing of their centre lines; none: NaN.
-double meeting(const Piece& p, double a, const std::vector<Piece>& all, const FloorPlanSettings& s) {
-  double best = std::numeric_limits<double>::quiet_NaN(), best_dist = 1e300;
-  const Eigen::Vector2d end = p.d * a + p.n * p.offset;
+// A wall crossing wall `p`'s line near its end at along `a`: the along of
+// the crossing of their centre lines, and the crossing wall's thickness.
+struct Crossing {
+  double at = 0, thickness = 0;
+};
+
+// The crossings of p's line by the walls that pass within `reach` (plus
+// their half thickness) of it at their own ends, with `outward` the
+// direction away from p (+1 past a1, -1 before a0).
+std::vector<Crossing> crossings(const Piece& p, const std::vector<Piece>& all, double reach) {
+  std::vector<Crossing> out;
   for (const Piece& q : all) {
     const double cross = p.d.dot(q.n);
     if (std::abs(cross) < std::sin(30.0 * kPi / 180.0)) continue;
-    // The crossing: along p's line, where q's offset is q.offset.
+    // Along p's line, where q's offset is q.offset.
     const double t = (q.offset - q.n.dot(p.n * p.offset)) / cross;
-    const Eigen::Vector2d x = p.d * t + p.n * p.offset;
-    const double reach = s.corner_gap_m + q.thickness / 2;
-    const double qa = q.d.dot(x);
-    if (qa < q.a0 - reach || qa > q.a1 + reach) continue;
-    const double dist = (x - end).norm();
-    if (dist <= reach && dist < best_dist) best = t, best_dist = dist;
+    const double qa = q.d.dot(p.d * t + p.n * p.offset);
+    if (qa < q.a0 - reach - q.thickness / 2 || qa > q.a1 + reach + q.thickness / 2) continue;
+    out.push_back({t, q.thickness});
+  }
+  return out;
+}
+
+// Where wall `p`'s end at along `a` (outward: +1 at a1, -1 at a0) meets a
+// crossing wall within corner_gap_m; or, as a doorway, a crossing wall a
+// door's width beyond it with free space through the gap: the new end (on
+// the crossing wall's centre line), and the doorway's g0..g1 when it is
+// one. Neither: NaN.
+double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward, const std::vector<Piece>& all,
+               const FloorPlanSettings& s, std::pair<double, double>& door) {
+  double best = std::numeric_limits<double>::quiet_NaN(), best_dist = 1e300;
+  for (const Crossing& c : crossings(p, all, s.corner_gap_m)) {
+    const double dist = std::abs(c.at - a);
+    if (dist <= s.corner_gap_m + c.thickness / 2 && dist < best_dist) best = c.at, best_dist = dist;
+  }
+  if (!std::isnan(best)) return best;
+  for (const Crossing& c : crossings(p, all, 0.0)) {
+    const double gap = outward * (c.at - a) - c.thickness / 2;  // clear width from the end to its face
+    if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
+    const double g0 = outward > 0 ? a : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : a;
+    if (!doorway(grid, p, g0, g1, s)) continue;
+    best = c.at, best_dist = gap, door = {g0, g1};
   }
   return best;
 }
@@ -353,9 +382,13 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
   std::vector<Piece> met = pieces;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const Piece& p = pieces[i];
-    const double m0 = meeting(p, p.a0, pieces, s), m1 = meeting(p, p.a1, pieces, s);
+    std::pair<double, double> door0{0, 0}, door1{0, 0};
+    const double m0 = meeting(grid, p, p.a0, -1, pieces, s, door0), m1 = meeting(grid, p, p.a1, +1, pieces, s, door1);
     met[i].a0 = std::isnan(m0) ? p.a0 + p.thickness / 2 : m0;
     met[i].a1 = std::isnan(m1) ? p.a1 - p.thickness / 2 : m1;
+    // A doorway between a wall's end and the wall it meets: its gap is part of the wall line.
+    if (door0.second > door0.first) met[i].doorways.insert(met[i].doorways.begin(), door0);
+    if (door1.second > door1.first) met[i].doorways.push_back(door1);
   }
   for (const Piece& p : met) {
     if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
