@@ -354,6 +354,52 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
   return best;
 }
 
+// Whether `x` lies in wall q's box (its centre line lengthened by half its
+// thickness at each end, half its thickness either side), grown by `margin`.
+bool inside(const Piece& q, const Eigen::Vector2d& x, double margin) {
+  const double a = q.d.dot(x), o = q.n.dot(x) - q.offset, h = q.thickness / 2 + margin;
+  return a >= q.a0 - h && a <= q.a1 + h && std::abs(o) <= h;
+}
+
+// Whether another wall's box reaches into the passage through doorway g of
+// wall i: the middle of the gap, door_clearance_m out either side.
+bool blocked(const std::vector<Piece>& walls, std::size_t i, const std::pair<double, double>& g,
+             const FloorPlanSettings& s) {
+  const Piece& p = walls[i];
+  const double w = g.second - g.first, reach = p.thickness / 2 + s.door_clearance_m;
+  for (double a = g.first + w / 5; a <= g.second - w / 5; a += 0.05)
+    for (double o = -reach; o <= reach; o += 0.05)
+      for (std::size_t j = 0; j < walls.size(); ++j)
+        if (j != i && inside(walls[j], p.d * a + p.n * (p.offset + o), 0.0)) return true;
+  return false;
+}
+
+// A wall found twice (a wall between two dominant directions is a face in
+// both) is kept once, the longer; a doorway another wall's box reaches
+// into is no doorway (the world would have wall in it).
+std::vector<Piece> without_duplicates(std::vector<Piece> pieces, const FloorPlanSettings& s) {
+  std::sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.a1 - a.a0 > b.a1 - b.a0; });
+  std::vector<Piece> kept;
+  for (const Piece& p : pieces) {
+    bool twice = false;
+    for (const Piece& q : kept) {
+      if (std::abs(p.d.dot(q.d)) < std::cos(2 * s.angle_tolerance_rad)) continue;
+      // The share of p's centre line inside q's box.
+      int in = 0, all = 0;
+      for (double a = p.a0; a <= p.a1; a += 0.05, ++all) in += inside(q, p.d * a + p.n * p.offset, 0.05) ? 1 : 0;
+      twice = twice || in >= 0.7 * all;
+    }
+    if (!twice) kept.push_back(p);
+  }
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    auto& doors = kept[i].doorways;
+    doors.erase(std::remove_if(doors.begin(), doors.end(),
+                               [&](const std::pair<double, double>& g) { return blocked(kept, i, g, s); }),
+                doors.end());
+  }
+  return kept;
+}
+
 }  // namespace
 
 Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettings& s) {
@@ -390,6 +436,7 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     if (door0.second > door0.first) met[i].doorways.insert(met[i].doorways.begin(), door0);
     if (door1.second > door1.first) met[i].doorways.push_back(door1);
   }
+  met = without_duplicates(std::move(met), s);
   for (const Piece& p : met) {
     if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
     Wall w;
