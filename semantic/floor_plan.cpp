@@ -232,7 +232,17 @@ bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
   proto.d = line.direction, proto.n = line.normal;
   proto.offset = line.normal.dot(line.point) + (lo + hi) / 2;
   proto.thickness = std::max(s.min_wall_thickness_m, hi - lo + grid.resolution_m);
-  if (!single_face && proto.thickness > s.max_wall_thickness_m) return false;
+  const auto [shortest, longest] = std::minmax_element(along.begin(), along.end());
+  if (proto.thickness > s.max_wall_thickness_m && (!single_face || *longest - *shortest >= 2 * s.min_wall_length_m)) {
+    if (!single_face) return false;
+    // A curved face (a drifting map's long wall): two straighter halves.
+    const double mid = detail::quantile(along, 0.5);
+    std::vector<Eigen::Vector2d> lo_half, hi_half;
+    for (std::size_t k = 0; k < xy.size(); ++k) (along[k] < mid ? lo_half : hi_half).push_back(xy[k]);
+    split_wall(grid, lo_half, false, true, s, out);
+    split_wall(grid, hi_half, false, true, s, out);
+    return true;
+  }
   proto.both_faces = both_faces;
   proto.cells = static_cast<int>(xy.size());
   const double base = line.direction.dot(line.point), res = grid.resolution_m;
