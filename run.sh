@@ -20,9 +20,9 @@ build=${RISE_BUILD_DIR:-$root/build}
 # Ceres for the semantic engine and Open3D as its benchmark peer, jsoncpp for
 # the training reports and journal, Chromium to render the HTML report in its
 # test, and to run the instructor console's browser tests), zlib for the
-# gzip'd CARMEN logs, cpp-httplib for the instructor's web server, Node.js + npm to build its pages from the
-# locked npm packages in instructor/web (three.js, esbuild, playwright-core)
-# at set-up. Installing
+# gzip'd CARMEN logs, cpp-httplib for the instructor's web server, Node.js
+# + npm to build its pages from the locked npm packages in instructor/web
+# (three.js, esbuild, playwright-core) at set-up. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(

@@ -77,6 +77,8 @@ OccupancyGrid read_ros_map(const std::string& yaml_path, const std::string& imag
     } catch (const YAML::Exception&) {
       fail_line(yaml_path, static_cast<size_t>(line_of(origin[i])), "origin: not a number: '" + origin[i].Scalar() + "'");
     }
+    if (!std::isfinite(xyyaw[i]))
+      fail_line(yaml_path, static_cast<size_t>(line_of(origin[i])), "origin: not a finite number: '" + origin[i].Scalar() + "'");
   }
   if (xyyaw[2] != 0)
     fail_line(yaml_path, static_cast<size_t>(line_of(origin)),
@@ -173,8 +175,9 @@ double carmen_step(size_t n) { return (n == 181 || n == 361) ? kPi / static_cast
 
 }  // namespace
 
-std::vector<LaserScan2D> read_carmen_log(const std::string& path) {
-  const std::string text = read_maybe_gz(path);
+std::vector<LaserScan2D> read_carmen_log(const std::string& path) { return parse_carmen_log(path, read_maybe_gz(path)); }
+
+std::vector<LaserScan2D> parse_carmen_log(const std::string& path, std::string_view text) {
   std::vector<LaserScan2D> scans;
   std::vector<size_t> flaser;  // indices of FLASER scans: their max range is decided at the end
   std::optional<double> front_laser_max;
@@ -186,7 +189,12 @@ std::vector<LaserScan2D> read_carmen_log(const std::string& path) {
     const auto w = formats::words(line);
     if (w.empty() || w[0].front() == '#') continue;
     const size_t ln = lines.number;
-    auto num = [&](size_t i, const char* what) { return formats::number<double>(w[i], path, ln, what); };
+    // from_chars reads "nan" and "inf" too: no file of ours means them.
+    auto num = [&](size_t i, const char* what) {
+      const double v = formats::number<double>(w[i], path, ln, what);
+      if (!std::isfinite(v)) fail_line(path, ln, std::string(what) + ": not a finite number: '" + std::string(w[i]) + "'");
+      return v;
+    };
     auto need = [&](size_t count, const std::string& what) {
       if (w.size() < count)
         fail_line(path, ln, std::string(w[0]) + ": " + what + ": " + std::to_string(count) + " fields expected, " +
@@ -201,7 +209,8 @@ std::vector<LaserScan2D> read_carmen_log(const std::string& path) {
       s.ranges.resize(n);
       for (size_t i = 0; i < n; ++i) {
         const double r = num(first + i, "range");
-        if (!(r >= 0) || !std::isfinite(r)) fail_line(path, ln, std::string(w[0]) + ": range " + std::to_string(i + 1) + " is negative");
+        if (!(r >= 0) || r > 1e5)  // no laser measures 100 km; a float holds the rest
+          fail_line(path, ln, std::string(w[0]) + ": range " + std::to_string(i + 1) + ": not a distance: '" + std::string(w[first + i]) + "'");
         s.ranges[i] = static_cast<float>(r);
       }
     };
@@ -279,6 +288,11 @@ OccupancyGrid grid_from_scans(const std::vector<LaserScan2D>& scans, double reso
   OccupancyGrid grid;
   grid.resolution_m = resolution_m;
   if (scans.empty()) return grid;
+  const Eigen::Vector2d span = (hi - lo) / resolution_m;
+  if (!(span.x() * span.y() < 1e8))  // 0.9 GB of log-odds, stamps and cells
+    throw std::invalid_argument("grid_from_scans: the scans span " + std::to_string(hi.x() - lo.x()) + " x " +
+                                std::to_string(hi.y() - lo.y()) + " m: too many cells at " +
+                                std::to_string(resolution_m) + " m");
   grid.origin_m = lo - Eigen::Vector2d::Constant(resolution_m);
   grid.width = static_cast<int>(std::ceil((hi.x() - grid.origin_m.x()) / resolution_m)) + 1;
   grid.height = static_cast<int>(std::ceil((hi.y() - grid.origin_m.y()) / resolution_m)) + 1;

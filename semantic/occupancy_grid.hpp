@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace rise::semantic {
@@ -75,6 +76,8 @@ struct LaserScan2D {
 /// has it, otherwise the log's largest reading: the SICK writes its
 /// no-return code there (81.83, 81.91 or a configured 50 m).
 std::vector<LaserScan2D> read_carmen_log(const std::string& path);
+/// The same on the log's text (`path` only names it in errors): the fuzz target's entry point.
+std::vector<LaserScan2D> parse_carmen_log(const std::string& path, std::string_view text);
 
 /// How scans become a grid: log-odds per cell, a hit where a beam ends, a
 /// miss in each cell it crosses (Thrun, Burgard, Fox, "Probabilistic

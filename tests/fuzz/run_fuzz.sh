@@ -3,7 +3,7 @@
 # inputs from a seed corpus this script writes itself (nothing binary is kept
 # in the repository).
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
-# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d or pcd; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd or carmen; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -17,6 +17,9 @@ case "$target" in
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
   ply | scan3d) sources=("$root"/semantic/cloud{,_formats}.cpp) ;;
   pcd) sources=("$root"/semantic/cloud{,_formats,_io}.cpp) ;;
+  # The CARMEN log reader and grid_from_scans (occupancy_grid.cpp links
+  # yaml-cpp, OpenCV and zlib for the other readers there; not sanitized).
+  carmen) sources=("$root"/semantic/{cloud,cloud_formats,occupancy_grid}.cpp) ;;
   *) echo "run_fuzz.sh: unknown target $target" >&2; exit 2 ;;
 esac
 sources+=("$root/tests/fuzz/${target}_fuzz.cpp")
@@ -34,6 +37,10 @@ if [ $rebuild -eq 1 ]; then
   flags=() libs=()
   case "$target" in
     ply | scan3d) flags=(-isystem /usr/include/eigen3) ;;
+    carmen)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/opencv4)
+      libs=(-lyaml-cpp -lopencv_imgcodecs -lopencv_core -lz)
+      ;;
     pcd)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/pcl-1.13)
       libs=(-lpcl_io -lpcl_common -lboost_filesystem)
@@ -108,6 +115,13 @@ case "$target" in
     printf 'VERSION .7\nFIELDS x y z normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4\nTYPE F F F F F F\nCOUNT 1 1 1 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3 0 0 1\nnan nan nan 0 0 1\n' >"$corpus/ascii.pcd"
     if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/pointclouds/pcl" ]; then
       find "$RISE_TEST_DATA/pointclouds/pcl" -name '*.pcd' -size -20k -exec cp {} "$corpus/" \;
+    fi
+    ;;
+  carmen)
+    printf 'PARAM robot_front_laser_max 50 nohost 0\nODOM 0 0 0 0 0 0 1 h 1\nFLASER 3 1.0 81.9 2.5 0.5 -0.2 0.1 0.5 -0.2 0.1 2.0 h 2.0\n' >"$corpus/flaser.log"
+    printf 'ROBOTLASER1 0 -1.5 3.0 0.75 30 0.01 0 5 1 2 3 4 5 0 1.0 2.0 0.5 1.0 2.0 0.5 0 0 0 0 0 7.5 h 7.5\n' >"$corpus/robotlaser.log"
+    if [ -n "${RISE_TEST_DATA:-}" ] && [ -f "$RISE_TEST_DATA/pointclouds/acschaefer_ple/intel-corrected.log.gz" ]; then
+      zcat "$RISE_TEST_DATA/pointclouds/acschaefer_ple/intel-corrected.log.gz" | head -60 >"$corpus/intel.log" || true  # zcat's SIGPIPE
     fi
     ;;
 esac

@@ -2,12 +2,14 @@
 // drawn over them (tests/data/buildings/README.md). Not installed.
 //
 //   grid_render IN OUT.png [--image PGM] [--res M] [--region X0 Y0 X1 Y1]
-//               [--px N] [--truth FILE.json]
+//               [--px N] [--truth FILE.json] [--dump GRID.pgm]
 //
 // IN is a map_server .yaml or a CARMEN log. Free cells white, occupied
 // black, unknown grey; a thin line every metre, a darker one with its
 // coordinate every 5 m; truth walls red, doors green (a bar as wide as the
-// door, across the wall).
+// door, across the wall). --dump writes the grid itself as a map_server
+// PGM (0 occupied, 254 free, 205 unknown; bottom row first in y) and prints
+// its origin, for scripts that measure on it.
 
 #include <json/json.h>
 
@@ -33,7 +35,7 @@ int main(int argc, char** argv) try {
     return 2;
   }
   const std::string in = argv[1], out = argv[2];
-  std::string image, truth;
+  std::string image, truth, dump;
   double res = 0.05;
   int px = 2;
   bool region = false;
@@ -44,6 +46,7 @@ int main(int argc, char** argv) try {
     else if (a == "--res") res = std::atof(argv[++i]);
     else if (a == "--px") px = std::atoi(argv[++i]);
     else if (a == "--truth") truth = argv[++i];
+    else if (a == "--dump") dump = argv[++i];
     else if (a == "--region") {
       region = true;
       x0 = std::atof(argv[++i]), y0 = std::atof(argv[++i]), x1 = std::atof(argv[++i]), y1 = std::atof(argv[++i]);
@@ -57,6 +60,15 @@ int main(int argc, char** argv) try {
   std::printf("%d x %d cells of %.3f m, origin %.3f %.3f, extent %.2f x %.2f m, occupied %zu, free %zu\n", g.width,
               g.height, g.resolution_m, g.origin_m.x(), g.origin_m.y(), g.width * g.resolution_m,
               g.height * g.resolution_m, occ, fre);
+  if (!dump.empty()) {
+    cv::Mat m(g.height, g.width, CV_8U);
+    for (int r = 0; r < g.height; ++r)
+      for (int c = 0; c < g.width; ++c) {
+        const CellState st = g.at(c, r);
+        m.at<uint8_t>(g.height - 1 - r, c) = st == CellState::Occupied ? 0 : st == CellState::Free ? 254 : 205;
+      }
+    cv::imwrite(dump, m);
+  }
   if (!region) {
     x0 = g.origin_m.x(), y0 = g.origin_m.y();
     x1 = x0 + g.width * g.resolution_m, y1 = y0 + g.height * g.resolution_m;

@@ -5,11 +5,13 @@
 #include <catch2/catch.hpp>
 #include <json/json.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <functional>
 #include <fstream>
 #include <map>
+#include <optional>
 
 #include "semantic/occupancy_grid.hpp"
 #include "tests/test_data.hpp"
@@ -181,6 +183,10 @@ TEST_CASE("a bad CARMEN log is refused with its file and line", "[semantic][grid
     const std::string p = s.write("b.log", "FLASER 2 1.0 x 0 0 0 0 0 0 5.0 h 5.0\n");
     CHECK_THAT(error_of([&] { read_carmen_log(p); }), Catch::Contains("b.log:1: range: not a number: 'x'"));
   }
+  SECTION("a pose that is not a finite number") {
+    const std::string p = s.write("e.log", "FLASER 2 1.0 2.0 nan 0 0 0 0 0 5.0 h 5.0\n");
+    CHECK_THAT(error_of([&] { read_carmen_log(p); }), Catch::Contains("e.log:1: x: not a finite number: 'nan'"));
+  }
   SECTION("a truncated gzip") {
     const std::string intel = rise::test::data_file("pointclouds/acschaefer_ple/intel-corrected.log.gz");
     if (intel.empty()) return;
@@ -207,7 +213,7 @@ TEST_CASE("a bad CARMEN log is refused with its file and line", "[semantic][grid
   }
 }
 
-TEST_CASE("grid_from_scans makes intel's floor, about 39 x 36 m", "[semantic][grid]") {
+TEST_CASE("grid_from_scans makes intel's floor: 29 x 29 m of walls in a grid of about 43 x 41 m", "[semantic][grid]") {
   const std::string intel = rise::test::data_file("pointclouds/acschaefer_ple/intel-corrected.log.gz");
   if (intel.empty()) {
     WARN("skipped: intel-corrected.log.gz not in RISE_TEST_DATA");
@@ -215,7 +221,91 @@ TEST_CASE("grid_from_scans makes intel's floor, about 39 x 36 m", "[semantic][gr
   }
   const OccupancyGrid g = grid_from_scans(read_carmen_log(intel), 0.05);
   CHECK(g.resolution_m == 0.05);
-  CHECK(g.width * g.resolution_m == Approx(39).margin(5));
-  CHECK(g.height * g.resolution_m == Approx(36).margin(6));
-  CHECK(count(g, CellState::Free) > 5 * count(g, CellState::Occupied));
+  // The grid holds every beam: rays through the windows reach 7 m beyond the walls.
+  CHECK(g.width * g.resolution_m == Approx(43.35).margin(1.0));
+  CHECK(g.height * g.resolution_m == Approx(41.25).margin(1.0));
+  CHECK(count(g, CellState::Free) > 10 * count(g, CellState::Occupied));
+  // The building: the occupied cells bar the 0.5% farthest each way (stray
+  // hits outside), x -10.4..18.7, y -23.1..5.8 as drawn in tests/data/buildings/intel.json.
+  std::vector<double> xs, ys;
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c)
+      if (g.at(c, r) == CellState::Occupied) xs.push_back(g.center(c, r).x()), ys.push_back(g.center(c, r).y());
+  std::sort(xs.begin(), xs.end());
+  std::sort(ys.begin(), ys.end());
+  const size_t lo = xs.size() / 200, hi = xs.size() - 1 - xs.size() / 200;
+  CHECK(xs[hi] - xs[lo] == Approx(29.1).margin(1.0));
+  CHECK(ys[hi] - ys[lo] == Approx(28.9).margin(1.0));
+}
+
+namespace {
+
+// The grid a truth file was drawn on: the map_server map it names, or the
+// grid of the CARMEN log at its resolution.
+std::optional<OccupancyGrid> truth_grid(const Json::Value& truth) {
+  const std::string source = rise::test::data_file(truth["source"].asString());
+  if (source.empty()) return std::nullopt;
+  if (truth.isMember("image")) {
+    const std::string image = rise::test::data_file(truth["image"].asString());
+    if (image.empty()) return std::nullopt;
+    return read_ros_map(source, image);
+  }
+  return grid_from_scans(read_carmen_log(source), truth["resolution_m"].asDouble());
+}
+
+bool occupied_near(const OccupancyGrid& g, const Eigen::Vector2d& p, double radius_m) {
+  const int r = static_cast<int>(std::ceil(radius_m / g.resolution_m));
+  const Eigen::Vector2i c = g.cell_of(p);
+  for (int dy = -r; dy <= r; ++dy)
+    for (int dx = -r; dx <= r; ++dx)
+      if (g.contains(c.x() + dx, c.y() + dy) && g.at(c.x() + dx, c.y() + dy) == CellState::Occupied &&
+          (g.center(c.x() + dx, c.y() + dy) - p).norm() <= radius_m + 0.5 * g.resolution_m)
+        return true;
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("each building's truth file lies on its map: walls on occupied cells, doors in free space", "[semantic][grid]") {
+  const fs::path dir = fs::path(RISE_SOURCE_DIR) / "tests/data/buildings";
+  size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    if (entry.path().extension() != ".json") continue;
+    ++files;
+    INFO(entry.path().filename().string());
+    std::ifstream in(entry.path());
+    Json::Value truth;
+    Json::CharReaderBuilder rb;
+    std::string errors;
+    REQUIRE(Json::parseFromStream(rb, in, &truth, &errors));
+    REQUIRE(truth["note"].asString().size() > 100);
+    REQUIRE(truth["walls"].size() > 0);
+    if (truth["source"].asString().ends_with(".bt")) {
+      WARN("not checked against its map: " << entry.path().filename().string() << " (an OctoMap; the 2D grid of a .bt is not built here)");
+      continue;
+    }
+    const auto grid = truth_grid(truth);
+    if (!grid) {
+      WARN("skipped: " << truth["source"].asString() << " not in RISE_TEST_DATA");
+      continue;
+    }
+    for (const auto& w : truth["walls"]) {
+      REQUIRE(w.size() == 4);
+      const Eigen::Vector2d a(w[0].asDouble(), w[1].asDouble()), b(w[2].asDouble(), w[3].asDouble());
+      const int n = std::max(2, static_cast<int>((b - a).norm() / 0.05));
+      int near = 0;
+      for (int i = 0; i <= n; ++i) near += occupied_near(*grid, a + (b - a) * i / n, 0.15);
+      INFO("wall " << w.toStyledString());
+      CHECK(near >= 0.8 * (n + 1));
+    }
+    for (const auto& d : truth["doors"]) {
+      INFO("door " << d.toStyledString());
+      CHECK(d["width"].asDouble() >= 0.6);
+      CHECK(d["width"].asDouble() <= 1.2);
+      const Eigen::Vector2i c = grid->cell_of({d["center"][0].asDouble(), d["center"][1].asDouble()});
+      REQUIRE(grid->contains(c.x(), c.y()));
+      CHECK(grid->at(c.x(), c.y()) == CellState::Free);
+    }
+  }
+  CHECK(files >= 1);
 }
