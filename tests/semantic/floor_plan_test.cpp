@@ -146,7 +146,15 @@ TEST_CASE("walls and doorways of the real buildings match their truth files with
       WARN("skipped " << file.filename() << ": " << truth.source << " not in RISE_TEST_DATA");
       continue;
     }
-    const bool ros = truth.source.size() > 5 && truth.source.compare(truth.source.size() - 5, 5, ".yaml") == 0;
+    const auto ends_with = [&](const std::string& tail) {
+      return truth.source.size() >= tail.size() &&
+             truth.source.compare(truth.source.size() - tail.size(), tail.size(), tail) == 0;
+    };
+    const bool ros = ends_with(".yaml");
+    if (!ros && !ends_with(".log") && !ends_with(".log.gz")) {
+      WARN("skipped " << file.filename() << ": " << truth.source << " is no 2D map (a 3D map's truth)");
+      continue;
+    }
     const OccupancyGrid grid = ros ? read_ros_map(map, truth.image.empty() ? "" : rise::test::data_file(truth.image))
                                    : grid_from_scans(read_carmen_log(map), truth.resolution_m);
     const Segmentation seg = segment_floor_plan(grid);
