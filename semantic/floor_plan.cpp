@@ -207,10 +207,31 @@ double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eig
   return all == 0 ? 0.0 : free / static_cast<double>(all);
 }
 
+// Share of the cells along a0..a1 of wall p's line whose cross-section
+// through the wall holds an occupied cell.
+double solid_share(const OccupancyGrid& grid, const Piece& p, double a0, double a1) {
+  int solid = 0, all = 0;
+  const double t = p.thickness / 2 + grid.resolution_m;
+  for (double a = a0; a <= a1; a += grid.resolution_m, ++all)
+    for (double o = -t; o <= t; o += grid.resolution_m) {
+      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
+      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) {
+        ++solid;
+        break;
+      }
+    }
+  return all == 0 ? 0.0 : solid / static_cast<double>(all);
+}
+
 // A doorway along g0..g1 of wall `p`'s line: free cells in the gap's
-// middle, and on both sides of the wall in front of it.
-bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, const FloorPlanSettings& s) {
+// middle, and on both sides of the wall in front of it; solid wall (not a
+// dotted line of cells a laser grazed) for door_jamb_m before g0 and after
+// g1, where the gap's ends are p's (`jamb_before`, `jamb_after`).
+bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, const FloorPlanSettings& s,
+             bool jamb_before = true, bool jamb_after = true) {
   const double m0 = g0 + (g1 - g0) / 5, m1 = g1 - (g1 - g0) / 5, t = p.thickness / 2, res = grid.resolution_m;
+  if (jamb_before && solid_share(grid, p, g0 - s.door_jamb_m, g0 - res / 2) < s.door_jamb_solid) return false;
+  if (jamb_after && solid_share(grid, p, g1 + res / 2, g1 + s.door_jamb_m) < s.door_jamb_solid) return false;
   return free_share(grid, p.d, p.n, m0, m1, p.offset - t, p.offset + t) >= s.door_min_free &&
          free_share(grid, p.d, p.n, m0, m1, p.offset - t - s.door_clearance_m, p.offset - t - res) >= s.door_min_free &&
          free_share(grid, p.d, p.n, m0, m1, p.offset + t + res, p.offset + t + s.door_clearance_m) >= s.door_min_free;
@@ -358,7 +379,7 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     const double gap = outward * (c.at - a) - c.thickness / 2;  // clear width from the end to its face
     if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
     const double g0 = outward > 0 ? a : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : a;
-    if (!doorway(grid, p, g0, g1, s)) continue;
+    if (!doorway(grid, p, g0, g1, s, outward > 0, outward < 0)) continue;
     best = c.at, best_dist = gap, door = {g0, g1};
   }
   return best;
