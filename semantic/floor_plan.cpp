@@ -1,0 +1,499 @@
+#include "semantic/floor_plan.hpp"
+
+#include "semantic/segmentation_internal.hpp"
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+namespace rise::semantic {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// The grid as 0/255 masks, image row = grid row.
+struct Masks {
+  cv::Mat occupied, free, unknown;
+};
+
+Masks masks_of(const OccupancyGrid& g) {
+  Masks m{cv::Mat::zeros(g.height, g.width, CV_8U), cv::Mat::zeros(g.height, g.width, CV_8U),
+          cv::Mat::zeros(g.height, g.width, CV_8U)};
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const CellState s = g.at(c, r);
+      (s == CellState::Occupied ? m.occupied : s == CellState::Free ? m.free : m.unknown).at<uint8_t>(r, c) = 255;
+    }
+  return m;
+}
+
+// The building's wall directions in [0, pi): peaks of the histogram (1°
+// bins) of the occupancy's local orientation, each at least
+// min_direction_share of the strongest. The orientation is the structure
+// tensor's (gradient products averaged over a few cells), weighted by its
+// anisotropy: a single cell's gradient snaps to the grid's axes and
+// diagonals on a staircase-aliased line, the averaged tensor does not.
+std::vector<double> wall_directions(const cv::Mat& occupied, const FloorPlanSettings& s) {
+  cv::Mat f, gx, gy;
+  occupied.convertTo(f, CV_32F, 1.0 / 255.0);
+  cv::GaussianBlur(f, f, cv::Size(0, 0), 1.0);
+  cv::Sobel(f, gx, CV_32F, 1, 0, 3);
+  cv::Sobel(f, gy, CV_32F, 0, 1, 3);
+  cv::Mat jxx = gx.mul(gx), jxy = gx.mul(gy), jyy = gy.mul(gy);
+  for (cv::Mat* j : {&jxx, &jxy, &jyy}) cv::GaussianBlur(*j, *j, cv::Size(0, 0), 3.0);
+  constexpr int kBins = 180;
+  std::vector<double> hist(kBins, 0.0);
+  for (int r = 0; r < f.rows; ++r)
+    for (int c = 0; c < f.cols; ++c) {
+      const double xx = jxx.at<float>(r, c), xy = jxy.at<float>(r, c), yy = jyy.at<float>(r, c);
+      const double anisotropy = std::hypot(xx - yy, 2 * xy);
+      if (anisotropy < 1e-3) continue;
+      // The dominant gradient's angle; the wall runs across it.
+      double a = 0.5 * std::atan2(2 * xy, xx - yy) + kPi / 2;
+      a = std::fmod(a + 2 * kPi, kPi);
+      hist[static_cast<std::size_t>(static_cast<int>(a / kPi * kBins) % kBins)] += anisotropy;
+    }
+  const auto wrap = [](int i) { return static_cast<std::size_t>(((i % kBins) + kBins) % kBins); };
+  std::vector<double> smooth(kBins, 0.0);
+  for (int i = 0; i < kBins; ++i)
+    for (int k = -2; k <= 2; ++k) smooth[wrap(i)] += hist[wrap(i + k)];
+  // Peaks: the largest bin within twice the angle tolerance either side.
+  const int window = std::max(3, static_cast<int>(std::lround(2 * s.angle_tolerance_rad / kPi * kBins)));
+  std::vector<std::pair<double, int>> peaks;
+  for (int i = 0; i < kBins; ++i) {
+    bool top = smooth[wrap(i)] > 0.0;
+    for (int k = 1; k <= window && top; ++k)
+      top = smooth[wrap(i)] > smooth[wrap(i - k)] && smooth[wrap(i)] >= smooth[wrap(i + k)];
+    if (top) peaks.emplace_back(smooth[wrap(i)], i);
+  }
+  std::sort(peaks.rbegin(), peaks.rend());
+  std::vector<double> out;
+  for (const auto& [weight, bin] : peaks) {
+    if (weight < s.min_direction_share * peaks.front().first) break;
+    // Sub-bin refinement: the weighted mean angle of the raw bins around the peak.
+    double sum = 0.0, w = 0.0;
+    for (int k = -3; k <= 3; ++k) {
+      sum += hist[wrap(bin + k)] * (bin + k + 0.5);
+      w += hist[wrap(bin + k)];
+    }
+    out.push_back(std::fmod((sum / w) / kBins * kPi + kPi, kPi));
+  }
+  return out;
+}
+
+// The grid turned so that direction `theta` runs along the image rows:
+// pixel (u, v) is along u, across v, its centre at along a0 + res (u + ½).
+struct Frame {
+  Eigen::Vector2d d, n;
+  double a0 = 0, o0 = 0, res = 0;
+  cv::Mat occupied, free;  // 0/255, outside the grid: neither
+
+  Eigen::Vector2d world(double along_m, double offset_m) const { return along_m * d + offset_m * n; }
+  double along_of_col(double col) const { return a0 + res * col; }  // left edge of column `col`
+  double offset_of_row(double row) const { return o0 + res * row; }
+};
+
+Frame turned(const OccupancyGrid& g, const Masks& m, double theta) {
+  Frame f;
+  f.res = g.resolution_m;
+  f.d = {std::cos(theta), std::sin(theta)};
+  f.n = {-f.d.y(), f.d.x()};
+  double a_lo = 1e300, a_hi = -1e300, o_lo = 1e300, o_hi = -1e300;
+  for (const double x : {0.0, g.width * f.res})
+    for (const double y : {0.0, g.height * f.res}) {
+      const Eigen::Vector2d p = g.origin_m + Eigen::Vector2d(x, y);
+      a_lo = std::min(a_lo, f.d.dot(p)), a_hi = std::max(a_hi, f.d.dot(p));
+      o_lo = std::min(o_lo, f.n.dot(p)), o_hi = std::max(o_hi, f.n.dot(p));
+    }
+  f.a0 = a_lo - f.res;
+  f.o0 = o_lo - f.res;
+  const int cols = static_cast<int>(std::ceil((a_hi - a_lo) / f.res)) + 3;
+  const int rows = static_cast<int>(std::ceil((o_hi - o_lo) / f.res)) + 3;
+  // Grid pixel (x, y) has its centre at origin + res (x + ½, y + ½).
+  const Eigen::Vector2d c0 = g.origin_m + Eigen::Vector2d(0.5, 0.5) * f.res;
+  const cv::Matx23d M(f.d.x(), f.d.y(), (f.d.dot(c0) - f.a0) / f.res - 0.5,  //
+                      f.n.x(), f.n.y(), (f.n.dot(c0) - f.o0) / f.res - 0.5);
+  cv::warpAffine(m.occupied, f.occupied, M, cv::Size(cols, rows), cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);
+  cv::warpAffine(m.free, f.free, M, cv::Size(cols, rows), cv::INTER_NEAREST, cv::BORDER_CONSTANT, 0);
+  return f;
+}
+
+// A wall face in a turned frame: a connected strip of long occupied runs.
+struct Face {
+  int r0 = 0, r1 = 0;  // the rows its occupied cells fill (inclusive)
+  int c0 = 0, c1 = 0;  // the columns it spans (inclusive)
+  std::vector<cv::Point> cells;  // its occupied cells (x = column, y = row)
+  double mid() const { return (r0 + r1) / 2.0; }
+};
+
+std::vector<Face> faces_of(const Frame& f, const FloorPlanSettings& s) {
+  const auto cells = [&](double m) { return std::max(1, static_cast<int>(std::lround(m / f.res))); };
+  // Rows wobble by a cell on a real map: a face may step between neighbouring rows.
+  cv::Mat strips;
+  cv::dilate(f.occupied, strips, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(1, 3)));
+  cv::morphologyEx(strips, strips, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.noise_gap_m) + 1, 1)));
+  cv::morphologyEx(strips, strips, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.min_face_length_m), 1)));
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(strips, labels, stats, centroids, 8, CV_32S);
+  std::vector<Face> out;
+  for (int i = 1; i < n; ++i) {
+    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), y = stats.at<int>(i, cv::CC_STAT_TOP);
+    const int w = stats.at<int>(i, cv::CC_STAT_WIDTH), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
+    std::vector<int> per_row(static_cast<std::size_t>(h), 0);
+    Face face;
+    face.c0 = x + w, face.c1 = x;
+    for (int r = y; r < y + h; ++r)
+      for (int c = x; c < x + w; ++c)
+        if (labels.at<int>(r, c) == i && f.occupied.at<uint8_t>(r, c) != 0) {
+          ++per_row[static_cast<std::size_t>(r - y)];
+          face.cells.emplace_back(c, r);
+          face.c0 = std::min(face.c0, c), face.c1 = std::max(face.c1, c);
+        }
+    if (face.cells.empty()) continue;
+    // The face's rows: those with a fair share of its cells (not a stray cell's).
+    const int most = *std::max_element(per_row.begin(), per_row.end());
+    face.r0 = -1;
+    for (int k = 0; k < h; ++k)
+      if (per_row[static_cast<std::size_t>(k)] * 10 >= most * 3) {
+        if (face.r0 < 0) face.r0 = y + k;
+        face.r1 = y + k;
+      }
+    out.push_back(std::move(face));
+  }
+  return out;
+}
+
+int find_root(std::vector<int>& parent, int i) {
+  while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+  return i;
+}
+
+// Share of free cells in rows r0..r1, columns c0..c1 of the frame.
+double free_share(const Frame& f, int r0, int r1, int c0, int c1) {
+  r0 = std::max(r0, 0), c0 = std::max(c0, 0);
+  r1 = std::min(r1, f.free.rows - 1), c1 = std::min(c1, f.free.cols - 1);
+  if (r1 < r0 || c1 < c0) return 0.0;
+  const cv::Mat roi = f.free(cv::Range(r0, r1 + 1), cv::Range(c0, c1 + 1));
+  return cv::countNonZero(roi) / static_cast<double>(roi.total());
+}
+
+// A straight wall before its ends meet the others: along a0..a1 of a line
+// `offset` across direction d.
+struct Piece {
+  Eigen::Vector2d d, n;
+  double offset = 0, a0 = 0, a1 = 0, thickness = 0;
+  bool both_faces = false;
+  int cells = 0;
+  std::vector<std::pair<double, double>> doorways;  // along, a0 < from < to < a1
+};
+
+// Share of free cells of `grid` over the rectangle along a0..a1, offset
+// o0..o1 of the line (d, n), sampled at the grid's resolution.
+double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eigen::Vector2d& n, double a0,
+                  double a1, double o0, double o1) {
+  int free = 0, all = 0;
+  for (double a = a0; a <= a1; a += grid.resolution_m)
+    for (double o = o0; o <= o1; o += grid.resolution_m) {
+      const Eigen::Vector2i c = grid.cell_of(a * d + o * n);
+      ++all;
+      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Free) ++free;
+    }
+  return all == 0 ? 0.0 : free / static_cast<double>(all);
+}
+
+// Share of the cells along a0..a1 of wall p's line whose cross-section
+// through the wall holds an occupied cell.
+double solid_share(const OccupancyGrid& grid, const Piece& p, double a0, double a1) {
+  int solid = 0, all = 0;
+  const double t = p.thickness / 2 + grid.resolution_m;
+  for (double a = a0; a <= a1; a += grid.resolution_m, ++all)
+    for (double o = -t; o <= t; o += grid.resolution_m) {
+      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
+      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) {
+        ++solid;
+        break;
+      }
+    }
+  return all == 0 ? 0.0 : solid / static_cast<double>(all);
+}
+
+// A doorway along g0..g1 of wall `p`'s line: free cells in the gap's
+// middle, and on both sides of the wall in front of it; solid wall (not a
+// dotted line of cells a laser grazed) for door_jamb_m before g0 and after
+// g1, where the gap's ends are p's (`jamb_before`, `jamb_after`).
+bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, const FloorPlanSettings& s,
+             bool jamb_before = true, bool jamb_after = true) {
+  const double m0 = g0 + (g1 - g0) / 5, m1 = g1 - (g1 - g0) / 5, t = p.thickness / 2, res = grid.resolution_m;
+  if (jamb_before && solid_share(grid, p, g0 - s.door_jamb_m, g0 - res / 2) < s.door_jamb_solid) return false;
+  if (jamb_after && solid_share(grid, p, g1 + res / 2, g1 + s.door_jamb_m) < s.door_jamb_solid) return false;
+  return free_share(grid, p.d, p.n, m0, m1, p.offset - t, p.offset + t) >= s.door_min_free &&
+         free_share(grid, p.d, p.n, m0, m1, p.offset - t - s.door_clearance_m, p.offset - t - res) >= s.door_min_free &&
+         free_share(grid, p.d, p.n, m0, m1, p.offset + t + res, p.offset + t + s.door_clearance_m) >= s.door_min_free;
+}
+
+// One wall line from the occupied cells of its faces (world xy): its centre
+// line fitted through them, its thickness their spread across it, split at
+// gaps along it that are neither narrower than a door nor a doorway (free
+// space in the gap's middle and on both sides of it). False, adding nothing,
+// when the cells spread wider than a wall's thickness across the line
+// (unless they are a single face: a face is straight by construction).
+bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& xy, bool both_faces, bool single_face,
+                const FloorPlanSettings& s, std::vector<Piece>& out) {
+  const detail::Line2 line = detail::fit_line(xy);
+  std::vector<double> along, across;
+  for (const auto& p : xy) along.push_back(line.along(p)), across.push_back(line.offset(p));
+  const double lo = detail::quantile(across, 0.03), hi = detail::quantile(across, 0.97);
+  Piece proto;
+  proto.d = line.direction, proto.n = line.normal;
+  proto.offset = line.normal.dot(line.point) + (lo + hi) / 2;
+  proto.thickness = std::max(s.min_wall_thickness_m, hi - lo + grid.resolution_m);
+  const auto [shortest, longest] = std::minmax_element(along.begin(), along.end());
+  if (proto.thickness > s.max_wall_thickness_m && (!single_face || *longest - *shortest >= 2 * s.min_wall_length_m)) {
+    if (!single_face) return false;
+    // A curved face (a drifting map's long wall): two straighter halves.
+    const double mid = detail::quantile(along, 0.5);
+    std::vector<Eigen::Vector2d> lo_half, hi_half;
+    for (std::size_t k = 0; k < xy.size(); ++k) (along[k] < mid ? lo_half : hi_half).push_back(xy[k]);
+    split_wall(grid, lo_half, false, true, s, out);
+    split_wall(grid, hi_half, false, true, s, out);
+    return true;
+  }
+  proto.both_faces = both_faces;
+  proto.cells = static_cast<int>(xy.size());
+  const double base = line.direction.dot(line.point), res = grid.resolution_m;
+  std::sort(along.begin(), along.end());
+  Piece cur = proto;
+  cur.a0 = base + along.front() - res / 2;
+  for (std::size_t k = 1; k <= along.size(); ++k) {
+    const double prev = base + along[k - 1] + res / 2;
+    if (k < along.size()) {
+      const double next = base + along[k] - res / 2, gap = next - prev;
+      if (gap < s.door_min_width_m) continue;
+      if (gap <= s.door_max_width_m + 2 * res) {
+        if (doorway(grid, proto, prev, next, s)) {
+          cur.doorways.emplace_back(prev, next);
+          continue;
+        }
+      }
+    }
+    cur.a1 = prev;
+    if (cur.a1 - cur.a0 >= s.min_wall_length_m) out.push_back(cur);
+    if (k < along.size()) {
+      cur = proto;
+      cur.a0 = base + along[k] - res / 2;
+    }
+  }
+  return true;
+}
+
+// The walls of one direction: faces joined into walls (the two faces of
+// one wall; collinear faces across door-wide gaps).
+void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings& s, std::vector<Piece>& out) {
+  std::vector<Face> faces = faces_of(f, s);
+  std::vector<int> parent(faces.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    for (std::size_t j = i + 1; j < faces.size(); ++j) {
+      const Face &a = faces[i], &b = faces[j];
+      const int overlap = std::min(a.c1, b.c1) - std::max(a.c0, b.c0) + 1;
+      const int gap = -overlap;  // columns between them when they do not overlap
+      bool join = false;
+      if (std::abs(a.mid() - b.mid()) * f.res <= s.collinear_offset_m && gap * f.res <= s.door_max_width_m) {
+        join = true;
+      } else if ((std::max(a.r1, b.r1) - std::min(a.r0, b.r0) + 1) * f.res <= s.max_wall_thickness_m &&
+                 overlap * 2 >= std::min(a.c1 - a.c0, b.c1 - b.c0)) {
+        // Two faces of one wall have no free space between them.
+        const Face &lo = a.mid() < b.mid() ? a : b, &hi = a.mid() < b.mid() ? b : a;
+        join = free_share(f, lo.r1 + 1, hi.r0 - 1, std::max(a.c0, b.c0), std::min(a.c1, b.c1)) < 0.05;
+      }
+      if (join) parent[static_cast<std::size_t>(find_root(parent, static_cast<int>(i)))] = find_root(parent, static_cast<int>(j));
+    }
+  std::vector<std::vector<int>> groups(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i)
+    groups[static_cast<std::size_t>(find_root(parent, static_cast<int>(i)))].push_back(static_cast<int>(i));
+  const auto cells_of = [&](const Face& face, std::vector<Eigen::Vector2d>& xy) {
+    for (const auto& c : face.cells) xy.push_back(f.world(f.along_of_col(c.x + 0.5), f.offset_of_row(c.y + 0.5)));
+  };
+  for (const auto& group : groups) {
+    if (group.empty()) continue;
+    std::vector<Eigen::Vector2d> xy;
+    bool both = false;
+    for (const int i : group) {
+      const Face& face = faces[static_cast<std::size_t>(i)];
+      cells_of(face, xy);
+      for (const int j : group) both = both || face.r1 < faces[static_cast<std::size_t>(j)].r0;
+    }
+    if (split_wall(grid, xy, both, group.size() == 1, s, out)) continue;
+    // Joined faces that do not make one straight slab: each on its own.
+    for (const int i : group) {
+      xy.clear();
+      cells_of(faces[static_cast<std::size_t>(i)], xy);
+      split_wall(grid, xy, false, true, s, out);
+    }
+  }
+}
+
+// A wall crossing wall `p`'s line near its end at along `a`: the along of
+// the crossing of their centre lines, and the crossing wall's thickness.
+struct Crossing {
+  double at = 0, thickness = 0;
+};
+
+// The crossings of p's line by the walls that pass within `reach` (plus
+// their half thickness) of it at their own ends, with `outward` the
+// direction away from p (+1 past a1, -1 before a0).
+std::vector<Crossing> crossings(const Piece& p, const std::vector<Piece>& all, double reach) {
+  std::vector<Crossing> out;
+  for (const Piece& q : all) {
+    const double cross = p.d.dot(q.n);
+    if (std::abs(cross) < std::sin(30.0 * kPi / 180.0)) continue;
+    // Along p's line, where q's offset is q.offset.
+    const double t = (q.offset - q.n.dot(p.n * p.offset)) / cross;
+    const double qa = q.d.dot(p.d * t + p.n * p.offset);
+    if (qa < q.a0 - reach - q.thickness / 2 || qa > q.a1 + reach + q.thickness / 2) continue;
+    out.push_back({t, q.thickness});
+  }
+  return out;
+}
+
+// Where wall `p`'s end at along `a` (outward: +1 at a1, -1 at a0) meets a
+// crossing wall within corner_gap_m; or, as a doorway, a crossing wall a
+// door's width beyond it with free space through the gap: the new end (on
+// the crossing wall's centre line), and the doorway's g0..g1 when it is
+// one. Neither: NaN.
+double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward, const std::vector<Piece>& all,
+               const FloorPlanSettings& s, std::pair<double, double>& door) {
+  double best = std::numeric_limits<double>::quiet_NaN(), best_dist = 1e300;
+  for (const Crossing& c : crossings(p, all, s.corner_gap_m)) {
+    const double dist = std::abs(c.at - a);
+    if (dist <= s.corner_gap_m + c.thickness / 2 && dist < best_dist) best = c.at, best_dist = dist;
+  }
+  if (!std::isnan(best)) return best;
+  for (const Crossing& c : crossings(p, all, 0.0)) {
+    const double gap = outward * (c.at - a) - c.thickness / 2;  // clear width from the end to its face
+    if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
+    const double g0 = outward > 0 ? a : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : a;
+    if (!doorway(grid, p, g0, g1, s, outward > 0, outward < 0)) continue;
+    best = c.at, best_dist = gap, door = {g0, g1};
+  }
+  return best;
+}
+
+// Whether `x` lies in wall q's box (its centre line lengthened by half its
+// thickness at each end, half its thickness either side), grown by `margin`.
+bool inside(const Piece& q, const Eigen::Vector2d& x, double margin) {
+  const double a = q.d.dot(x), o = q.n.dot(x) - q.offset, h = q.thickness / 2 + margin;
+  return a >= q.a0 - h && a <= q.a1 + h && std::abs(o) <= h;
+}
+
+// Whether another wall's box reaches into the passage through doorway g of
+// wall i: the middle of the gap, door_clearance_m out either side.
+bool blocked(const std::vector<Piece>& walls, std::size_t i, const std::pair<double, double>& g,
+             const FloorPlanSettings& s) {
+  const Piece& p = walls[i];
+  const double w = g.second - g.first, reach = p.thickness / 2 + s.door_clearance_m;
+  for (double a = g.first + w / 5; a <= g.second - w / 5; a += 0.05)
+    for (double o = -reach; o <= reach; o += 0.05)
+      for (std::size_t j = 0; j < walls.size(); ++j)
+        if (j != i && inside(walls[j], p.d * a + p.n * (p.offset + o), 0.0)) return true;
+  return false;
+}
+
+// A wall found twice (a wall between two dominant directions is a face in
+// both) is kept once, the longer; a doorway another wall's box reaches
+// into is no doorway (the world would have wall in it).
+std::vector<Piece> without_duplicates(std::vector<Piece> pieces, const FloorPlanSettings& s) {
+  std::sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.a1 - a.a0 > b.a1 - b.a0; });
+  std::vector<Piece> kept;
+  for (const Piece& p : pieces) {
+    bool twice = false;
+    for (const Piece& q : kept) {
+      if (std::abs(p.d.dot(q.d)) < std::cos(2 * s.angle_tolerance_rad)) continue;
+      // The share of p's centre line inside q's box.
+      int in = 0, all = 0;
+      for (double a = p.a0; a <= p.a1; a += 0.05, ++all) in += inside(q, p.d * a + p.n * p.offset, 0.05) ? 1 : 0;
+      twice = twice || in >= 0.7 * all;
+    }
+    if (!twice) kept.push_back(p);
+  }
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    auto& doors = kept[i].doorways;
+    doors.erase(std::remove_if(doors.begin(), doors.end(),
+                               [&](const std::pair<double, double>& g) { return blocked(kept, i, g, s); }),
+                doors.end());
+  }
+  return kept;
+}
+
+}  // namespace
+
+Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettings& s) {
+  if (grid.width <= 0 || grid.height <= 0 || grid.cells.size() != static_cast<std::size_t>(grid.width) * grid.height)
+    throw std::invalid_argument("segment_floor_plan: empty or inconsistent grid");
+  const Masks masks = masks_of(grid);
+  const int n_free = cv::countNonZero(masks.free);
+  if (n_free == 0 || cv::countNonZero(masks.occupied) == 0)
+    throw std::invalid_argument("segment_floor_plan: the grid has no free or no occupied cells");
+
+  Segmentation seg;
+  seg.floor.height_m = 0.0;
+  seg.floor.points = n_free;
+  std::vector<cv::Point> free_px;
+  cv::findNonZero(masks.free, free_px);
+  const cv::Rect box = cv::boundingRect(free_px);
+  seg.floor.min_m = grid.origin_m + grid.resolution_m * Eigen::Vector2d(box.x, box.y);
+  seg.floor.max_m = grid.origin_m + grid.resolution_m * Eigen::Vector2d(box.x + box.width, box.y + box.height);
+
+  std::vector<Piece> pieces;
+  for (const double theta : wall_directions(masks.occupied, s)) walls_of(grid, turned(grid, masks, theta), s, pieces);
+
+  // Ends meet the crossing wall's centre line; a free end stops half a
+  // thickness short of the last occupied cell (the world file's box
+  // reaches thickness/2 past its line's ends).
+  std::vector<Piece> met = pieces;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    const Piece& p = pieces[i];
+    std::pair<double, double> door0{0, 0}, door1{0, 0};
+    const double m0 = meeting(grid, p, p.a0, -1, pieces, s, door0), m1 = meeting(grid, p, p.a1, +1, pieces, s, door1);
+    met[i].a0 = std::isnan(m0) ? p.a0 + p.thickness / 2 : m0;
+    met[i].a1 = std::isnan(m1) ? p.a1 - p.thickness / 2 : m1;
+    // A doorway between a wall's end and the wall it meets: its gap is part of the wall line.
+    if (door0.second > door0.first) met[i].doorways.insert(met[i].doorways.begin(), door0);
+    if (door1.second > door1.first) met[i].doorways.push_back(door1);
+  }
+  met = without_duplicates(std::move(met), s);
+  for (const Piece& p : met) {
+    if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
+    Wall w;
+    w.from_m = p.d * p.a0 + p.n * p.offset;
+    w.to_m = p.d * p.a1 + p.n * p.offset;
+    w.height_m = s.wall_height_m;
+    w.thickness_m = p.thickness;
+    w.both_faces_seen = p.both_faces;
+    w.points = p.cells;
+    const int index = static_cast<int>(seg.walls.size());
+    for (const auto& [g0, g1] : p.doorways) {
+      if (g0 <= p.a0 || g1 >= p.a1) continue;
+      w.openings.push_back({g0 - p.a0, g1 - g0, s.door_height_m});
+      Door door;
+      door.center_m = p.d * ((g0 + g1) / 2) + p.n * p.offset;
+      door.yaw_rad = std::atan2(p.d.y(), p.d.x());
+      door.width_m = g1 - g0;
+      door.height_m = s.door_height_m;
+      door.wall_thickness_m = p.thickness;
+      door.lintel = true;
+      door.wall = index;
+      seg.doors.push_back(door);
+    }
+    seg.walls.push_back(std::move(w));
+  }
+  return seg;
+}
+
+}  // namespace rise::semantic

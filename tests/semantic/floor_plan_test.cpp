@@ -1,0 +1,173 @@
+// segment_floor_plan: walls and doorways from occupancy grids, on small
+// drawn grids and on the real buildings of shared/data against their truth
+// files (tests/data/buildings).
+
+#include <catch2/catch.hpp>
+
+#include <cstdio>
+#include <filesystem>
+
+#include "semantic/floor_plan.hpp"
+#include "semantic/occupancy_grid.hpp"
+#include "tests/semantic/building_truth.hpp"
+#include "tests/test_data.hpp"
+
+namespace fs = std::filesystem;
+using namespace rise::semantic;
+using namespace rise::semantic::testing;
+
+namespace {
+
+// A grid of `w` x `h` unknown cells of 5 cm, origin at 0, 0.
+OccupancyGrid blank(int w, int h) {
+  OccupancyGrid g;
+  g.resolution_m = 0.05;
+  g.width = w, g.height = h;
+  g.cells.assign(static_cast<std::size_t>(w) * h, CellState::Unknown);
+  return g;
+}
+
+void fill(OccupancyGrid& g, double x0, double y0, double x1, double y1, CellState s) {
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) {
+      const Eigen::Vector2d p = g.center(c, r);
+      if (p.x() >= x0 && p.x() < x1 && p.y() >= y0 && p.y() < y1) g.at(c, r) = s;
+    }
+}
+
+// Two 4 x 3 m rooms side by side (x 0..4 and 4.3..8.3, y 0..3), their
+// shared wall 0.3 m thick seen as two faces with unknown cells between
+// and, when `door`, a 0.9 m doorway in it at y 1.0..1.9; outer walls one
+// cell thick, seen from inside only.
+OccupancyGrid two_rooms(bool door) {
+  OccupancyGrid g = blank(180, 80);
+  fill(g, 0.2, 0.2, 8.6, 3.6, CellState::Free);
+  fill(g, 4.2, 0.2, 4.5, 3.6, CellState::Unknown);    // inside the shared wall
+  fill(g, 0.15, 0.15, 8.65, 0.2, CellState::Occupied);  // south
+  fill(g, 0.15, 3.6, 8.65, 3.65, CellState::Occupied);  // north
+  fill(g, 0.15, 0.15, 0.2, 3.65, CellState::Occupied);  // west
+  fill(g, 8.6, 0.15, 8.65, 3.65, CellState::Occupied);  // east
+  fill(g, 4.15, 0.2, 4.2, 3.6, CellState::Occupied);    // shared wall, west face
+  fill(g, 4.5, 0.2, 4.55, 3.6, CellState::Occupied);    // ... east face
+  if (door) {
+    fill(g, 4.15, 1.0, 4.55, 1.9, CellState::Free);
+  }
+  return g;
+}
+
+// The walls within 0.1 m of x = `x` running along y.
+std::vector<Wall> walls_at_x(const Segmentation& seg, double x) {
+  std::vector<Wall> out;
+  for (const Wall& w : seg.walls)
+    if (std::abs(w.direction().x()) < 0.1 && std::abs((w.from_m.x() + w.to_m.x()) / 2 - x) < 0.1) out.push_back(w);
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("a wall seen as two faces is one wall with its thickness, and its doorway an opening with a lintel",
+          "[semantic]") {
+  FloorPlanSettings st;
+  st.wall_height_m = 2.6;
+  st.door_height_m = 2.1;
+  const Segmentation seg = segment_floor_plan(two_rooms(true), st);
+  const auto shared = walls_at_x(seg, 4.35);
+  REQUIRE(shared.size() == 1);
+  CHECK(shared[0].thickness_m == Approx(0.4).margin(0.06));
+  CHECK(shared[0].height_m == 2.6);
+  CHECK(shared[0].both_faces_seen);
+  REQUIRE(shared[0].openings.size() == 1);
+  CHECK(shared[0].openings[0].width_m == Approx(0.9).margin(0.1));
+  CHECK(shared[0].openings[0].height_m == 2.1);
+  REQUIRE(seg.doors.size() == 1);
+  const Door& d = seg.doors[0];
+  CHECK(d.center_m.x() == Approx(4.35).margin(0.05));
+  CHECK(d.center_m.y() == Approx(1.45).margin(0.05));
+  CHECK(d.lintel);
+  REQUIRE(d.wall >= 0);
+  CHECK(seg.walls[static_cast<std::size_t>(d.wall)].openings.size() == 1);
+  // The outer walls, seen from one side only, are walls too: 4 + the shared one.
+  CHECK(seg.walls.size() == 5);
+  CHECK_FALSE(seg.ceiling.found);
+  CHECK(seg.obstacles.empty());
+  CHECK(seg.floor.min_m.x() == Approx(0.2).margin(0.06));
+  CHECK(seg.floor.max_m.x() == Approx(8.6).margin(0.06));
+}
+
+TEST_CASE("a gap of door width whose far side is unknown is no doorway, and a wall without one is whole",
+          "[semantic]") {
+  SECTION("no gap: one wall, no door") {
+    const Segmentation seg = segment_floor_plan(two_rooms(false));
+    CHECK(walls_at_x(seg, 4.35).size() == 1);
+    CHECK(seg.doors.empty());
+  }
+  SECTION("the far side unknown") {
+    OccupancyGrid g = two_rooms(true);
+    fill(g, 4.55, 0.2, 8.6, 3.6, CellState::Unknown);
+    fill(g, 4.5, 0.2, 4.55, 3.6, CellState::Unknown);
+    fill(g, 4.15, 1.0, 4.55, 1.9, CellState::Unknown);
+    const Segmentation seg = segment_floor_plan(g);
+    CHECK(seg.doors.empty());
+  }
+}
+
+TEST_CASE("thin diagonal clutter and specks in a room are not walls", "[semantic]") {
+  OccupancyGrid g = two_rooms(false);
+  for (int k = 0; k < 30; ++k) {  // a 1.5 m line at 30 deg to the walls, one cell wide
+    const Eigen::Vector2i c = g.cell_of({1.0 + 0.05 * k * std::cos(0.52), 1.0 + 0.05 * k * std::sin(0.52)});
+    g.at(c.x(), c.y()) = CellState::Occupied;
+  }
+  fill(g, 2.5, 2.5, 2.6, 2.6, CellState::Occupied);
+  const Segmentation seg = segment_floor_plan(g);
+  CHECK(seg.walls.size() == 5);
+}
+
+TEST_CASE("segment_floor_plan refuses a grid with nothing to find", "[semantic]") {
+  CHECK_THROWS_AS(segment_floor_plan(blank(10, 10)), std::invalid_argument);
+  CHECK_THROWS_AS(segment_floor_plan(OccupancyGrid{}), std::invalid_argument);
+}
+
+TEST_CASE("walls and doorways of the real buildings match their truth files with precision and recall >= 0.9",
+          "[semantic]") {
+  const fs::path dir = fs::path(RISE_SOURCE_DIR) / "tests" / "data" / "buildings";
+  std::vector<fs::path> files;
+  if (fs::is_directory(dir))
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().extension() == ".json") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  if (files.empty()) {
+    WARN("skipped: no truth files in " << dir);
+    return;
+  }
+  for (const fs::path& file : files) {
+    const BuildingTruth truth = read_building_truth(file.string());
+    const std::string map = rise::test::data_file(truth.source);
+    if (map.empty()) {
+      WARN("skipped " << file.filename() << ": " << truth.source << " not in RISE_TEST_DATA");
+      continue;
+    }
+    const auto ends_with = [&](const std::string& tail) {
+      return truth.source.size() >= tail.size() &&
+             truth.source.compare(truth.source.size() - tail.size(), tail.size(), tail) == 0;
+    };
+    const bool ros = ends_with(".yaml");
+    if (!ros && !ends_with(".log") && !ends_with(".log.gz")) {
+      WARN("skipped " << file.filename() << ": " << truth.source << " is no 2D map (a 3D map's truth)");
+      continue;
+    }
+    const OccupancyGrid grid = ros ? read_ros_map(map, truth.image.empty() ? "" : rise::test::data_file(truth.image))
+                                   : grid_from_scans(read_carmen_log(map), truth.resolution_m);
+    const Segmentation seg = segment_floor_plan(grid);
+    const BuildingScore s = score_building(seg, truth);
+    std::printf("%-16s walls: precision %.3f recall %.3f (%.1f m found, %.1f m true, %zu walls); doors: precision "
+                "%.3f recall %.3f (%d found, %d true, %d matched)\n",
+                file.stem().c_str(), s.wall_precision, s.wall_recall, s.detected_wall_m, s.truth_wall_m,
+                seg.walls.size(), s.door_precision, s.door_recall, s.doors_detected, s.doors_truth, s.doors_matched);
+    INFO(file.filename().string());
+    CHECK(s.wall_precision >= 0.9);
+    CHECK(s.wall_recall >= 0.9);
+    CHECK(s.door_precision >= 0.9);
+    CHECK(s.door_recall >= 0.9);
+    for (const Obstacle& o : seg.obstacles) CHECK(o.size_m.maxCoeff() <= 3.0);
+  }
+}
