@@ -347,6 +347,8 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
     T = dT * T;
     const double moved = dT.translation().norm();
     const double turned = Eigen::AngleAxisd(dT.linear()).angle();
+    result.last_step_m = moved;
+    result.last_step_rad = turned;
     if (moved < settings.translation_epsilon_m && turned < settings.rotation_epsilon_rad &&
         radius <= settings.min_correspondence_m * (1.0 + 1e-9) && stride == 1) {
       result.converged = true;

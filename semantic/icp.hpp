@@ -50,6 +50,10 @@ struct IcpResult {
   double rmse_m = 0.0;         ///< over the inlier pairs of the last iteration
   double inlier_ratio = 0.0;   ///< paired source points / all source points
   bool converged = false;
+  /// The last update's translation and rotation: how far from settled a
+  /// match that ran out of iterations still was.
+  double last_step_m = 0.0;
+  double last_step_rad = 0.0;
 };
 
 /// Registers `source` onto `target` from `T_initial` (target ← source).

@@ -81,6 +81,13 @@ Cloud neighbourhood(const std::vector<Cloud>& clouds, const std::vector<Eigen::I
   return map;
 }
 
+// Converged, or at the iteration limit but moving less than a tenth of the
+// final pairing distance per step (sliding slowly along a weak direction,
+// as ground-dominated scenes do, not lost).
+bool settled(const IcpResult& r, const IcpSettings& s) {
+  return r.converged || r.last_step_m < 0.1 * s.min_correspondence_m;
+}
+
 class Pipeline {
  public:
   Pipeline(const SlamSettings& settings, const SlamProgress& progress) : s_(settings), progress_(progress) {}
@@ -109,12 +116,22 @@ class Pipeline {
     for (std::size_t i = 1; i < n; ++i) {
       const Eigen::Isometry3d guess =
           chain ? T_world_scan[i - 1] * odometry[i - 1].inverse() * odometry[i] : T_world_scan[i];
-      results[i] = icp(sources[i], local_map(clouds, T_world_scan, i, guess.translation(), s_), guess, icp_settings);
+      const Cloud target = local_map(clouds, T_world_scan, i, guess.translation(), s_);
+      results[i] = icp(sources[i], target, guess, icp_settings);
+      if (!results[i].converged && results[i].inlier_ratio >= s_.match_min_inlier_ratio) {
+        // Still sliding along a weak direction when the iterations ran out:
+        // as many again at the final pairing distance before judging it.
+        IcpSettings more = icp_settings;
+        more.max_correspondence_m = more.min_correspondence_m;
+        const IcpResult first = results[i];
+        results[i] = icp(sources[i], target, first.T_target_source, more);
+        results[i].iterations += first.iterations;
+      }
       if (chain) {
         // A match that did not settle, or that paired almost nothing, is
         // not built on: the scan stays where the odometry put it, and the
         // result says so (refused).
-        if (!results[i].converged || results[i].inlier_ratio < s_.match_min_inlier_ratio) {
+        if (!settled(results[i], icp_settings) || results[i].inlier_ratio < s_.match_min_inlier_ratio) {
           refused.push_back(i);
           results[i].T_target_source = guess;
         }

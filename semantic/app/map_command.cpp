@@ -149,7 +149,8 @@ int run_map(const MapOptions& o) {
     for (const std::size_t i : r.slam.refused) {
       const IcpResult& m = r.slam.sequential[i];
       which += fmt::format("{}{} ({}, {:.0f} % paired)", which.empty() ? "" : ", ", names[i],
-                           m.converged ? "too few pairs" : "did not converge", 100.0 * m.inlier_ratio);
+                           m.inlier_ratio < settings.slam.match_min_inlier_ratio ? "too few pairs" : "did not converge",
+                           100.0 * m.inlier_ratio);
     }
     spdlog::error("map: {} of {} scans did not register onto the scans before them: {}; no map written",
                   r.slam.refused.size(), names.size(), which);

@@ -1,3 +1,4 @@
+#include "semantic/cloud_formats.hpp"
 #include "semantic/cloud_io.hpp"
 
 #include <catch2/catch.hpp>
@@ -150,7 +151,14 @@ TEST_CASE("3DTK scans read in metres, right-handed, z up, with their odometry po
   const sem::Scan s = sem::read_scan(path);
   CHECK(s.name == "scan001");
   // 81360 lines "x y z": the first is a point too (3DTK skips only a "W x H" header).
-  CHECK(s.cloud.size() == 81360);
+  const sem::Cloud all = sem::read_cloud(path);
+  CHECK(all.size() == 81360);
+  // As a scan, config.ini's range limits apply (min=48, max=3276 cm): the
+  // points its scanner wrote at 32.76 m for no return are gone.
+  size_t in_range = 0;
+  for (const auto& p : all.points) in_range += p.norm() >= 0.48f && p.norm() < 32.76f ? 1 : 0;
+  CHECK(in_range < 81360 - 1000);
+  CHECK(s.cloud.size() == in_range);
   REQUIRE(s.T_world_scan.has_value());
   // scan001.pose: -3.10605 -7.50803 156.917 cm (x right, y up, z forward):
   // 1.569 m forward, 3.1 cm to the left, 7.5 cm down.
@@ -279,4 +287,24 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     CHECK_THROWS_WITH(sem::read_cloud("/nonexistent/x.pcd"), "/nonexistent/x.pcd: cannot open: No such file or directory");
     CHECK_THROWS_WITH(sem::read_cloud("x.obj"), Catch::StartsWith("x.obj: unknown extension"));
   }
+}
+
+TEST_CASE("3DTK's config.ini gives the range limits and names the line of a bad one", "[semantic]") {
+  using sem::formats::parse_3dtk_config;
+  const auto r = parse_3dtk_config("config.ini", "max=3276 # maximum point distance\nmin=48   # minimum\nadvanced=true\n");
+  CHECK(r.max_m == Approx(32.76));
+  CHECK(r.min_m == Approx(0.48));
+  CHECK(parse_3dtk_config("c.ini", "").max_m == 0.0);  // no limits
+  const auto message = [](const std::string& text) {
+    try {
+      (void)parse_3dtk_config("c.ini", text);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK(message("min=1\nmax=far\n") == "c.ini:2: max: not a number: 'far'");
+  CHECK(message("max=-5\n") == "c.ini:1: max: must be a distance >= 0 (cm)");
+  CHECK(message("max\n") == "c.ini:1: max: expected key=value");
+  CHECK(message("min=50\nmax=40\n").find("min must be below max") != std::string::npos);
 }
