@@ -1,6 +1,7 @@
 #include "semantic/registration.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -13,6 +14,8 @@ namespace {
 
 // The voxel at which `cloud` keeps about `points` points: a voxel grid's
 // occupied cells fall monotonically (near enough) as its cells grow.
+// Counted on the cloud thinned to a 4000th of its size first: the same
+// answer for any voxel above that, at a fraction of the cost.
 double voxel_for_points(const Cloud& cloud, size_t points) {
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
   for (const auto& p : cloud.points)
@@ -22,11 +25,14 @@ double voxel_for_points(const Cloud& cloud, size_t points) {
     }
   const double box = lo.x() <= hi.x() ? static_cast<double>((hi - lo).norm()) : 0.0;
   if (!(box > 0.0)) return 1e-3;
-  // Geometric bisection between a voxel that keeps every point and the box.
-  double small = box * 1e-6, large = box;
+  const double floor_m = box / 4000.0;
+  const Cloud thin = voxel_filter(cloud, floor_m);
+  if (thin.size() <= points) return floor_m;
+  // Geometric bisection between the thinning voxel and the box.
+  double small = floor_m, large = box;
   for (int i = 0; i < 24 && large / small > 1.05; ++i) {
     const double mid = std::sqrt(small * large);
-    (VoxelGrid(cloud.points, static_cast<float>(mid)).occupied_cells() > points ? small : large) = mid;
+    (VoxelGrid(thin.points, static_cast<float>(mid)).occupied_cells() > points ? small : large) = mid;
   }
   return large;
 }
@@ -78,6 +84,10 @@ std::vector<double> registration_voxels(const Cloud& source, const Cloud& target
 
 RegistrationResult register_clouds(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
                                    const RegistrationSettings& s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
   const std::vector<double> voxels = registration_voxels(source, target, s);
   struct Level {
     Cloud source, target;
@@ -85,12 +95,15 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
   };
   std::vector<Level> levels(voxels.size());
   double radius = 0.0;  // how far a rotation carries the source's points: their spread about the centroid
+  const Cloud fine_source = voxel_filter(source, voxels.back()), fine_target = voxel_filter(target, voxels.back());
   for (size_t l = 0; l < voxels.size(); ++l) {
     const double v = voxels[l];
     const bool finest = l + 1 == voxels.size();
     Level& level = levels[l];
-    level.source = voxel_filter(source, v);
-    level.target = voxel_filter(target, v);
+    // Coarse levels filter the finest level's points, a fraction of the
+    // input (centroids of centroids: within a fine voxel of the same).
+    level.source = finest ? fine_source : voxel_filter(fine_source, v);
+    level.target = finest ? fine_target : voxel_filter(fine_target, v);
     IcpSettings& icp_settings = level.icp;
     icp_settings.metric = finest ? s.fine_metric : s.coarse_metric;
     if (icp_settings.metric == IcpMetric::PointToPlane) estimate_normals(level.target, s.normals_k);
@@ -113,6 +126,8 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
     icp_settings.rotation_epsilon_rad = s.convergence_voxels * v / std::max(radius, v);
   }
 
+  const double prepare_s = seconds_since(t0);
+
   // The levels from `first` on, starting at T.
   const auto run = [&](size_t first, Eigen::Isometry3d T) {
     RegistrationResult r;
@@ -123,7 +138,9 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
       done.pairing_m = level.icp.max_correspondence_m;
       done.source_points = level.source.size();
       done.target_points = level.target.size();
+      const auto t = std::chrono::steady_clock::now();
       done.icp = icp(level.source, level.target, T, level.icp);
+      done.seconds = seconds_since(t);
       T = done.icp.T_target_source;
       r.iterations += done.icp.iterations;
       r.levels.push_back(done);
@@ -149,6 +166,8 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
       result.iterations += refined.iterations;
     }
   }
+  result.prepare_s = prepare_s;
+  result.total_s = seconds_since(t0);
   const IcpResult& last = result.levels.back().icp;
   char why[160] = "";
   if (last.inlier_ratio < s.min_inlier_ratio)

@@ -58,6 +58,7 @@ struct RegistrationLevel {
   double pairing_m = 0.0;
   size_t source_points = 0, target_points = 0;
   IcpResult icp;
+  double seconds = 0.0;  ///< its ICP
 };
 
 struct RegistrationResult {
@@ -73,6 +74,8 @@ struct RegistrationResult {
   /// itself, not from the whole pyramid (see register_clouds).
   bool from_start = false;
   std::string failure;        ///< why not converged, one line; empty when converged
+  double prepare_s = 0.0;     ///< sizing the pyramid, filtering each level, the target normals
+  double total_s = 0.0;
 };
 
 /// The pyramid's voxels, coarse to fine, for these clouds and settings.

@@ -200,6 +200,9 @@ void add_map_command(CLI::App& app) {
     int rc = 0;
     try {
       rc = run_map(*opts);
+    } catch (const NoRobotStart& e) {  // the world cannot be driven: no right answer
+      spdlog::error("map: {}", e.what());
+      rc = 1;
     } catch (const std::exception& e) {
       spdlog::error("map: {}", e.what());
       rc = 2;

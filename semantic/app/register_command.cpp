@@ -126,9 +126,11 @@ int run_register(const RegisterOptions& o) {
     s.threads = o.threads;
     const RegistrationResult r = register_clouds(source.cloud, target.cloud, T_initial, s);
     for (const auto& l : r.levels)
-      spdlog::info("level {:.3g} m: {} onto {} points, pairing {:.3g} m, {} iterations, rmse {:.4f} m, {:.0f} % paired{}",
-                   l.voxel_m, l.source_points, l.target_points, l.pairing_m, l.icp.iterations, l.icp.rmse_m,
-                   100.0 * l.icp.inlier_ratio, l.icp.converged ? ", converged" : "");
+      spdlog::info("level {:.3g} m: {} onto {} points, pairing {:.3g} m, {} iterations in {:.1f} ms, rmse {:.4f} m, {:.0f} % paired{}",
+                   l.voxel_m, l.source_points, l.target_points, l.pairing_m, l.icp.iterations, 1e3 * l.seconds,
+                   l.icp.rmse_m, 100.0 * l.icp.inlier_ratio, l.icp.converged ? ", converged" : "");
+    spdlog::info("pyramid sized, filtered and target normals estimated in {:.1f} ms; the answer from {}", 1e3 * r.prepare_s,
+                 r.from_start ? "the finer levels run from the start" : "the whole pyramid");
     T = r.T_target_source;
     rmse = r.rmse_m;
     inliers = r.inlier_ratio;
