@@ -19,12 +19,14 @@
 #include <string>
 #include <vector>
 
+#include "semantic/cloud_io.hpp"
 #include "sim/pcd_file.hpp"
 #include "sim/simulation.hpp"
 #include "sim/world_description.hpp"
 #include "tests/semantic/ground_truth.hpp"
 #include "tests/semantic/scan_sequence.hpp"
 #include "tests/semantic/sim_drive.hpp"
+#include "tests/semantic/synthetic_room.hpp"
 
 using namespace rise::semantic;
 using namespace rise::semantic::testing;
@@ -262,5 +264,29 @@ TEST_CASE("rise-semantic map refuses a missing scan and bad flags with exit code
     CHECK(WEXITSTATUS(rc) == 2);
     CHECK(slurp(err).find("--metric") != std::string::npos);
   }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("rise-semantic map refuses a scan that did not register, with one line and exit code 1", "[semantic]") {
+  const fs::path dir = fs::temp_directory_path() / ("rise_map_command_test_refused_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // The same room twice, the second 30 m away with no pose to say so: the
+  // second scan's match pairs nothing.
+  const rise::semantic::Cloud room = rise::semantic::test::synthetic_room(20000, 1);
+  rise::semantic::write_cloud((dir / "scan00.xyz").string(), room);
+  rise::semantic::write_cloud((dir / "scan01.xyz").string(),
+                              rise::semantic::transformed(room, Eigen::Isometry3d(Eigen::Translation3d(30, 0, 0))));
+  const std::string err = (dir / "stderr.txt").string();
+  const int rc = std::system((kProgram + " map " + (dir / "scan00.xyz").string() + " " + (dir / "scan01.xyz").string() +
+                              " --threads 1 -o " + (dir / "out").string() + " > /dev/null 2> " + err)
+                                 .c_str());
+  REQUIRE(WIFEXITED(rc));
+  CHECK(WEXITSTATUS(rc) == 1);
+  const std::string log = slurp(err);
+  INFO(log);
+  CHECK(log.find("scan01 (too few pairs") != std::string::npos);
+  CHECK(log.find("no map written") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "out" / "world.yaml"));
   fs::remove_all(dir);
 }
