@@ -222,12 +222,13 @@ Eigen::Vector3d robot_start(const SemanticNet& net, const ExportSettings& st) {
   clear_solids(inner, grid, solids);
   clear_solids(unoccupied, grid, solids);
   // Where the robot stood: the floor under it is out of the scanner's
-  // sight, so only what is occupied counts there.
+  // sight, so only what is occupied counts there; and it stood there, so
+  // its half-width is room enough (no margin).
   if (!st.known_poses.empty()) {
     const cv::Mat1f room = clearance_m(unoccupied, grid.resolution_m);
     for (const auto& pose : st.known_poses) {
       const Eigen::Vector2i c = grid.cell_of(pose.head<2>());
-      if (grid.contains(c.x(), c.y()) && room(c.y(), c.x()) >= need) return pose;
+      if (grid.contains(c.x(), c.y()) && room(c.y(), c.x()) >= st.robot_half_width_m) return pose;
     }
   }
   // The largest region with room for the robot, at its clearest point.

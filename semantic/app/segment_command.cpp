@@ -116,6 +116,10 @@ int run_segment(const SegmentOptions& o) {
     st.world_name = o.name;
     // A 2D map is its own floor plan; a cloud's is made from it.
     st.floor_plan = std::make_shared<OccupancyGrid>(plan ? grid : floor_plan_of(cloud, net.segmentation(), st));
+    // A cloud's origin is where its scanner stood: a single scan's sensor
+    // frame, or the first scan's in a map SLAM made (rise-semantic map's
+    // map.pcd, 3DTK, PCL's scans). A pose the robot has been at.
+    if (!plan && !o.level) st.known_poses.push_back(Eigen::Vector3d::Zero());
     // The map first: it shows why, when the world file has no start.
     write_map_png((dir / "map.png").string(), net, &cloud, st);
     write_text_file((dir / "world.sdf").string(), sdf_world(net, st));
