@@ -3,6 +3,7 @@
 //
 //   grid_render IN OUT.png [--image PGM] [--res M] [--region X0 Y0 X1 Y1]
 //               [--px N] [--truth FILE.json] [--dump GRID.pgm] [--detect]
+//               [--set SETTING=VALUE]...
 //
 // IN is a map_server .yaml or a CARMEN log. Free cells white, occupied
 // black, unknown grey; a thin line every metre, a darker one with its
@@ -25,6 +26,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <string>
 
 #include "semantic/floor_plan.hpp"
@@ -37,10 +39,11 @@ using rise::semantic::OccupancyGrid;
 namespace {
 
 template <class ToPx>
-void draw_detections(cv::Mat& img, const OccupancyGrid& g, const std::string& truth_file, const ToPx& to_px) {
+void draw_detections(cv::Mat& img, const OccupancyGrid& g, const std::string& truth_file,
+                     const rise::semantic::FloorPlanSettings& settings, const ToPx& to_px) {
   using namespace rise::semantic;
   using testing::detail::Segment;
-  const Segmentation seg = segment_floor_plan(g);
+  const Segmentation seg = segment_floor_plan(g, settings);
   testing::BuildingTruth truth;
   if (!truth_file.empty()) truth = testing::read_building_truth(truth_file);
   std::vector<Segment> expected;
@@ -111,6 +114,16 @@ int main(int argc, char** argv) try {
   double res = 0.05;
   int px = 2;
   bool region = false, detect = false;
+  rise::semantic::FloorPlanSettings settings;
+  const std::map<std::string, double*> knobs = {
+      {"door_min_width_m", &settings.door_min_width_m},     {"door_max_width_m", &settings.door_max_width_m},
+      {"min_face_length_m", &settings.min_face_length_m},   {"min_wall_length_m", &settings.min_wall_length_m},
+      {"free_wall_min_length_m", &settings.free_wall_min_length_m},
+      {"max_wall_thickness_m", &settings.max_wall_thickness_m}, {"noise_gap_m", &settings.noise_gap_m},
+      {"collinear_offset_m", &settings.collinear_offset_m}, {"min_direction_share", &settings.min_direction_share},
+      {"corner_gap_m", &settings.corner_gap_m},             {"door_clearance_m", &settings.door_clearance_m},
+      {"door_min_free", &settings.door_min_free},           {"door_jamb_m", &settings.door_jamb_m},
+      {"door_jamb_solid", &settings.door_jamb_solid}};
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
@@ -120,6 +133,12 @@ int main(int argc, char** argv) try {
     else if (a == "--truth") truth = argv[++i];
     else if (a == "--dump") dump = argv[++i];
     else if (a == "--detect") detect = true;
+    else if (a == "--set") {  // --set NAME=VALUE: a FloorPlanSettings field
+      const std::string kv = argv[++i];
+      const auto k = knobs.find(kv.substr(0, kv.find('=')));
+      if (k == knobs.end()) throw std::runtime_error("unknown setting " + kv);
+      *k->second = std::atof(kv.substr(kv.find('=') + 1).c_str());
+    }
     else if (a == "--region") {
       region = true;
       x0 = std::atof(argv[++i]), y0 = std::atof(argv[++i]), x1 = std::atof(argv[++i]), y1 = std::atof(argv[++i]);
@@ -187,7 +206,7 @@ int main(int argc, char** argv) try {
       cv::circle(img, to_px(cx, cy), 3, {0, 150, 0}, -1);
     }
   }
-  if (detect) draw_detections(img, g, truth, to_px);
+  if (detect) draw_detections(img, g, truth, settings, to_px);
   cv::imwrite(out, img);
   return 0;
 } catch (const std::exception& e) {
