@@ -344,6 +344,7 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
 // the crossing of their centre lines, and the crossing wall's thickness.
 struct Crossing {
   double at = 0, thickness = 0;
+  int side = 0;  // +1 / -1: the crossing wall lies on that side of p's line only (it ends there); 0: both
 };
 
 // The crossings of p's line by the walls that pass within `reach` (plus
@@ -358,9 +359,26 @@ std::vector<Crossing> crossings(const Piece& p, const std::vector<Piece>& all, d
     const double t = (q.offset - q.n.dot(p.n * p.offset)) / cross;
     const double qa = q.d.dot(p.d * t + p.n * p.offset);
     if (qa < q.a0 - reach - q.thickness / 2 || qa > q.a1 + reach + q.thickness / 2) continue;
-    out.push_back({t, q.thickness});
+    // Which side of p's line q's two ends lie on (beyond a corner's reach).
+    const double o0 = p.n.dot(q.d * q.a0 + q.n * q.offset) - p.offset, o1 = p.n.dot(q.d * q.a1 + q.n * q.offset) - p.offset;
+    const double r = reach + p.thickness / 2;
+    const int side = std::min(o0, o1) > -r ? 1 : std::max(o0, o1) < r ? -1 : 0;
+    out.push_back({t, q.thickness, side});
   }
   return out;
+}
+
+// Whether a wall lies on p's line (parallel, centre lines within twice
+// collinear_offset_m) starting within corner_gap_m past along `at`.
+bool continues(const Piece& p, const std::vector<Piece>& all, double at, int outward, const FloorPlanSettings& s) {
+  for (const Piece& q : all) {
+    if (std::abs(p.d.dot(q.d)) < std::cos(s.angle_tolerance_rad)) continue;
+    const Eigen::Vector2d e0 = q.d * q.a0 + q.n * q.offset, e1 = q.d * q.a1 + q.n * q.offset;
+    if (std::abs(p.n.dot((e0 + e1) / 2) - p.offset) > 2 * s.collinear_offset_m) continue;
+    const double near = outward > 0 ? std::min(p.d.dot(e0), p.d.dot(e1)) : std::max(p.d.dot(e0), p.d.dot(e1));
+    if (std::abs(near - at) <= s.corner_gap_m) return true;
+  }
+  return false;
 }
 
 // Where wall `p`'s end at along `a` (outward: +1 at a1, -1 at a0) meets a
@@ -375,12 +393,24 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     const double dist = std::abs(c.at - a);
     if (dist <= s.corner_gap_m + c.thickness / 2 && dist < best_dist) best = c.at, best_dist = dist;
   }
-  if (!std::isnan(best)) return best;
+  // From the corner's far face (or the end itself) to the next crossing
+  // wall: a doorway when door-wide with free space through it (a corridor
+  // meeting a hall beside a corner, a door beside a wall's end).
+  // Beyond a corner only between two walls leaving p's line to the same side (a corridor's mouth).
+  double from = a, corner = best;
+  int corner_side = 0;
+  if (!std::isnan(best)) {
+    for (const Crossing& c : crossings(p, all, s.corner_gap_m))
+      if (c.at == best) from = c.at + outward * c.thickness / 2, corner_side = c.side;
+    if (corner_side == 0) return best;
+    best_dist = 1e300;
+  }
   for (const Crossing& c : crossings(p, all, 0.0)) {
-    const double gap = outward * (c.at - a) - c.thickness / 2;  // clear width from the end to its face
+    if (corner_side != 0 && (c.side != corner_side || !continues(p, all, c.at, outward, s))) continue;
+    const double gap = outward * (c.at - from) - c.thickness / 2;  // clear width from the end to its face
     if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
-    const double g0 = outward > 0 ? a : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : a;
-    if (!doorway(grid, p, g0, g1, s, outward > 0, outward < 0)) continue;
+    const double g0 = outward > 0 ? from : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : from;
+    if (!doorway(grid, p, g0, g1, s, outward > 0 && std::isnan(corner), outward < 0 && std::isnan(corner))) continue;
     best = c.at, best_dist = gap, door = {g0, g1};
   }
   return best;
