@@ -190,7 +190,7 @@ struct Piece {
   double offset = 0, a0 = 0, a1 = 0, thickness = 0;
   bool both_faces = false;
   int cells = 0;
-  bool joined = false;  // an end meets another wall
+  bool joined = false;  // an end meets another wall, or another lies on its line
   std::vector<std::pair<double, double>> doorways;  // along, a0 < from < to < a1
 };
 
@@ -360,7 +360,8 @@ std::vector<Crossing> crossings(const Piece& p, const std::vector<Piece>& all, d
     const double qa = q.d.dot(p.d * t + p.n * p.offset);
     if (qa < q.a0 - reach - q.thickness / 2 || qa > q.a1 + reach + q.thickness / 2) continue;
     // Which side of p's line q's two ends lie on (beyond a corner's reach).
-    const double o0 = p.n.dot(q.d * q.a0 + q.n * q.offset) - p.offset, o1 = p.n.dot(q.d * q.a1 + q.n * q.offset) - p.offset;
+    const double o0 = p.n.dot(q.d * q.a0 + q.n * q.offset) - p.offset;
+    const double o1 = p.n.dot(q.d * q.a1 + q.n * q.offset) - p.offset;
     const double r = reach + p.thickness / 2;
     const int side = std::min(o0, o1) > -r ? 1 : std::max(o0, o1) < r ? -1 : 0;
     out.push_back({t, q.thickness, side});
@@ -393,10 +394,11 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     const double dist = std::abs(c.at - a);
     if (dist <= s.corner_gap_m + c.thickness / 2 && dist < best_dist) best = c.at, best_dist = dist;
   }
-  // From the corner's far face (or the end itself) to the next crossing
-  // wall: a doorway when door-wide with free space through it (a corridor
-  // meeting a hall beside a corner, a door beside a wall's end).
-  // Beyond a corner only between two walls leaving p's line to the same side (a corridor's mouth).
+  // From the end (or the corner's far face) to the next crossing wall: a
+  // doorway when door-wide with free space through it (a door beside a
+  // wall's end). Beyond a corner only between two walls leaving p's line
+  // to the same side, the line going on past the far one (a corridor's
+  // mouth in a hall's wall).
   double from = a, corner = best;
   int corner_side = 0;
   if (!std::isnan(best)) {
@@ -416,9 +418,9 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
   return best;
 }
 
-// Whether another wall lies on wall i's line (within collinear_offset_m,
-// parallel) less than a door's width beyond one of its ends: a piece of a
-// wall line broken by doorways.
+// Whether another wall lies on wall i's line (parallel, centre lines within
+// twice collinear_offset_m) less than a door's width and two corner gaps
+// beyond one of its ends: a piece of a wall line broken by doorways.
 bool in_line(const std::vector<Piece>& all, std::size_t i, const FloorPlanSettings& s) {
   const Piece& p = all[i];
   for (std::size_t j = 0; j < all.size(); ++j) {
@@ -456,8 +458,9 @@ bool blocked(const std::vector<Piece>& walls, std::size_t i, const std::pair<dou
 }
 
 // A wall found twice (a wall between two dominant directions is a face in
-// both) is kept once, the longer; a doorway another wall's box reaches
-// into is no doorway (the world would have wall in it).
+// both) is kept once, the longer; a wall's other face beside it (nothing
+// free between) makes it one thicker wall; a doorway another wall's box
+// reaches into is no doorway (the world would have wall in it).
 std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Piece> pieces,
                                       const FloorPlanSettings& s) {
   std::sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.a1 - a.a0 > b.a1 - b.a0; });

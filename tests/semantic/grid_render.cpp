@@ -83,7 +83,8 @@ void draw_detections(cv::Mat& img, const OccupancyGrid& g, const std::string& tr
     }
   }
   for (std::size_t i = 0; i < expected.size(); ++i) {
-    const double len = (expected[i].second - expected[i].first).norm(), miss = len - testing::detail::union_length(covered[i]);
+    const double len = (expected[i].second - expected[i].first).norm();
+    const double miss = len - testing::detail::union_length(covered[i]);
     if (miss > 0.3)
       std::printf("uncovered truth %.1f of %.1f m: (%.2f, %.2f) - (%.2f, %.2f)\n", miss, len, expected[i].first.x(),
                   expected[i].first.y(), expected[i].second.x(), expected[i].second.y());
