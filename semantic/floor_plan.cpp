@@ -190,6 +190,7 @@ struct Piece {
   double offset = 0, a0 = 0, a1 = 0, thickness = 0;
   bool both_faces = false;
   int cells = 0;
+  bool joined = false;  // an end meets another wall, or another lies on its line
   std::vector<std::pair<double, double>> doorways;  // along, a0 < from < to < a1
 };
 
@@ -343,6 +344,7 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
 // the crossing of their centre lines, and the crossing wall's thickness.
 struct Crossing {
   double at = 0, thickness = 0;
+  int side = 0;  // +1 / -1: the crossing wall lies on that side of p's line only (it ends there); 0: both
 };
 
 // The crossings of p's line by the walls that pass within `reach` (plus
@@ -357,9 +359,27 @@ std::vector<Crossing> crossings(const Piece& p, const std::vector<Piece>& all, d
     const double t = (q.offset - q.n.dot(p.n * p.offset)) / cross;
     const double qa = q.d.dot(p.d * t + p.n * p.offset);
     if (qa < q.a0 - reach - q.thickness / 2 || qa > q.a1 + reach + q.thickness / 2) continue;
-    out.push_back({t, q.thickness});
+    // Which side of p's line q's two ends lie on (beyond a corner's reach).
+    const double o0 = p.n.dot(q.d * q.a0 + q.n * q.offset) - p.offset;
+    const double o1 = p.n.dot(q.d * q.a1 + q.n * q.offset) - p.offset;
+    const double r = reach + p.thickness / 2;
+    const int side = std::min(o0, o1) > -r ? 1 : std::max(o0, o1) < r ? -1 : 0;
+    out.push_back({t, q.thickness, side});
   }
   return out;
+}
+
+// Whether a wall lies on p's line (parallel, centre lines within twice
+// collinear_offset_m) starting within corner_gap_m past along `at`.
+bool continues(const Piece& p, const std::vector<Piece>& all, double at, int outward, const FloorPlanSettings& s) {
+  for (const Piece& q : all) {
+    if (std::abs(p.d.dot(q.d)) < std::cos(s.angle_tolerance_rad)) continue;
+    const Eigen::Vector2d e0 = q.d * q.a0 + q.n * q.offset, e1 = q.d * q.a1 + q.n * q.offset;
+    if (std::abs(p.n.dot((e0 + e1) / 2) - p.offset) > 2 * s.collinear_offset_m) continue;
+    const double near = outward > 0 ? std::min(p.d.dot(e0), p.d.dot(e1)) : std::max(p.d.dot(e0), p.d.dot(e1));
+    if (std::abs(near - at) <= s.corner_gap_m) return true;
+  }
+  return false;
 }
 
 // Where wall `p`'s end at along `a` (outward: +1 at a1, -1 at a0) meets a
@@ -374,15 +394,47 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     const double dist = std::abs(c.at - a);
     if (dist <= s.corner_gap_m + c.thickness / 2 && dist < best_dist) best = c.at, best_dist = dist;
   }
-  if (!std::isnan(best)) return best;
+  // From the end (or the corner's far face) to the next crossing wall: a
+  // doorway when door-wide with free space through it (a door beside a
+  // wall's end). Beyond a corner only between two walls leaving p's line
+  // to the same side, the line going on past the far one (a corridor's
+  // mouth in a hall's wall).
+  double from = a, corner = best;
+  int corner_side = 0;
+  if (!std::isnan(best)) {
+    for (const Crossing& c : crossings(p, all, s.corner_gap_m))
+      if (c.at == best) from = c.at + outward * c.thickness / 2, corner_side = c.side;
+    if (corner_side == 0) return best;
+    best_dist = 1e300;
+  }
   for (const Crossing& c : crossings(p, all, 0.0)) {
-    const double gap = outward * (c.at - a) - c.thickness / 2;  // clear width from the end to its face
+    if (corner_side != 0 && (c.side != corner_side || !continues(p, all, c.at, outward, s))) continue;
+    const double gap = outward * (c.at - from) - c.thickness / 2;  // clear width from the end to its face
     if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
-    const double g0 = outward > 0 ? a : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : a;
-    if (!doorway(grid, p, g0, g1, s, outward > 0, outward < 0)) continue;
+    const double g0 = outward > 0 ? from : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : from;
+    if (!doorway(grid, p, g0, g1, s, outward > 0 && std::isnan(corner), outward < 0 && std::isnan(corner))) continue;
     best = c.at, best_dist = gap, door = {g0, g1};
   }
   return best;
+}
+
+// Whether another wall lies on wall i's line (parallel, centre lines within
+// twice collinear_offset_m) less than a door's width and two corner gaps
+// beyond one of its ends: a piece of a wall line broken by doorways.
+bool in_line(const std::vector<Piece>& all, std::size_t i, const FloorPlanSettings& s) {
+  const Piece& p = all[i];
+  for (std::size_t j = 0; j < all.size(); ++j) {
+    const Piece& q = all[j];
+    if (j == i || std::abs(p.d.dot(q.d)) < std::cos(s.angle_tolerance_rad)) continue;
+    const double sign = p.d.dot(q.d) > 0 ? 1.0 : -1.0;
+    const double q0 = p.d.dot(q.d * (sign > 0 ? q.a0 : q.a1) + q.n * q.offset);
+    const double q1 = p.d.dot(q.d * (sign > 0 ? q.a1 : q.a0) + q.n * q.offset);
+    const double off = p.n.dot(q.d * ((q.a0 + q.a1) / 2) + q.n * q.offset) - p.offset;
+    if (std::abs(off) > 2 * s.collinear_offset_m) continue;
+    const double gap = std::max(q0 - p.a1, p.a0 - q1);
+    if (gap <= s.door_max_width_m + 2 * s.corner_gap_m) return true;
+  }
+  return false;
 }
 
 // Whether `x` lies in wall q's box (its centre line lengthened by half its
@@ -406,19 +458,43 @@ bool blocked(const std::vector<Piece>& walls, std::size_t i, const std::pair<dou
 }
 
 // A wall found twice (a wall between two dominant directions is a face in
-// both) is kept once, the longer; a doorway another wall's box reaches
-// into is no doorway (the world would have wall in it).
-std::vector<Piece> without_duplicates(std::vector<Piece> pieces, const FloorPlanSettings& s) {
+// both) is kept once, the longer; a wall's other face beside it (nothing
+// free between) makes it one thicker wall; a doorway another wall's box
+// reaches into is no doorway (the world would have wall in it).
+std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Piece> pieces,
+                                      const FloorPlanSettings& s) {
   std::sort(pieces.begin(), pieces.end(), [](const Piece& a, const Piece& b) { return a.a1 - a.a0 > b.a1 - b.a0; });
   std::vector<Piece> kept;
   for (const Piece& p : pieces) {
     bool twice = false;
-    for (const Piece& q : kept) {
-      if (std::abs(p.d.dot(q.d)) < std::cos(2 * s.angle_tolerance_rad)) continue;
-      // The share of p's centre line inside q's box.
-      int in = 0, all = 0;
-      for (double a = p.a0; a <= p.a1; a += 0.05, ++all) in += inside(q, p.d * a + p.n * p.offset, 0.05) ? 1 : 0;
-      twice = twice || in >= 0.7 * all;
+    for (Piece& q : kept) {
+      if (twice || std::abs(p.d.dot(q.d)) < std::cos(2 * s.angle_tolerance_rad)) continue;
+      // The share of p's centre line inside q's box; or close beside it
+      // with no free cell between: q's other face, the two faces of a wall
+      // thicker than the faces could join at.
+      int in = 0, behind = 0, all = 0;
+      for (double a = p.a0; a <= p.a1; a += 0.05, ++all) {
+        const Eigen::Vector2d x = p.d * a + p.n * p.offset;
+        if (inside(q, x, 0.05)) {
+          ++in;
+        } else if (inside(q, x, s.max_wall_thickness_m)) {
+          const Eigen::Vector2d y = x - q.n * (q.n.dot(x) - q.offset);  // x's foot on q's line
+          const double len = (y - x).norm();
+          bool clear = true;
+          for (double t = 0; t <= len && clear; t += grid.resolution_m) {
+            const Eigen::Vector2i c = grid.cell_of(x + (y - x) * (t / len));
+            clear = !grid.contains(c.x(), c.y()) || grid.at(c.x(), c.y()) != CellState::Free;
+          }
+          behind += clear ? 1 : 0;
+        }
+      }
+      twice = in >= 0.7 * all || in + behind >= 0.7 * all;
+      if (!twice || behind <= in) continue;
+      // One wall between the outer sides of the two faces (p's mid-point across q's line).
+      const double po = q.n.dot(p.d * ((p.a0 + p.a1) / 2) + p.n * p.offset);
+      const double lo = std::min(q.offset - q.thickness / 2, po - p.thickness / 2);
+      const double hi = std::max(q.offset + q.thickness / 2, po + p.thickness / 2);
+      q.offset = (lo + hi) / 2, q.thickness = hi - lo, q.both_faces = true;
     }
     if (!twice) kept.push_back(p);
   }
@@ -463,13 +539,16 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     const double m0 = meeting(grid, p, p.a0, -1, pieces, s, door0), m1 = meeting(grid, p, p.a1, +1, pieces, s, door1);
     met[i].a0 = std::isnan(m0) ? p.a0 + p.thickness / 2 : m0;
     met[i].a1 = std::isnan(m1) ? p.a1 - p.thickness / 2 : m1;
+    met[i].joined = !std::isnan(m0) || !std::isnan(m1) || in_line(pieces, i, s);
     // A doorway between a wall's end and the wall it meets: its gap is part of the wall line.
     if (door0.second > door0.first) met[i].doorways.insert(met[i].doorways.begin(), door0);
     if (door1.second > door1.first) met[i].doorways.push_back(door1);
   }
-  met = without_duplicates(std::move(met), s);
+  met = without_duplicates(grid, std::move(met), s);
   for (const Piece& p : met) {
     if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
+    // A short wall standing free, touching no other, is furniture or clutter.
+    if (!p.joined && p.a1 - p.a0 < s.free_wall_min_length_m) continue;
     Wall w;
     w.from_m = p.d * p.a0 + p.n * p.offset;
     w.to_m = p.d * p.a1 + p.n * p.offset;

@@ -28,6 +28,7 @@ struct FloorPlanSettings {
   double door_max_width_m = 1.2;       ///< wider gaps (not doorways) split the wall
   double min_face_length_m = 0.5;      ///< shorter runs of occupied cells are not wall faces
   double min_wall_length_m = 1.0;      ///< shorter walls are furniture, jambs, recesses: left out
+  double free_wall_min_length_m = 2.0; ///< ... and shorter ones standing free (no wall at an end or on their line)
   double min_wall_thickness_m = 0.1;   ///< a thinner measured slab is given this
   double max_wall_thickness_m = 0.5;   ///< faces up to this apart, nothing free between: one wall
   double noise_gap_m = 0.3;            ///< gaps up to this in a face are noise

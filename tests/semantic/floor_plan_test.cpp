@@ -139,11 +139,11 @@ struct Floors {
 };
 const std::map<std::string, Floors> kMeasured = {
     // stem            walls P  walls R  doors P  doors R   (measured 2026-12-02)
-    {"aces", {0.87, 0.93, 0.5, 0.5}},          // 0.890 0.956 0.50 0.50
-    {"csail", {0.67, 0.93, 0.0, 1.0}},         // 0.691 0.955 0.00 (4 found, none true) 1.00
-    {"freiburg-101", {0.83, 0.91, 0.0, 0.0}},  // 0.854 0.939 0.00 0.00
-    {"intel", {0.85, 0.87, 0.6, 0.9}},         // 0.870 0.897 0.60 0.90
-    {"pwr", {0.77, 0.84, 0.0, 1.0}},           // 0.794 0.864 0.00 (2 found, none true) 1.00
+    {"aces", {0.91, 0.94, 0.5, 0.5}},          // 0.924 0.955 0.50 0.50
+    {"csail", {0.80, 0.94, 0.0, 1.0}},         // 0.821 0.961 0.00 (4 found, none true) 1.00
+    {"freiburg-101", {0.88, 0.92, 0.5, 0.5}},  // 0.903 0.940 0.50 0.50
+    {"intel", {0.86, 0.87, 0.6, 0.9}},         // 0.883 0.884 0.60 0.90
+    {"pwr", {0.83, 0.84, 0.0, 1.0}},           // 0.855 0.853 0.00 (2 found, none true) 1.00
 };
 
 TEST_CASE("walls and doorways of the real buildings match their truth files no worse than measured",

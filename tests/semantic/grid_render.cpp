@@ -2,14 +2,18 @@
 // drawn over them (tests/data/buildings/README.md). Not installed.
 //
 //   grid_render IN OUT.png [--image PGM] [--res M] [--region X0 Y0 X1 Y1]
-//               [--px N] [--truth FILE.json] [--dump GRID.pgm]
+//               [--px N] [--truth FILE.json] [--dump GRID.pgm] [--detect]
+//               [--set SETTING=VALUE]...
 //
 // IN is a map_server .yaml or a CARMEN log. Free cells white, occupied
 // black, unknown grey; a thin line every metre, a darker one with its
 // coordinate every 5 m; truth walls red, doors green (a bar as wide as the
 // door, across the wall). --dump writes the grid itself as a map_server
 // PGM (0 occupied, 254 free, 205 unknown; bottom row first in y) and prints
-// its origin, for scripts that measure on it.
+// its origin, for scripts that measure on it. --detect runs
+// segment_floor_plan on the grid and draws its walls over it, blue where
+// they match a truth wall and magenta where not, its doors as orange bars,
+// and prints the score against --truth and the unmatched pieces over 0.3 m.
 
 #include <json/json.h>
 
@@ -22,12 +26,84 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <string>
 
+#include "semantic/floor_plan.hpp"
 #include "semantic/occupancy_grid.hpp"
+#include "tests/semantic/building_truth.hpp"
 
 using rise::semantic::CellState;
 using rise::semantic::OccupancyGrid;
+
+namespace {
+
+template <class ToPx>
+void draw_detections(cv::Mat& img, const OccupancyGrid& g, const std::string& truth_file,
+                     const rise::semantic::FloorPlanSettings& settings, const ToPx& to_px) {
+  using namespace rise::semantic;
+  using testing::detail::Segment;
+  const Segmentation seg = segment_floor_plan(g, settings);
+  testing::BuildingTruth truth;
+  if (!truth_file.empty()) truth = testing::read_building_truth(truth_file);
+  std::vector<Segment> expected;
+  for (const auto& t : truth.walls)
+    if (const auto c = testing::detail::clipped(t, truth.region)) expected.push_back(*c);
+  std::vector<std::vector<std::pair<double, double>>> covered(expected.size());
+  for (const Wall& w : seg.walls) {
+    const Eigen::Vector2d u = w.direction();
+    std::vector<Segment> parts;
+    double at = 0;
+    for (const Opening& o : w.openings) {
+      parts.push_back({w.from_m + at * u, w.from_m + o.at_m * u});
+      at = o.at_m + o.width_m;
+    }
+    parts.push_back({w.from_m + at * u, w.to_m});
+    for (const Segment& d : parts) {
+      cv::line(img, to_px(d.first.x(), d.first.y()), to_px(d.second.x(), d.second.y()), {255, 0, 255}, 2);
+      const auto c = testing::detail::clipped(d, truth.region);
+      if (!c) continue;
+      const double len = (c->second - c->first).norm();
+      std::vector<std::pair<double, double>> own;
+      for (std::size_t i = 0; i < expected.size(); ++i) {
+        const auto o = testing::detail::overlap_on_truth(*c, expected[i]);
+        if (!o) continue;
+        covered[i].push_back(*o);
+        const Eigen::Vector2d tu = (expected[i].second - expected[i].first).normalized();
+        const Eigen::Vector2d a = expected[i].first + o->first * tu, b = expected[i].first + o->second * tu;
+        cv::line(img, to_px(a.x(), a.y()), to_px(b.x(), b.y()), {255, 120, 0}, 2);
+        const Eigen::Vector2d v = (c->second - c->first) / len;
+        own.emplace_back(std::clamp(std::min(v.dot(a - c->first), v.dot(b - c->first)), 0.0, len),
+                         std::clamp(std::max(v.dot(a - c->first), v.dot(b - c->first)), 0.0, len));
+      }
+      const double miss = len - testing::detail::union_length(own);
+      if (miss > 0.3)
+        std::printf("unmatched detection %.1f of %.1f m: (%.2f, %.2f) - (%.2f, %.2f)\n", miss, len, c->first.x(),
+                    c->first.y(), c->second.x(), c->second.y());
+    }
+  }
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    const double len = (expected[i].second - expected[i].first).norm();
+    const double miss = len - testing::detail::union_length(covered[i]);
+    if (miss > 0.3)
+      std::printf("uncovered truth %.1f of %.1f m: (%.2f, %.2f) - (%.2f, %.2f)\n", miss, len, expected[i].first.x(),
+                  expected[i].first.y(), expected[i].second.x(), expected[i].second.y());
+  }
+  for (const Door& d : seg.doors) {
+    const Eigen::Vector2d t(std::cos(d.yaw_rad), std::sin(d.yaw_rad));
+    const Eigen::Vector2d a = d.center_m - d.width_m / 2 * t, b = d.center_m + d.width_m / 2 * t;
+    cv::line(img, to_px(a.x(), a.y()), to_px(b.x(), b.y()), {0, 140, 255}, 3);
+    std::printf("door (%.2f, %.2f) width %.2f yaw %.1f\n", d.center_m.x(), d.center_m.y(), d.width_m,
+                d.yaw_rad * 180 / 3.14159265358979);
+  }
+  const testing::BuildingScore s = testing::score_building(seg, truth);
+  std::printf("walls: precision %.3f recall %.3f (%.1f m found, %.1f m true); doors: precision %.3f recall %.3f "
+              "(%d found, %d true, %d matched)\n",
+              s.wall_precision, s.wall_recall, s.detected_wall_m, s.truth_wall_m, s.door_precision, s.door_recall,
+              s.doors_detected, s.doors_truth, s.doors_matched);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) try {
   if (argc < 3) {
@@ -38,7 +114,17 @@ int main(int argc, char** argv) try {
   std::string image, truth, dump;
   double res = 0.05;
   int px = 2;
-  bool region = false;
+  bool region = false, detect = false;
+  rise::semantic::FloorPlanSettings settings;
+  const std::map<std::string, double*> knobs = {
+      {"door_min_width_m", &settings.door_min_width_m},     {"door_max_width_m", &settings.door_max_width_m},
+      {"min_face_length_m", &settings.min_face_length_m},   {"min_wall_length_m", &settings.min_wall_length_m},
+      {"free_wall_min_length_m", &settings.free_wall_min_length_m},
+      {"max_wall_thickness_m", &settings.max_wall_thickness_m}, {"noise_gap_m", &settings.noise_gap_m},
+      {"collinear_offset_m", &settings.collinear_offset_m}, {"min_direction_share", &settings.min_direction_share},
+      {"corner_gap_m", &settings.corner_gap_m},             {"door_clearance_m", &settings.door_clearance_m},
+      {"door_min_free", &settings.door_min_free},           {"door_jamb_m", &settings.door_jamb_m},
+      {"door_jamb_solid", &settings.door_jamb_solid}};
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
@@ -47,6 +133,13 @@ int main(int argc, char** argv) try {
     else if (a == "--px") px = std::atoi(argv[++i]);
     else if (a == "--truth") truth = argv[++i];
     else if (a == "--dump") dump = argv[++i];
+    else if (a == "--detect") detect = true;
+    else if (a == "--set") {  // --set NAME=VALUE: a FloorPlanSettings field
+      const std::string kv = argv[++i];
+      const auto k = knobs.find(kv.substr(0, kv.find('=')));
+      if (k == knobs.end()) throw std::runtime_error("unknown setting " + kv);
+      *k->second = std::atof(kv.substr(kv.find('=') + 1).c_str());
+    }
     else if (a == "--region") {
       region = true;
       x0 = std::atof(argv[++i]), y0 = std::atof(argv[++i]), x1 = std::atof(argv[++i]), y1 = std::atof(argv[++i]);
@@ -114,6 +207,7 @@ int main(int argc, char** argv) try {
       cv::circle(img, to_px(cx, cy), 3, {0, 150, 0}, -1);
     }
   }
+  if (detect) draw_detections(img, g, truth, settings, to_px);
   cv::imwrite(out, img);
   return 0;
 } catch (const std::exception& e) {
