@@ -37,6 +37,13 @@ struct SegmentationSettings {
   double door_min_height_m = 1.6;      ///< lintel underside / panel top above the floor
   double door_max_sill_m = 0.3;        ///< an open gap is clear from this height up (else: a window's sill)
   int door_min_floor_cells = 3;        ///< 10 cm floor cells seen on each side of an open doorway
+  /// Walls and doorways from segment_floor_plan() (floor_plan.hpp) on a
+  /// grid of the cloud: occupied where a cell is tall (wall_min_tall_m over
+  /// the wall band), free where the floor is seen with nothing standing on
+  /// it below door_min_height_m; each doorway then checked in 3D for a lintel
+  /// or a panel. Off: Hough lines refined as vertical planes.
+  bool walls_from_floor_plan = false;
+  double floor_plan_cell_m = 0.05;     ///< that grid's cells
   double stairs_min_riser_m = 0.1, stairs_max_riser_m = 0.25;
   double stairs_min_tread_m = 0.2, stairs_max_tread_m = 0.45;
   int stairs_min_steps = 3;

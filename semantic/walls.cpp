@@ -14,6 +14,7 @@
 #include <limits>
 #include <tuple>
 
+#include "semantic/floor_plan.hpp"
 #include "semantic/segmentation_internal.hpp"
 
 namespace rise::semantic::detail {
@@ -113,6 +114,43 @@ bool parallel(const Line2& a, const Line2& b, double tol_rad) {
   return std::abs(a.direction.dot(b.normal)) < std::sin(tol_rad);
 }
 
+// The cells (row-major, nx × ny cells of `cell` from `lo`) of tall
+// vertical structure: holding points, and together with the cells within
+// `radius` of them reaching over the wall band zlo..zhi (wall_min_tall_m of
+// it, or 60 % of a lower band): a far wall's points lie on scan lines a few
+// cells apart, on a few columns of rays.
+std::vector<char> tall_cells(const std::vector<Eigen::Vector2d>& xy, const std::vector<double>& z, double zlo,
+                             double zhi, const Eigen::Vector2d& lo, double cell, int nx, int ny, int radius,
+                             const SegmentationSettings& s) {
+  const int slices = std::clamp(static_cast<int>(std::ceil((zhi - zlo) / kSliceM)), 1, 64);
+  const int need = std::max(1, std::min(static_cast<int>(std::lround(s.wall_min_tall_m / kSliceM)),
+                                        static_cast<int>(std::ceil(0.6 * slices))));
+  std::vector<uint64_t> mask(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
+  for (std::size_t i = 0; i < xy.size(); ++i) {
+    const int c = static_cast<int>((xy[i].x() - lo.x()) / cell), r = static_cast<int>((xy[i].y() - lo.y()) / cell);
+    if (c < 0 || r < 0 || c >= nx || r >= ny) continue;
+    const int k = std::clamp(static_cast<int>((z[i] - zlo) / kSliceM), 0, slices - 1);
+    mask[static_cast<std::size_t>(r) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(c)] |= uint64_t{1} << k;
+  }
+  // From the lowest to the highest slice seen around the cell.
+  const auto span = [](uint64_t m) { return m ? 64 - std::countl_zero(m) - std::countr_zero(m) : 0; };
+  std::vector<char> tall(mask.size(), 0);
+  for (int r = 0; r < ny; ++r)
+    for (int c = 0; c < nx; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(c);
+      if (mask[i] == 0) continue;
+      uint64_t m = 0;
+      for (int dr = -radius; dr <= radius; ++dr)
+        for (int dc = -radius; dc <= radius; ++dc) {
+          const int rr = r + dr, cc = c + dc;
+          if (rr >= 0 && rr < ny && cc >= 0 && cc < nx)
+            m |= mask[static_cast<std::size_t>(rr) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(cc)];
+        }
+      tall[i] = span(m) >= need;
+    }
+  return tall;
+}
+
 std::vector<Face> find_faces(const std::vector<Eigen::Vector2d>& xy, const std::vector<double>& z, double zlo,
                              double zhi, const SegmentationSettings& s) {
   std::vector<Face> faces;
@@ -125,36 +163,12 @@ std::vector<Face> find_faces(const std::vector<Eigen::Vector2d>& xy, const std::
   const double cell = s.cell_m;
   check_grid(hi - lo, cell, "the wall band");
   const int nx = static_cast<int>((hi.x() - lo.x()) / cell) + 1, ny = static_cast<int>((hi.y() - lo.y()) / cell) + 1;
-  const int slices = std::clamp(static_cast<int>(std::ceil((zhi - zlo) / kSliceM)), 1, 64);
-  const int need = std::max(1, std::min(static_cast<int>(std::lround(s.wall_min_tall_m / kSliceM)),
-                                        static_cast<int>(std::ceil(0.6 * slices))));
-  std::vector<uint64_t> mask(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
+  const auto is_tall = tall_cells(xy, z, zlo, zhi, lo, cell, nx, ny, 2, s);
   const auto cell_of = [&](const Eigen::Vector2d& p) {
     return static_cast<std::size_t>(static_cast<int>((p.y() - lo.y()) / cell)) * static_cast<std::size_t>(nx) +
            static_cast<std::size_t>(static_cast<int>((p.x() - lo.x()) / cell));
   };
-  for (std::size_t i = 0; i < xy.size(); ++i) {
-    const int k = std::clamp(static_cast<int>((z[i] - zlo) / kSliceM), 0, slices - 1);
-    mask[cell_of(xy[i])] |= uint64_t{1} << k;
-  }
-  // A cell is tall when the cells within 2 of it together reach over the
-  // height: a far wall's points lie on scan lines a few cells apart.
-  std::vector<uint64_t> near(mask.size(), 0);
-  for (int r = 0; r < ny; ++r)
-    for (int c = 0; c < nx; ++c) {
-      uint64_t m = 0;
-      for (int dr = -2; dr <= 2; ++dr)
-        for (int dc = -2; dc <= 2; ++dc) {
-          const int rr = r + dr, cc = c + dc;
-          if (rr >= 0 && rr < ny && cc >= 0 && cc < nx)
-            m |= mask[static_cast<std::size_t>(rr) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(cc)];
-        }
-      near[static_cast<std::size_t>(r) * static_cast<std::size_t>(nx) + static_cast<std::size_t>(c)] = m;
-    }
-  // Tall: from the lowest to the highest slice seen, so that a wall far
-  // from the scanner, whose points lie on a few columns of rays, counts.
-  const auto span = [](uint64_t m) { return m ? 64 - std::countl_zero(m) - std::countr_zero(m) : 0; };
-  const auto tall = [&](std::size_t i) { return mask[i] != 0 && span(near[i]) >= need; };
+  const auto tall = [&](std::size_t i) { return is_tall[i] != 0; };
   cv::Mat1b image(ny, nx, uchar{0});
   for (int r = 0; r < ny; ++r)
     for (int c = 0; c < nx; ++c)
@@ -348,6 +362,145 @@ struct Segment {
   int points = 0;
 };
 
+
+// A wall's slab in 3D: its points (along from_m, height above the floor)
+// below the ceiling; its top (the fifth highest point over its length);
+// the cells a gap in it is inspected in: twice the faces' point spacing,
+// 5 to 25 cm (a sparse far wall has holes between its points).
+struct Slab {
+  std::vector<std::pair<double, double>> along_height;
+  double top_m = 0, cell_m = 0.05;
+};
+
+Slab slab_of(const Cloud& cloud, const Line2& line, double half_m, double a0, double a1, const std::vector<Run>& runs,
+             bool both, double z_floor, double z_roof) {
+  Slab out;
+  std::vector<double> heights;
+  for (const auto& p : cloud.points) {
+    if (p.z() > z_roof) continue;
+    const Eigen::Vector2d xy = p.head<2>().cast<double>();
+    if (std::abs(line.offset(xy)) > half_m) continue;
+    const double a = line.along(xy);
+    if (a < a0 - 0.2 || a > a1 + 0.2) continue;
+    out.along_height.push_back({a, p.z() - z_floor});
+    for (const auto& r : runs)
+      if (a >= r.first && a <= r.second) {
+        heights.push_back(p.z() - z_floor);
+        break;
+      }
+  }
+  std::sort(heights.begin(), heights.end());
+  out.top_m = heights.size() > 5 ? heights[heights.size() - 5] : quantile(heights, 1.0);
+  double seen_m2 = 0;
+  for (const auto& r : runs) seen_m2 += (r.second - r.first) * std::max(out.top_m, 0.1) * (both ? 2.0 : 1.0);
+  const double spacing_m = std::sqrt(seen_m2 / std::max<double>(1.0, static_cast<double>(heights.size())));
+  out.cell_m = std::clamp(2 * spacing_m, 0.05, 0.25);
+  return out;
+}
+
+// Walls and doors from segment_floor_plan() on the cloud's wall-band grid
+// (see SegmentationSettings::walls_from_floor_plan): one wall per slab, its
+// height from its points; a doorway of the plan is a door when doors.cpp
+// finds a lintel or a panel in it and no window sill, as in
+// find_walls_and_doors; any other doorway is a gap between two walls.
+void walls_from_floor_plan(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor, double zlo,
+                           double zhi, double z_roof, const std::vector<Eigen::Vector2d>& band_xy,
+                           const std::vector<double>& band_z, const std::vector<Eigen::Vector2d>& floor_xy,
+                           std::vector<Wall>& walls, std::vector<Door>& doors) {
+  if (band_xy.empty() || floor_xy.empty()) return;
+  Eigen::Vector2d lo = band_xy[0], hi = band_xy[0];
+  for (const auto* set : {&band_xy, &floor_xy})
+    for (const auto& p : *set) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  OccupancyGrid grid;
+  grid.resolution_m = s.floor_plan_cell_m;
+  check_grid(hi - lo, grid.resolution_m, "the floor plan");
+  grid.origin_m = lo;
+  grid.width = static_cast<int>((hi.x() - lo.x()) / grid.resolution_m) + 1;
+  grid.height = static_cast<int>((hi.y() - lo.y()) / grid.resolution_m) + 1;
+  const auto tall = tall_cells(band_xy, band_z, zlo, zhi, lo, grid.resolution_m, grid.width, grid.height, 1, s);
+  // Free: the floor seen (closed over a far floor's scan lines), nothing
+  // standing on it up to a door's height.
+  cv::Mat1b seen(grid.height, grid.width, uchar{0}), standing(grid.height, grid.width, uchar{0});
+  for (const auto& p : cloud.points) {
+    const Eigen::Vector2i c = grid.cell_of(p.head<2>().cast<double>());
+    if (!grid.contains(c.x(), c.y())) continue;
+    const double h = p.z() - floor.height_m;
+    if (std::abs(h) < s.plane_band_m) seen(c.y(), c.x()) = 255;
+    else if (h >= s.plane_band_m && h < s.door_min_height_m) standing(c.y(), c.x()) = 255;
+  }
+  cv::morphologyEx(seen, seen, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+  grid.cells.assign(tall.size(), CellState::Unknown);
+  for (int r = 0; r < grid.height; ++r)
+    for (int c = 0; c < grid.width; ++c) {
+      const std::size_t i = static_cast<std::size_t>(r) * static_cast<std::size_t>(grid.width) + static_cast<std::size_t>(c);
+      grid.cells[i] = tall[i] ? CellState::Occupied : seen(r, c) && !standing(r, c) ? CellState::Free : CellState::Unknown;
+    }
+  if (std::none_of(grid.cells.begin(), grid.cells.end(), [](CellState v) { return v == CellState::Occupied; }) ||
+      std::none_of(grid.cells.begin(), grid.cells.end(), [](CellState v) { return v == CellState::Free; }))
+    return;
+  FloorPlanSettings fs;
+  fs.door_min_width_m = s.door_min_width_m;
+  fs.door_max_width_m = s.door_max_width_m;
+  fs.wall_height_m = zhi - floor.height_m;
+  // Cupboards and shelves along a room's walls are tall too: the slab seen
+  // in the band is the wall and them, wider than a 2D map's wall.
+  fs.max_wall_thickness_m = 0.7;
+  const Segmentation plan = segment_floor_plan(grid, fs);
+
+  for (const Wall& pw : plan.walls) {
+    Line2 line;
+    line.point = pw.from_m;
+    line.direction = pw.direction();
+    line.normal = {-line.direction.y(), line.direction.x()};
+    const double len = pw.length_m(), half = pw.thickness_m / 2 + s.wall_inlier_m;
+    // The wall's stretches between the plan's doorways.
+    std::vector<Run> runs;
+    double from = 0;
+    for (const auto& o : pw.openings) {
+      runs.push_back({from, o.at_m});
+      from = o.at_m + o.width_m;
+    }
+    runs.push_back({from, len});
+    const Slab slab = slab_of(cloud, line, half, 0, len, runs, pw.both_faces_seen, floor.height_m, z_roof);
+    Wall cur = pw;
+    cur.height_m = slab.top_m;
+    cur.openings.clear();
+    double start = 0;  // cur's from_m along the plan's wall
+    const auto close = [&](double end) {
+      cur.from_m = line.point + line.direction * start;
+      cur.to_m = line.point + line.direction * end;
+      walls.push_back(cur);
+    };
+    for (const auto& o : pw.openings) {
+      const double g0 = o.at_m, g1 = o.at_m + o.width_m;
+      const GapReport rep = inspect_gap(slab.along_height, g0, g1, slab.top_m, slab.cell_m, s);
+      const bool open = rep.free_below && !rep.panel && floor_through(line, half, g0, g1, floor_xy, s);
+      const bool door = !rep.window && ((rep.lintel && (rep.panel || open)) || (rep.panel && !rep.lintel));
+      Door d;
+      d.center_m = line.point + line.direction * ((g0 + g1) / 2);
+      d.yaw_rad = std::atan2(line.direction.y(), line.direction.x());
+      d.width_m = g1 - g0;
+      d.height_m = rep.lintel ? std::min(rep.lintel_bottom_m, slab.top_m) : rep.panel_top_m;
+      d.wall_thickness_m = pw.thickness_m;
+      d.lintel = rep.lintel;
+      d.panel = rep.panel;
+      if (door && rep.lintel) {
+        cur.openings.push_back({g0 - start, g1 - g0, d.height_m});
+        d.wall = static_cast<int>(walls.size());
+        doors.push_back(d);
+        continue;
+      }
+      // No wall above it: the gap lies between two walls.
+      d.wall_before = static_cast<int>(walls.size());
+      d.wall_after = d.wall_before + 1;
+      close(g0);
+      if (door) doors.push_back(d);
+      cur.openings.clear();
+      start = g1;
+    }
+    close(len);
+  }
+}
 }  // namespace
 
 void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
@@ -372,6 +525,10 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
     std::vector<Eigen::Vector2d> thin;
     for (std::size_t i = 0; i < floor_xy.size(); i += stride) thin.push_back(floor_xy[i]);
     floor_xy.swap(thin);
+  }
+  if (s.walls_from_floor_plan) {
+    walls_from_floor_plan(cloud, s, floor, zlo, zhi, z_roof, band_xy, band_z, floor_xy, walls, doors);
+    return;
   }
   const auto faces = find_faces(band_xy, band_z, zlo, zhi, s);
   const auto lines = build_wall_lines(faces, floor_xy, s);

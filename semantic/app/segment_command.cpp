@@ -27,6 +27,7 @@ struct SegmentOptions {
   std::string image;            // a ROS map's image, replacing the one its YAML names
   double resolution_m = 0.05;   // a CARMEN log's grid
   FloorPlanSettings plan;
+  SegmentationSettings cloud_settings;
 };
 
 bool ends_with(const std::string& s, const std::string& tail) {
@@ -73,7 +74,7 @@ int run_segment(const SegmentOptions& o) {
     }
   }
   const auto t1 = std::chrono::steady_clock::now();
-  SemanticNet net(plan ? segment_floor_plan(grid, o.plan) : segment(cloud));
+  SemanticNet net(plan ? segment_floor_plan(grid, o.plan) : segment(cloud, o.cloud_settings));
   const auto t2 = std::chrono::steady_clock::now();
   if (plan) cloud = occupied_cells(grid, o.plan.wall_height_m / 2);
   const auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
@@ -152,6 +153,8 @@ void add_segment_command(CLI::App& app) {
       ->check(CLI::Range(0.1, 20.0));
   sub->add_flag("--json", opts->json, "print the entities and relations as JSON");
   sub->add_flag("--level", opts->level, "level the cloud first (its floor made horizontal)");
+  sub->add_flag("--walls-from-floor-plan", opts->cloud_settings.walls_from_floor_plan,
+                "cloud: walls and doorways from the floor plan of its wall band (one wall per slab)");
   sub->add_option("--out-dir,-o", opts->out_dir,
                   "also write map.png, world.sdf, model.obj and world.yaml here (exit 1 when the robot has no room to start)");
   sub->add_option("--name", opts->name, "world name in the files written")->capture_default_str();

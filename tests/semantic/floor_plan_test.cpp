@@ -9,6 +9,7 @@
 #include <map>
 #include <string>
 
+#include "semantic/cloud_io.hpp"
 #include "semantic/floor_plan.hpp"
 #include "semantic/occupancy_grid.hpp"
 #include "tests/semantic/building_truth.hpp"
@@ -190,5 +191,36 @@ TEST_CASE("walls and doorways of the real buildings match their truth files no w
     CHECK(s.door_precision >= floors->second.door_precision);
     CHECK(s.door_recall >= floors->second.door_recall);
     for (const Obstacle& o : seg.obstacles) CHECK(o.size_m.maxCoeff() <= 3.0);
+  }
+}
+
+TEST_CASE("the 3D map of a real room (OctoMap .bt) matches its truth file no worse than measured, walls from "
+          "Hough lines and from its floor plan",
+          "[semantic]") {
+  const fs::path file = fs::path(RISE_SOURCE_DIR) / "tests" / "data" / "buildings" / "freiburg1_360.json";
+  const BuildingTruth truth = read_building_truth(file.string());
+  const std::string map = rise::test::data_file(truth.source);
+  if (map.empty()) {
+    WARN("skipped: " << truth.source << " not in RISE_TEST_DATA");
+    return;
+  }
+  const Cloud cloud = read_cloud(map);
+  for (const bool from_plan : {false, true}) {
+    // walls P  walls R  doors P  doors R (measured 2026-12-02)
+    const Floors floors = from_plan ? Floors{0.91, 0.79, 1.0, 0.0}    // 0.931 0.815 1.00 (none found) 0.00
+                                    : Floors{0.71, 0.81, 1.0, 1.0};  // 0.737 0.833 1.00 1.00, 41 walls
+    SegmentationSettings st;
+    st.walls_from_floor_plan = from_plan;
+    const Segmentation seg = segment(cloud, st);
+    const BuildingScore s = score_building(seg, truth);
+    std::printf("freiburg1_360 %-10s walls: precision %.3f recall %.3f (%.1f m found, %.1f m true, %zu walls); "
+                "doors: precision %.3f recall %.3f (%d found, %d true, %d matched)\n",
+                from_plan ? "plan" : "hough", s.wall_precision, s.wall_recall, s.detected_wall_m, s.truth_wall_m,
+                seg.walls.size(), s.door_precision, s.door_recall, s.doors_detected, s.doors_truth, s.doors_matched);
+    INFO((from_plan ? "walls from the floor plan" : "walls from Hough lines"));
+    CHECK(s.wall_precision >= floors.wall_precision);
+    CHECK(s.wall_recall >= floors.wall_recall);
+    CHECK(s.door_precision >= floors.door_precision);
+    CHECK(s.door_recall >= floors.door_recall);
   }
 }
