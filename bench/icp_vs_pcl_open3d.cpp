@@ -29,7 +29,6 @@
 #include <pcl/registration/icp.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -43,12 +42,16 @@
 #include <string>
 #include <vector>
 
+#include "bench/peer_clouds.hpp"
 #include "semantic/cloud_io.hpp"
 #include "semantic/icp.hpp"
 #include "semantic/voxel_grid.hpp"
 
 namespace sem = rise::semantic;
 namespace o3r = open3d::pipelines::registration;
+using rise::bench::iso;
+using rise::bench::to_open3d;
+using rise::bench::to_pcl;
 
 namespace {
 
@@ -67,10 +70,6 @@ struct Row {
   double ms;
   Eigen::Isometry3d T;
 };
-
-double now_ms() {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 std::string data_root() {
   if (const char* e = std::getenv("RISE_TEST_DATA")) return e;
@@ -98,47 +97,14 @@ sem::Cloud filter_to(const sem::Cloud& c, size_t points) {
   return best;
 }
 
-pcl::PointCloud<pcl::PointXYZ>::Ptr to_pcl(const sem::Cloud& c) {
-  pcl::PointCloud<pcl::PointXYZ>::Ptr out(new pcl::PointCloud<pcl::PointXYZ>);
-  out->points.reserve(c.size());
-  for (const auto& p : c.points) out->points.emplace_back(p.x(), p.y(), p.z());
-  out->width = static_cast<uint32_t>(c.size());
-  out->height = 1;
-  return out;
-}
-
-open3d::geometry::PointCloud to_open3d(const sem::Cloud& c) {
-  open3d::geometry::PointCloud out;
-  out.points_.reserve(c.size());
-  for (const auto& p : c.points) out.points_.push_back(p.cast<double>());
-  for (const auto& n : c.normals) out.normals_.push_back(n.cast<double>());
-  return out;
-}
-
-Eigen::Isometry3d iso(const Eigen::Matrix4d& M) {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::Quaterniond(Eigen::Matrix3d(M.topLeftCorner<3, 3>())).normalized().toRotationMatrix();
-  T.translation() = M.topRightCorner<3, 1>();
-  return T;
-}
-
-// The fastest of the runs: on a shared machine the others measure the neighbours.
-double fastest(const std::vector<double>& v) { return *std::min_element(v.begin(), v.end()); }
-
 void run_pair(const Pair& pair, bool quick, bool ours_only) {
   constexpr int kIterations = 30;
   const int reps = quick ? 1 : 3;  // ours 2 * reps + 1 runs, Open3D reps, PCL one (seconds each)
   std::vector<Row> rows;
   const double r = pair.max_correspondence_m;
 
-  const auto time_it = [&](int n, const std::function<Eigen::Isometry3d()>& f, Eigen::Isometry3d& T) {
-    std::vector<double> ms;
-    for (int i = 0; i < n; ++i) {
-      const double t0 = now_ms();
-      T = f();
-      ms.push_back(now_ms() - t0);
-    }
-    return fastest(ms);
+  const auto time_it = [](int n, const std::function<Eigen::Isometry3d()>& f, Eigen::Isometry3d& T) {
+    return rise::bench::time_fastest(n, f, T);
   };
 
   struct Variant {
