@@ -72,7 +72,10 @@ std::vector<double> registration_voxels(const Cloud& source, const Cloud& target
   double fine = s.fine_voxel_m;
   if (fine == 0.0) fine = std::max(point_spacing(target), voxel_for_points(target, s.fine_points));
   double coarse = s.coarse_voxel_m;
-  if (coarse == 0.0) coarse = voxel_for_points(target, s.coarse_points);
+  // At least three levels: a cloud of a few hundred points (PCL's bunny)
+  // would otherwise be one level pairing within 2 cm, whose basin a 20°
+  // start misses (35° off, "converged").
+  if (coarse == 0.0) coarse = std::max(voxel_for_points(target, s.coarse_points), 4.0 * fine);
   if (!(fine > 0.0)) fine = 1e-3;
   coarse = std::max(coarse, fine);
   // Levels about a factor of two apart, ending exactly at the fine voxel.

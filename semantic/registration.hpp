@@ -32,7 +32,8 @@ struct RegistrationSettings {
   /// The finest level's voxel; 0: the one that keeps fine_points of the
   /// target, or the target's point spacing if that is larger.
   double fine_voxel_m = 0.0;
-  /// The coarsest level's voxel; 0: the one that keeps coarse_points of the target.
+  /// The coarsest level's voxel; 0: the one that keeps coarse_points of the
+  /// target, and at least 4 fine voxels.
   double coarse_voxel_m = 0.0;
   size_t fine_points = 40000;
   size_t coarse_points = 1500;
