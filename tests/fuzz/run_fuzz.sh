@@ -17,7 +17,7 @@ case "$target" in
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
   ply | scan3d) sources=("$root"/semantic/cloud{,_formats}.cpp) ;;
   maps) sources=("$root"/semantic/{cloud,cloud_formats,octomap_format,vtk_format}.cpp) ;;
-  pcd) sources=("$root"/semantic/cloud{,_formats,_io}.cpp) ;;
+  pcd) sources=("$root"/semantic/{cloud,cloud_formats,cloud_io,octomap_format,vtk_format}.cpp) ;;
   # The CARMEN log reader and grid_from_scans (occupancy_grid.cpp links
   # yaml-cpp, OpenCV and zlib for the other readers there; not sanitized).
   carmen) sources=("$root"/semantic/{cloud,cloud_formats,occupancy_grid}.cpp) ;;
