@@ -12,35 +12,44 @@
 namespace rise::semantic {
 namespace {
 
-// The voxel at which `cloud` keeps about `points` points: a voxel grid's
-// occupied cells fall monotonically (near enough) as its cells grow.
-// Counted on the cloud thinned to a 4000th of its size first: the same
-// answer for any voxel above that, at a fraction of the cost.
-double voxel_for_points(const Cloud& cloud, size_t points) {
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
-  for (const auto& p : cloud.points)
-    if (p.allFinite()) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-    }
-  const double box = lo.x() <= hi.x() ? static_cast<double>((hi - lo).norm()) : 0.0;
-  if (!(box > 0.0)) return 1e-3;
-  const double floor_m = box / 4000.0;
-  const Cloud thin = voxel_filter(cloud, floor_m);
-  if (thin.size() <= points) return floor_m;
-  // Geometric bisection between the thinning voxel and the box.
-  double small = floor_m, large = box;
-  for (int i = 0; i < 24 && large / small > 1.05; ++i) {
-    const double mid = std::sqrt(small * large);
-    (VoxelGrid(thin.points, static_cast<float>(mid)).occupied_cells() > points ? small : large) = mid;
+// The voxel sizes of a cloud, from one look at it: thinned to a 4000th of
+// its bounding box first (the same counts for any voxel above that, at a
+// fraction of the cost), then bisected for a number of points.
+class Sizing {
+ public:
+  explicit Sizing(const Cloud& cloud) {
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max()), hi = -lo;
+    for (const auto& p : cloud.points)
+      if (p.allFinite()) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+    box_m_ = lo.x() <= hi.x() ? static_cast<double>((hi - lo).norm()) : 0.0;
+    if (box_m_ > 0.0) thin_ = voxel_filter(cloud, box_m_ / 4000.0);
   }
-  return large;
-}
+
+  // The voxel at which the cloud keeps about `points` points: a voxel
+  // grid's occupied cells fall monotonically (near enough) as its cells grow.
+  double voxel_for_points(size_t points) const {
+    if (!(box_m_ > 0.0)) return 1e-3;
+    double small = box_m_ / 4000.0, large = box_m_;
+    if (thin_.size() <= points) return small;
+    for (int i = 0; i < 24 && large / small > 1.05; ++i) {
+      const double mid = std::sqrt(small * large);
+      (VoxelGrid(thin_.points, static_cast<float>(mid)).occupied_cells() > points ? small : large) = mid;
+    }
+    return large;
+  }
+
+ private:
+  double box_m_ = 0.0;
+  Cloud thin_;
+};
 
 // The median distance from a point to its nearest other point, over a
-// sample: the cloud's resolution.
-double point_spacing(const Cloud& cloud) {
-  const VoxelGrid grid(cloud.points, static_cast<float>(voxel_for_points(cloud, cloud.size() / 4 + 1)));
+// sample: the cloud's resolution. `cell_m`: a grid cell holding a few points.
+double point_spacing(const Cloud& cloud, double cell_m) {
+  const VoxelGrid grid(cloud.points, static_cast<float>(cell_m));
   const size_t step = std::max<size_t>(1, cloud.size() / 2000);
   std::vector<float> d;
   std::vector<VoxelGrid::Neighbour> nbs;
@@ -67,15 +76,28 @@ void validate(const Cloud& source, const Cloud& target, const RegistrationSettin
 
 }  // namespace
 
+std::string icp_failure(const IcpResult& r, double min_inlier_ratio) {
+  char why[160] = "";
+  if (r.inlier_ratio < min_inlier_ratio)
+    std::snprintf(why, sizeof why, "the clouds did not meet: %.0f %% of the source paired, %.0f %% needed",
+                  100.0 * r.inlier_ratio, 100.0 * min_inlier_ratio);
+  else if (!r.converged)
+    std::snprintf(why, sizeof why, "ICP did not converge: still moving after %d iterations", r.iterations);
+  return why;
+}
+
 std::vector<double> registration_voxels(const Cloud& source, const Cloud& target, const RegistrationSettings& s) {
   validate(source, target, s);
+  const Sizing sizing(target);
   double fine = s.fine_voxel_m;
-  if (fine == 0.0) fine = std::max(point_spacing(target), voxel_for_points(target, s.fine_points));
+  if (fine == 0.0)
+    fine = std::max(point_spacing(target, sizing.voxel_for_points(target.size() / 4 + 1)),
+                    sizing.voxel_for_points(s.fine_points));
   double coarse = s.coarse_voxel_m;
   // At least three levels: a cloud of a few hundred points (PCL's bunny)
   // would otherwise be one level pairing within 2 cm, whose basin a 20°
   // start misses (35° off, "converged").
-  if (coarse == 0.0) coarse = std::max(voxel_for_points(target, s.coarse_points), 4.0 * fine);
+  if (coarse == 0.0) coarse = std::max(sizing.voxel_for_points(s.coarse_points), 4.0 * fine);
   if (!(fine > 0.0)) fine = 1e-3;
   coarse = std::max(coarse, fine);
   // Levels about a factor of two apart, ending exactly at the fine voxel.
@@ -172,14 +194,12 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
   result.prepare_s = prepare_s;
   result.total_s = seconds_since(t0);
   const IcpResult& last = result.levels.back().icp;
-  char why[160] = "";
-  if (last.inlier_ratio < s.min_inlier_ratio)
-    std::snprintf(why, sizeof why, "the clouds did not meet: %.0f %% of the source paired, %.0f %% needed",
-                  100.0 * last.inlier_ratio, 100.0 * s.min_inlier_ratio);
-  else if (!last.converged)
-    std::snprintf(why, sizeof why, "ICP did not converge: still moving after %d iterations at the %.3g m level",
-                  last.iterations, result.levels.back().voxel_m);
-  result.failure = why;
+  result.failure = icp_failure(last, s.min_inlier_ratio);
+  if (!result.failure.empty() && last.inlier_ratio >= s.min_inlier_ratio) {
+    char level[48];
+    std::snprintf(level, sizeof level, " at the %.3g m level", result.levels.back().voxel_m);
+    result.failure += level;
+  }
   result.converged = result.failure.empty();
   return result;
 }

@@ -79,6 +79,12 @@ struct RegistrationResult {
   double total_s = 0.0;
 };
 
+/// Why an ICP result is no answer, in one line ("the clouds did not meet:
+/// ...", "ICP did not converge: ..."); empty when it converged and paired
+/// at least `min_inlier_ratio` of the source. register_clouds' verdict on
+/// its finest level, and rise-semantic register's on a plain ICP.
+std::string icp_failure(const IcpResult& result, double min_inlier_ratio);
+
 /// The pyramid's voxels, coarse to fine, for these clouds and settings.
 std::vector<double> registration_voxels(const Cloud& source, const Cloud& target, const RegistrationSettings& settings = {});
 

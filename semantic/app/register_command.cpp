@@ -113,10 +113,7 @@ int run_register(const RegisterOptions& o) {
     rmse = r.rmse_m;
     inliers = r.inlier_ratio;
     iterations = r.iterations;
-    if (!r.converged)
-      failure = "ICP did not converge in " + std::to_string(r.iterations) + " iterations";
-    else if (r.inlier_ratio < o.min_inlier_ratio)
-      failure = "the clouds did not meet: " + std::to_string(static_cast<int>(100 * r.inlier_ratio)) + " % of the source paired";
+    failure = icp_failure(r, o.min_inlier_ratio);
   } else {
     RegistrationSettings s;
     s.fine_metric = metric;
@@ -139,7 +136,7 @@ int run_register(const RegisterOptions& o) {
   }
   spdlog::info("registration: {} iterations in {:.1f} ms", iterations,
                std::chrono::duration<double, std::milli>(clock::now() - ti).count());
-  if (!failure.empty() && !getenv("RISE_SHOW")) {
+  if (!failure.empty()) {
     // Never a transform that looks like an answer: nothing on stdout.
     spdlog::error("{} onto {}: {} (rmse {:.4f} m, {:.0f} % paired)", o.source, o.target, failure, rmse, 100.0 * inliers);
     return 1;
