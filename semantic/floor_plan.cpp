@@ -340,6 +340,41 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
   }
 }
 
+// Collinear pieces of one wall line that walls_of kept apart (a drifting
+// map's wall, its faces a little more than collinear_offset_m apart
+// across), joined across a door-wide gap with free space through it: the
+// gap is their doorway.
+void join_across_doorways(const OccupancyGrid& grid, std::vector<Piece>& pieces, const FloorPlanSettings& s) {
+  for (bool again = true; again;) {
+    again = false;
+    for (std::size_t i = 0; i < pieces.size() && !again; ++i)
+      for (std::size_t j = 0; j < pieces.size() && !again; ++j) {
+        Piece& p = pieces[i];
+        const Piece& q = pieces[j];
+        if (j == i || std::abs(p.d.dot(q.d)) < std::cos(s.angle_tolerance_rad)) continue;
+        const Eigen::Vector2d e0 = q.d * q.a0 + q.n * q.offset, e1 = q.d * q.a1 + q.n * q.offset;
+        if (std::max(std::abs(p.n.dot(e0) - p.offset), std::abs(p.n.dot(e1) - p.offset)) > 2 * s.collinear_offset_m)
+          continue;
+        const double q0 = std::min(p.d.dot(e0), p.d.dot(e1)), q1 = std::max(p.d.dot(e0), p.d.dot(e1));
+        const double gap = q0 - p.a1;
+        if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m) continue;
+        if (!doorway(grid, p, p.a1, q0, s)) continue;
+        p.doorways.emplace_back(p.a1, q0);
+        for (const auto& [g0, g1] : q.doorways) {
+          const double b0 = p.d.dot(q.d * g0 + q.n * q.offset), b1 = p.d.dot(q.d * g1 + q.n * q.offset);
+          p.doorways.emplace_back(std::min(b0, b1), std::max(b0, b1));
+        }
+        std::sort(p.doorways.begin(), p.doorways.end());
+        p.a1 = q1;
+        p.cells += q.cells;
+        p.thickness = std::max(p.thickness, q.thickness);
+        p.both_faces = p.both_faces || q.both_faces;
+        pieces.erase(pieces.begin() + static_cast<std::ptrdiff_t>(j));
+        again = true;
+      }
+  }
+}
+
 // A wall crossing wall `p`'s line near its end at along `a`: the along of
 // the crossing of their centre lines, and the crossing wall's thickness.
 struct Crossing {
@@ -395,10 +430,11 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     if (dist <= s.corner_gap_m + c.thickness / 2 && dist < best_dist) best = c.at, best_dist = dist;
   }
   // From the end (or the corner's far face) to the next crossing wall: a
-  // doorway when door-wide with free space through it (a door beside a
-  // wall's end). Beyond a corner only between two walls leaving p's line
-  // to the same side, the line going on past the far one (a corridor's
-  // mouth in a hall's wall).
+  // doorway when door-wide with free space through it and p's line going
+  // on past the crossing wall (a gap in a wall line; a gap between a
+  // wall's end and a wall across its way is a passage round a corner, as
+  // in the truth files' rule). Beyond a corner only between two walls
+  // leaving p's line to the same side (a corridor's mouth in a hall's wall).
   double from = a, corner = best;
   int corner_side = 0;
   if (!std::isnan(best)) {
@@ -408,7 +444,7 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     best_dist = 1e300;
   }
   for (const Crossing& c : crossings(p, all, 0.0)) {
-    if (corner_side != 0 && (c.side != corner_side || !continues(p, all, c.at, outward, s))) continue;
+    if ((corner_side != 0 && c.side != corner_side) || !continues(p, all, c.at, outward, s)) continue;
     const double gap = outward * (c.at - from) - c.thickness / 2;  // clear width from the end to its face
     if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
     const double g0 = outward > 0 ? from : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : from;
@@ -532,6 +568,7 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
   // Ends meet the crossing wall's centre line; a free end stops half a
   // thickness short of the last occupied cell (the world file's box
   // reaches thickness/2 past its line's ends).
+  join_across_doorways(grid, pieces, s);
   std::vector<Piece> met = pieces;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const Piece& p = pieces[i];
@@ -547,8 +584,11 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
   met = without_duplicates(grid, std::move(met), s);
   for (const Piece& p : met) {
     if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
-    // A short wall standing free, touching no other, is furniture or clutter.
-    if (!p.joined && p.a1 - p.a0 < s.free_wall_min_length_m) continue;
+    // A short wall standing free, touching no other, is furniture or
+    // clutter: short by its solid length (desks in a row are no wall with doorways).
+    double solid = p.a1 - p.a0;
+    for (const auto& [g0, g1] : p.doorways) solid -= g1 - g0;
+    if (!p.joined && solid < s.free_wall_min_length_m) continue;
     Wall w;
     w.from_m = p.d * p.a0 + p.n * p.offset;
     w.to_m = p.d * p.a1 + p.n * p.offset;
