@@ -224,13 +224,54 @@ double solid_share(const OccupancyGrid& grid, const Piece& p, double a0, double 
   return all == 0 ? 0.0 : solid / static_cast<double>(all);
 }
 
-// A doorway along g0..g1 of wall `p`'s line: free cells in the gap's
-// middle, and on both sides of the wall in front of it; solid wall (not a
-// dotted line of cells a laser grazed) for door_jamb_m before g0 and after
-// g1, where the gap's ends are p's (`jamb_before`, `jamb_after`).
+// The clear width of the gap around along `mid` of wall p's line on the
+// grid itself: from mid out to the first cross-section through the wall
+// (half its thickness and a cell either side) that holds an occupied cell.
+// The faces' cells come from a turned copy of the grid, which can move a
+// gap's ends by a cell.
+double clear_width(const OccupancyGrid& grid, const Piece& p, double mid, double limit) {
+  const double res = grid.resolution_m, t = p.thickness / 2 + res;
+  const auto solid_at = [&](double a) {
+    for (double o = -t; o <= t; o += res) {
+      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
+      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) return true;
+    }
+    return false;
+  };
+  double lo = mid, hi = mid;
+  while (mid - lo < limit && !solid_at(lo - res / 2)) lo -= res / 2;
+  while (hi - mid < limit && !solid_at(hi + res / 2)) hi += res / 2;
+  return hi - lo;
+}
+
+// How far from wall p's face, to `side` (+1 along p.n, -1 against), free
+// cells reach through the gap a0..a1: the farthest free cell on a line
+// across it before an occupied one, over the lines.
+double free_reach(const OccupancyGrid& grid, const Piece& p, double a0, double a1, int side, double limit) {
+  const double res = grid.resolution_m, face = p.thickness / 2;
+  double reach = 0.0;
+  for (double a = a0; a <= a1; a += res)
+    for (double o = res; o <= limit; o += res) {
+      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + side * (face + o)) * p.n);
+      if (!grid.contains(c.x(), c.y()) || grid.at(c.x(), c.y()) == CellState::Occupied) break;
+      if (grid.at(c.x(), c.y()) == CellState::Free) reach = std::max(reach, o);
+    }
+  return reach;
+}
+
+// A doorway along g0..g1 of wall `p`'s line: at least a door's clear
+// width on the grid itself; free cells in the gap's middle, and on both
+// sides of the wall in front of it, reaching door_min_depth_m beyond it
+// (a doorway leads somewhere, a shallow recess does not); solid wall (not
+// a dotted line of cells a laser grazed) for door_jamb_m before g0 and
+// after g1, where the gap's ends are p's (`jamb_before`, `jamb_after`).
 bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, const FloorPlanSettings& s,
              bool jamb_before = true, bool jamb_after = true) {
   const double m0 = g0 + (g1 - g0) / 5, m1 = g1 - (g1 - g0) / 5, t = p.thickness / 2, res = grid.resolution_m;
+  if (clear_width(grid, p, (g0 + g1) / 2, s.door_min_width_m) < s.door_min_width_m - res / 2) return false;
+  if (free_reach(grid, p, m0, m1, -1, s.door_min_depth_m) < s.door_min_depth_m - res ||
+      free_reach(grid, p, m0, m1, +1, s.door_min_depth_m) < s.door_min_depth_m - res)
+    return false;
   if (jamb_before && solid_share(grid, p, g0 - s.door_jamb_m, g0 - res / 2) < s.door_jamb_solid) return false;
   if (jamb_after && solid_share(grid, p, g1 + res / 2, g1 + s.door_jamb_m) < s.door_jamb_solid) return false;
   return free_share(grid, p.d, p.n, m0, m1, p.offset - t, p.offset + t) >= s.door_min_free &&

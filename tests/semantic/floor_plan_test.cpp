@@ -140,8 +140,8 @@ struct Floors {
 };
 const std::map<std::string, Floors> kMeasured = {
     // stem            walls P  walls R  doors P  doors R   (measured 2026-12-02, second pass)
-    {"aces", {0.92, 0.94, 0.85, 0.85}},        // 0.936 0.956 0.875 0.875
-    {"csail", {0.81, 0.94, 0.0, 1.0}},         // 0.822 0.959 0.00 (1 found, none true) 1.00
+    {"aces", {0.92, 0.94, 1.0, 0.85}},         // 0.936 0.954 1.00 0.875
+    {"csail", {0.82, 0.94, 1.0, 1.0}},         // 0.834 0.958 1.00 (none found, none true) 1.00
     {"freiburg-101", {0.91, 0.92, 1.0, 0.5}},  // 0.926 0.940 1.00 0.50
     {"intel", {0.87, 0.86, 0.75, 0.7}},        // 0.886 0.879 0.778 0.70
     {"pwr", {0.84, 0.84, 1.0, 1.0}},           // 0.859 0.853 1.00 (none found, none true) 1.00
