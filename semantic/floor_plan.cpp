@@ -31,13 +31,13 @@ Masks masks_of(const OccupancyGrid& g) {
   return m;
 }
 
-// The building's wall directions in [0, pi): peaks of the histogram (1°
-// bins) of the occupancy's local orientation, each at least
-// min_direction_share of the strongest. The orientation is the structure
+// The building's wall directions in [0, pi), each with its share of the
+// strongest: peaks of the histogram (1° bins) of the occupancy's local
+// orientation, each at least minor_direction_share of the strongest. The orientation is the structure
 // tensor's (gradient products averaged over a few cells), weighted by its
 // anisotropy: a single cell's gradient snaps to the grid's axes and
 // diagonals on a staircase-aliased line, the averaged tensor does not.
-std::vector<double> wall_directions(const cv::Mat& occupied, const FloorPlanSettings& s) {
+std::vector<std::pair<double, double>> wall_directions(const cv::Mat& occupied, const FloorPlanSettings& s) {
   cv::Mat f, gx, gy;
   occupied.convertTo(f, CV_32F, 1.0 / 255.0);
   cv::GaussianBlur(f, f, cv::Size(0, 0), 1.0);
@@ -71,16 +71,16 @@ std::vector<double> wall_directions(const cv::Mat& occupied, const FloorPlanSett
     if (top) peaks.emplace_back(smooth[wrap(i)], i);
   }
   std::sort(peaks.rbegin(), peaks.rend());
-  std::vector<double> out;
+  std::vector<std::pair<double, double>> out;
   for (const auto& [weight, bin] : peaks) {
-    if (weight < s.min_direction_share * peaks.front().first) break;
+    if (weight < s.minor_direction_share * peaks.front().first) break;
     // Sub-bin refinement: the weighted mean angle of the raw bins around the peak.
     double sum = 0.0, w = 0.0;
     for (int k = -3; k <= 3; ++k) {
       sum += hist[wrap(bin + k)] * (bin + k + 0.5);
       w += hist[wrap(bin + k)];
     }
-    out.push_back(std::fmod((sum / w) / kBins * kPi + kPi, kPi));
+    out.emplace_back(std::fmod((sum / w) / kBins * kPi + kPi, kPi), weight / peaks.front().first);
   }
   return out;
 }
@@ -604,7 +604,12 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
   seg.floor.max_m = grid.origin_m + grid.resolution_m * Eigen::Vector2d(box.x + box.width, box.y + box.height);
 
   std::vector<Piece> pieces;
-  for (const double theta : wall_directions(masks.occupied, s)) walls_of(grid, turned(grid, masks, theta), s, pieces);
+  for (const auto& [theta, share] : wall_directions(masks.occupied, s)) {
+    // A minor direction (a building's one slanted wall) holds long walls only: its short runs are clutter.
+    FloorPlanSettings in_direction = s;
+    if (share < s.min_direction_share) in_direction.min_wall_length_m = s.minor_wall_min_length_m;
+    walls_of(grid, turned(grid, masks, theta), in_direction, pieces);
+  }
 
   // Ends meet the crossing wall's centre line; a free end stops half a
   // thickness short of the last occupied cell (the world file's box

@@ -34,7 +34,9 @@ struct FloorPlanSettings {
   double noise_gap_m = 0.3;            ///< gaps up to this in a face are noise
   double collinear_offset_m = 0.15;    ///< collinear faces: centre lines at most this apart ...
   double angle_tolerance_rad = 6.0 * 3.14159265358979 / 180.0;  ///< directions closer than this are one
-  double min_direction_share = 0.08;   ///< a direction holds this share of the strongest one's edges
+  double min_direction_share = 0.08;   ///< a direction holds this share of the strongest one's edges ...
+  double minor_direction_share = 0.03; ///< ... or this share, and then only walls this long:
+  double minor_wall_min_length_m = 3.0;
   double corner_gap_m = 0.4;           ///< a wall end this close to another wall's line meets it
   double door_clearance_m = 0.4;       ///< free space checked this deep either side of a doorway
   double door_min_free = 0.5;          ///< ... at least this share of it free
