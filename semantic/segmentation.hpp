@@ -139,7 +139,9 @@ struct Segmentation {
   std::vector<Door> doors;
   std::vector<Stairs> stairs;
   std::vector<Obstacle> obstacles;
-  /// Clusters larger than obstacle_max_size_m that were dropped, not obstacles.
+  /// Clusters larger than obstacle_max_size_m, or too sparse for a thing
+  /// (their points cover under a third of their box), that were dropped,
+  /// not obstacles.
   int oversize_clusters_dropped = 0;
 };
 

@@ -194,6 +194,19 @@ bool oversize(const Obstacle& o, const SegmentationSettings& s) {
   return o.size_m.maxCoeff() > s.obstacle_max_size_m;
 }
 
+// A thing's points cover at least this much of its box's footprint.
+constexpr double kMinFill = 1.0 / 3.0;
+
+// The fraction of `o`'s footprint that cells of `cell_m` holding its points `pts` cover.
+double fill(const Obstacle& o, const std::vector<Point3>& pts, double cell_m) {
+  std::vector<std::pair<long long, long long>> cells;
+  for (const auto& p : pts)
+    cells.emplace_back(static_cast<long long>(std::floor(p.xy.x() / cell_m)), static_cast<long long>(std::floor(p.xy.y() / cell_m)));
+  std::sort(cells.begin(), cells.end());
+  const auto n = std::unique(cells.begin(), cells.end()) - cells.begin();
+  return static_cast<double>(n) * cell_m * cell_m / (o.size_m.x() * o.size_m.y());
+}
+
 // Clusters of `pts`: connected cells of cell_m after a dilation by a
 // `dilate` cells wide disc (scan lines a few cells apart on a far surface
 // are one cluster). Clusters in no particular order.
@@ -325,17 +338,21 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
       if (o.size_m.z() >= s.obstacle_min_height_m) obstacles.push_back(o);
     };
     const Obstacle o = box_of(pts, floor.height_m);
-    if (!oversize(o, s)) {
+    if (!oversize(o, s) && fill(o, pts, s.obstacle_cell_m) >= kMinFill) {
       keep(o);
       continue;
     }
     // Too large for a thing: structure the wall finder missed (columns of
-    // points over a wall's height) or several things touching. Without the
-    // tall columns, on a finer grid, it falls apart into the things.
+    // points over a wall's height) or several things touching. Or too
+    // sparse for one, its box mostly empty: a wall's far face beside a
+    // doorway and what was seen through it, a box that would shut the
+    // doorway (freiburg1_360.bt). Without the tall columns, on a finer
+    // grid, it falls apart into the things; what is still too large or too
+    // sparse is dropped.
     for (const auto& part : connected(without_tall_columns(pts, s), s.obstacle_cell_m, 3)) {
       if (static_cast<int>(part.size()) < s.obstacle_min_points) continue;
       const Obstacle b = box_of(part, floor.height_m);
-      if (oversize(b, s))
+      if (oversize(b, s) || fill(b, part, s.obstacle_cell_m) < kMinFill)
         ++dropped;
       else
         keep(b);
