@@ -14,8 +14,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "semantic/segmentation_internal.hpp"
-
 namespace rise::semantic {
 namespace {
 
@@ -157,15 +155,9 @@ cv::Mat1f clearance_m(const cv::Mat1b& mask, double cell_m) {
 
 OccupancyGrid floor_plan_of(const Cloud& cloud, const Segmentation& seg, const ExportSettings& st) {
   const double z0 = seg.floor.height_m;
-  // The floor is as thick as its noise. Nothing lies just under a floor,
-  // so the points there are that noise, and it reaches as far above: a
-  // laser's floor is a few cm thick, a Kinect's OctoMap (freiburg1_360.bt)
-  // +-9 cm, whose floor voxels would otherwise make a room's floor occupied.
-  constexpr double kUnderM = 0.3;
-  std::vector<double> under;
-  for (const auto& p : cloud.points)
-    if (p.allFinite() && p.z() < z0 && p.z() > z0 - kUnderM) under.push_back(z0 - p.z());
-  const double band_m = std::max(0.03, detail::quantile(under, 0.9)), above_m = band_m + 0.02;
+  // A floor is as thick as its noise (Floor::noise_m): a Kinect's floor
+  // voxels would otherwise make a room's floor occupied.
+  const double band_m = std::max(0.03, seg.floor.noise_m), above_m = band_m + 0.02;
   Eigen::Vector2d lo = seg.floor.min_m, hi = seg.floor.max_m;
   for (const auto& p : cloud.points)
     if (p.allFinite() && p.z() > z0 - band_m && p.z() < z0 + st.robot_height_m) {

@@ -93,7 +93,7 @@ int run_segment(const SegmentOptions& o) {
     std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles", seg.walls.size(), seg.doors.size(),
                 seg.stairs.size(), seg.obstacles.size());
     if (seg.oversize_clusters_dropped > 0)
-      std::printf(" (%d clusters over %.1f m or too sparse for a thing dropped)", seg.oversize_clusters_dropped,
+      std::printf(" (%d clusters over %.1f m or across a doorway dropped)", seg.oversize_clusters_dropped,
                   SegmentationSettings{}.obstacle_max_size_m);
     std::printf("\n");
     for (const auto& e : net.entities()) {
