@@ -140,6 +140,11 @@ void find_floor_and_ceiling(const Cloud& cloud, const SegmentationSettings& s, F
     break;
   }
   if (floor.points == 0) throw std::invalid_argument("segment: no floor (no horizontal plane of 1 m² near the bottom)");
+  // Its noise, from below: nothing else lies just under a floor.
+  std::vector<double> under;
+  for (const auto& p : cloud.points)
+    if (p.z() < floor.height_m && p.z() > floor.height_m - 0.3) under.push_back(floor.height_m - p.z());
+  floor.noise_m = quantile(under, 0.98);
   // The ceiling: the highest such peak well above the floor.
   for (auto it = peaks.rbegin(); it != peaks.rend(); ++it) {
     if (peak_z(*it) < floor.height_m + s.min_ceiling_clearance_m) break;

@@ -61,6 +61,11 @@ struct Floor {
   Eigen::Vector3d normal{0, 0, 1};             ///< least-squares plane normal, up
   Eigen::Vector2d min_m{0, 0}, max_m{0, 0};    ///< xy extent of its inlier points
   int points = 0;
+  /// Its noise: how far under height_m the points within 30 cm of it reach
+  /// (98th percentile). Nothing lies just under a floor, so they are the
+  /// floor, and it is as thick above: 12 cm in a Kinect's OctoMap
+  /// (freiburg1_360.bt), 6.6 cm in PCL's room_scan1.pcd.
+  double noise_m = 0.0;
 };
 
 struct Ceiling {
@@ -139,7 +144,9 @@ struct Segmentation {
   std::vector<Door> doors;
   std::vector<Stairs> stairs;
   std::vector<Obstacle> obstacles;
-  /// Clusters larger than obstacle_max_size_m that were dropped, not obstacles.
+  /// Clusters larger than obstacle_max_size_m, or whose box would shut a
+  /// door's passage their points leave open, that were dropped, not
+  /// obstacles.
   int oversize_clusters_dropped = 0;
 };
 

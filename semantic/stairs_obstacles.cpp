@@ -194,6 +194,26 @@ bool oversize(const Obstacle& o, const SegmentationSettings& s) {
   return o.size_m.maxCoeff() > s.obstacle_max_size_m;
 }
 
+// Whether the box `o` of points `pts` shuts door `d`: it covers part of
+// the door's passage (its gap, out to a door width either side of the
+// wall) where hardly any of its points stand lower than a door's top
+// (door_min_height_m; higher up, by the lintel, they stop nobody).
+bool shuts(const Obstacle& o, const std::vector<Point3>& pts, const Door& d, const SegmentationSettings& s) {
+  const Eigen::Vector2d along(std::cos(d.yaw_rad), std::sin(d.yaw_rad)), across(-along.y(), along.x());
+  const auto in_passage = [&](const Eigen::Vector2d& xy) {
+    return std::abs(along.dot(xy - d.center_m)) < d.width_m / 2 && std::abs(across.dot(xy - d.center_m)) < d.width_m;
+  };
+  const Eigen::Vector2d ax(std::cos(o.yaw_rad), std::sin(o.yaw_rad)), ay(-ax.y(), ax.x());
+  bool covers = false;
+  for (double u = -0.5; u <= 0.5 && !covers; u += 0.05)
+    for (double v = -0.5; v <= 0.5 && !covers; v += 0.05)
+      covers = in_passage(o.center_m.head<2>() + u * o.size_m.x() * ax + v * o.size_m.y() * ay);
+  if (!covers) return false;
+  int blocking = 0;
+  for (const auto& p : pts) blocking += p.z < s.door_min_height_m && in_passage(p.xy) ? 1 : 0;
+  return blocking < s.obstacle_min_points;
+}
+
 // Clusters of `pts`: connected cells of cell_m after a dilation by a
 // `dilate` cells wide disc (scan lines a few cells apart on a far surface
 // are one cluster). Clusters in no particular order.
@@ -247,7 +267,7 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
                                const Ceiling& ceiling, const std::vector<Wall>& walls,
                                const std::vector<Door>& doors, std::vector<Stairs>& stairs,
                                std::vector<Obstacle>& obstacles, int& dropped) {
-  const double z0 = floor.height_m + 0.04;
+  const double z0 = floor.height_m + std::max(0.04, floor.noise_m + 0.02);  // above the floor's noise
   const double z1 = ceiling.found ? ceiling.height_m - 0.04 : std::numeric_limits<double>::infinity();
   // Slabs to leave out: each wall and each door gap, widened by the inlier distance.
   struct Slab {
@@ -295,6 +315,9 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
     }
     others.push_back(k);
   }
+  const auto shuts_a_door = [&](const Obstacle& b, const std::vector<Point3>& pts) {
+    return std::any_of(doors.begin(), doors.end(), [&](const Door& d) { return shuts(b, pts, d, s); });
+  };
   for (std::size_t k : others) {
     const auto& pts = clusters[k];
     // The far end of a landing seen from beyond it, apart from the flight
@@ -325,17 +348,21 @@ void find_stairs_and_obstacles(const Cloud& cloud, const SegmentationSettings& s
       if (o.size_m.z() >= s.obstacle_min_height_m) obstacles.push_back(o);
     };
     const Obstacle o = box_of(pts, floor.height_m);
-    if (!oversize(o, s)) {
+    if (!oversize(o, s) && !shuts_a_door(o, pts)) {
       keep(o);
       continue;
     }
     // Too large for a thing: structure the wall finder missed (columns of
-    // points over a wall's height) or several things touching. Without the
-    // tall columns, on a finer grid, it falls apart into the things.
+    // points over a wall's height) or several things touching. Or a box
+    // across a doorway its points leave open: the wall's far face and
+    // lintel beside it (just beyond the wall's slab) with what was seen
+    // through it (freiburg1_360.bt). Without the tall columns, on a finer
+    // grid, it falls apart into the things; what is still too large, or
+    // still shuts a door, is dropped.
     for (const auto& part : connected(without_tall_columns(pts, s), s.obstacle_cell_m, 3)) {
       if (static_cast<int>(part.size()) < s.obstacle_min_points) continue;
       const Obstacle b = box_of(part, floor.height_m);
-      if (oversize(b, s))
+      if (oversize(b, s) || shuts_a_door(b, part))
         ++dropped;
       else
         keep(b);

@@ -154,11 +154,13 @@ cv::Mat1f clearance_m(const cv::Mat1b& mask, double cell_m) {
 }  // namespace
 
 OccupancyGrid floor_plan_of(const Cloud& cloud, const Segmentation& seg, const ExportSettings& st) {
-  constexpr double kFloorBandM = 0.03, kAboveFloorM = 0.05;
   const double z0 = seg.floor.height_m;
+  // A floor is as thick as its noise (Floor::noise_m): a Kinect's floor
+  // voxels would otherwise make a room's floor occupied.
+  const double band_m = std::max(0.03, seg.floor.noise_m), above_m = band_m + 0.02;
   Eigen::Vector2d lo = seg.floor.min_m, hi = seg.floor.max_m;
   for (const auto& p : cloud.points)
-    if (p.allFinite() && p.z() > z0 - kFloorBandM && p.z() < z0 + st.robot_height_m) {
+    if (p.allFinite() && p.z() > z0 - band_m && p.z() < z0 + st.robot_height_m) {
       lo = lo.cwiseMin(p.head<2>().cast<double>());
       hi = hi.cwiseMax(p.head<2>().cast<double>());
     }
@@ -178,8 +180,8 @@ OccupancyGrid floor_plan_of(const Cloud& cloud, const Segmentation& seg, const E
     const Eigen::Vector2i c = g.cell_of(p.head<2>().cast<double>());
     if (!g.contains(c.x(), c.y())) continue;
     const double h = p.z() - z0;
-    if (std::abs(h) < kFloorBandM) floor(c.y(), c.x()) = 255;
-    else if (h > kAboveFloorM && h < st.robot_height_m) above(c.y(), c.x()) += 1.0f;
+    if (std::abs(h) < band_m) floor(c.y(), c.x()) = 255;
+    else if (h > above_m && h < st.robot_height_m) above(c.y(), c.x()) += 1.0f;
   }
   // A far floor is seen on scan lines some cells apart.
   cv::morphologyEx(floor, floor, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));

@@ -76,9 +76,10 @@ Eigen::Vector3d robot_start(const SemanticNet& net, const ExportSettings& settin
 
 /// The floor plan of `cloud` as `seg` found it, in cells of
 /// floor_plan_cell_m over the floor's and the cloud's extent: free where
-/// the floor was seen, occupied where a point lies between 5 cm above the
-/// floor and robot_height_m, unknown elsewhere. Small holes between a far
-/// floor's scan lines are closed.
+/// the floor was seen, occupied where a point lies between 2 cm above the
+/// floor's band and robot_height_m, unknown elsewhere. The band is the
+/// floor's noise as the points under it show it (at least 3 cm). Small
+/// holes between a far floor's scan lines are closed.
 OccupancyGrid floor_plan_of(const Cloud& cloud, const Segmentation& seg, const ExportSettings& settings = {});
 
 /// The world file's text (YAML, the format sim/world_description.cpp reads).

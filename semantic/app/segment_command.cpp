@@ -93,7 +93,8 @@ int run_segment(const SegmentOptions& o) {
     std::printf("; %zu walls, %zu doors, %zu stairs, %zu obstacles", seg.walls.size(), seg.doors.size(),
                 seg.stairs.size(), seg.obstacles.size());
     if (seg.oversize_clusters_dropped > 0)
-      std::printf(" (%d clusters over %.1f m dropped)", seg.oversize_clusters_dropped, SegmentationSettings{}.obstacle_max_size_m);
+      std::printf(" (%d clusters over %.1f m or across a doorway dropped)", seg.oversize_clusters_dropped,
+                  SegmentationSettings{}.obstacle_max_size_m);
     std::printf("\n");
     for (const auto& e : net.entities()) {
       std::printf("  %-16s at (%7.3f, %7.3f, %6.3f) size %.3f x %.3f x %.3f yaw %6.1f deg", e.name.c_str(),
