@@ -32,6 +32,14 @@ struct SegmentationSettings {
   double default_wall_thickness_m = 0.15;  ///< for a wall seen from one side only
   double corner_gap_m = 0.35;          ///< wall ends this close to another wall's face meet it
   double parallel_tolerance_rad = 2.0 * 3.14159265358979 / 180.0;
+  /// A slab of points (a voxel map's wall with the shelves along it, a
+  /// noisy sensor's) is found as several parallel lines: lines within this
+  /// angle of each other, side by side with no floor seen between them ...
+  double slab_tolerance_rad = 6.0 * 3.14159265358979 / 180.0;
+  double slab_max_thickness_m = 0.5;   ///< ... are one wall up to this thick together;
+  double slab_against_m = 0.3;         ///< a thicker pair, faces at most this apart: the shorter stands against the other (furniture)
+  double wall_major_share = 0.3;       ///< a major direction holds this share of the most-walled one's length ...
+  double wall_off_direction_min_length_m = 3.0;  ///< ... lines off them shorter than this are clutter
   double door_min_width_m = 0.6;
   double door_max_width_m = 1.2;
   double door_min_height_m = 1.6;      ///< lintel underside / panel top above the floor

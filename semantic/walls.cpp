@@ -267,6 +267,109 @@ bool contains(const WallLine& w, const Line2& line, const std::vector<Run>& runs
   return in(runs.front().first) && in(runs.back().second);
 }
 
+// Lines side by side with no floor seen between them over their common
+// stretch are one wall: a slab of points (a voxel map's thick wall with
+// the shelves along it, a noisy sensor's wall) is found as several
+// parallel faces a few centimetres apart, and a drifting map's as faces a
+// few degrees apart (slab_tolerance_rad). A pair of like length whose
+// joint slab is at most slab_max_thickness_m thick becomes one line through
+// the slab's middle; a thicker pair, or one less than half the other's
+// length, whose faces are at most slab_against_m apart is a wall and what
+// stands against it (shelves, a cupboard): the shorter goes.
+void merge_side_by_side(std::vector<WallLine>& walls, const std::vector<Eigen::Vector2d>& floor_xy,
+                        const SegmentationSettings& s) {
+  std::sort(walls.begin(), walls.end(), [](const WallLine& a, const WallLine& b) { return a.points > b.points; });
+  for (bool again = true; again;) {
+    again = false;
+    for (std::size_t j = walls.size(); j-- > 0 && !again;)
+      for (std::size_t i = 0; i < j && !again; ++i) {
+        WallLine& w = walls[i];
+        const WallLine& v = walls[j];
+        if (!parallel(w.line, v.line, s.slab_tolerance_rad)) continue;
+        const auto rv = reproject(v.runs, v.line, w.line);
+        const double ov = overlap(w.runs, rv);
+        if (ov < 0.5 * std::min(total_length(w.runs), total_length(v.runs))) continue;
+        // v's centre line across w's, at the ends of their common stretch.
+        const double a0 = std::max(w.runs.front().first, rv.front().first);
+        const double a1 = std::min(w.runs.back().second, rv.back().second);
+        const auto across = [&](double a) {
+          const Eigen::Vector2d on_w = w.line.point + w.line.direction * a;
+          const double t = v.line.along(on_w);
+          return w.line.offset(v.line.point + v.line.direction * t);
+        };
+        const double o0 = std::min(across(a0), across(a1)), o1 = std::max(across(a0), across(a1));
+        const double lo = std::min(-w.thickness_m / 2, o0 - v.thickness_m / 2);
+        const double hi = std::max(w.thickness_m / 2, o1 + v.thickness_m / 2);
+        // Floor between their faces: two walls, not one.
+        const double g0 = o0 > 0 ? w.thickness_m / 2 : o1 + v.thickness_m / 2;
+        const double g1 = o0 > 0 ? o0 - v.thickness_m / 2 : -w.thickness_m / 2;
+        if (g1 - g0 > s.slab_against_m) continue;
+        int between = 0;
+        if (g1 - g0 > 0.05)
+          for (const auto& p : floor_xy) {
+            const double a = w.line.along(p), o = w.line.offset(p);
+            between += a > a0 && a < a1 && o > g0 && o < g1;
+          }
+        if (between > 0) continue;
+        // Too thick together, or v a short thing beside a long wall: what
+        // stands against it (shelves, a cupboard) goes, the wall stays as it is.
+        if (hi - lo > s.slab_max_thickness_m || total_length(v.runs) < 0.5 * total_length(w.runs)) {
+          if (total_length(v.runs) < total_length(w.runs)) {
+            w.points += v.points;
+            walls.erase(walls.begin() + static_cast<std::ptrdiff_t>(j));
+            again = true;
+          }
+          continue;
+        }
+        auto runs = w.runs;
+        runs.insert(runs.end(), rv.begin(), rv.end());
+        w.runs = merge_runs(runs, s.wall_merge_gap_m);
+        w.line.point += w.line.normal * ((lo + hi) / 2);
+        w.thickness_m = hi - lo;
+        w.both = w.both || v.both;
+        w.points += v.points;
+        walls.erase(walls.begin() + static_cast<std::ptrdiff_t>(j));
+        again = true;
+      }
+  }
+}
+
+// Lines off the building's major directions (peaks holding at least
+// wall_major_share of the most-walled direction's length, in 1° bins
+// smoothed over ±3°, within slab_tolerance_rad) that are shorter than
+// wall_off_direction_min_length_m: furniture and clutter at odd angles.
+void drop_off_direction(std::vector<WallLine>& walls, const SegmentationSettings& s) {
+  constexpr int kBins = 180;
+  std::vector<double> hist(kBins, 0.0);
+  const auto bin_of = [](const WallLine& w) {
+    double a = std::atan2(w.line.direction.y(), w.line.direction.x()) * 180.0 / M_PI;
+    a = std::fmod(a + 360.0, 180.0);
+    return static_cast<int>(a) % kBins;
+  };
+  for (const auto& w : walls) hist[static_cast<std::size_t>(bin_of(w))] += total_length(w.runs);
+  std::vector<double> smooth(kBins, 0.0);
+  for (int i = 0; i < kBins; ++i)
+    for (int k = -3; k <= 3; ++k) smooth[static_cast<std::size_t>(i)] += hist[static_cast<std::size_t>(((i + k) % kBins + kBins) % kBins)];
+  const double top = *std::max_element(smooth.begin(), smooth.end());
+  const int tol = static_cast<int>(std::lround(s.slab_tolerance_rad * 180.0 / M_PI));
+  std::vector<WallLine> kept;
+  for (const auto& w : walls) {
+    const int b = bin_of(w);
+    bool major = false;
+    for (int k = -tol; k <= tol && !major; ++k) {
+      const int i = ((b + k) % kBins + kBins) % kBins;
+      // A peak within tol of the line's own direction, strong enough.
+      bool peak = smooth[static_cast<std::size_t>(i)] >= s.wall_major_share * top;
+      for (int m = 1; m <= 3 && peak; ++m)
+        peak = smooth[static_cast<std::size_t>(i)] >= smooth[static_cast<std::size_t>(((i + m) % kBins + kBins) % kBins)] &&
+               smooth[static_cast<std::size_t>(i)] >= smooth[static_cast<std::size_t>(((i - m) % kBins + kBins) % kBins)];
+      major = peak;
+    }
+    if (major || total_length(w.runs) >= s.wall_off_direction_min_length_m) kept.push_back(w);
+  }
+  walls.swap(kept);
+}
+
 std::vector<WallLine> build_wall_lines(std::vector<Face> faces, const std::vector<Eigen::Vector2d>& floor_xy,
                                        const SegmentationSettings& s) {
   std::sort(faces.begin(), faces.end(),
@@ -350,6 +453,8 @@ std::vector<WallLine> build_wall_lines(std::vector<Face> faces, const std::vecto
     }
     if (!merged) walls.push_back(w);
   }
+  drop_off_direction(walls, s);
+  merge_side_by_side(walls, floor_xy, s);
   return walls;
 }
 
@@ -624,6 +729,12 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
         cur.s1 = g0;
         segs.push_back(cur);
         cur = Segment{li, g1, w.runs[k].second, {}, top_m, w.points};
+        continue;
+      }
+      // A gap no wider than a doorway with no floor seen through it is wall
+      // the sensor did not see (behind something, in its shadow): closed.
+      if (gap <= s.door_max_width_m + 0.05 && !floor_through(w.line, half, g0, g1, floor_xy, s)) {
+        cur.s1 = w.runs[k].second;
         continue;
       }
       segs.push_back(cur);

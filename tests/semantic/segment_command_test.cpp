@@ -60,7 +60,9 @@ TEST_CASE("rise-semantic segment prints the building's entities as JSON and writ
   const auto world = rise::sim::load_world_description((dir / "world.yaml").string());
   CHECK(world.name == "found");
   CHECK(world.stairs.size() == 1);
-  CHECK(world.walls.size() >= 9);
+  // 8: the east wall is one wall past the T of the corridor wall meeting it
+  // (its face's gap there, with no floor seen through it, is closed).
+  CHECK(world.walls.size() >= 8);
   std::filesystem::remove_all(dir);
   std::filesystem::remove(json);
 }
