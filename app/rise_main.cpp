@@ -21,8 +21,8 @@
 #include <set>
 #include <thread>
 
-#include "app/chain_monitor.hpp"
-#include "app/child_process.hpp"
+#include "process/chain_monitor.hpp"
+#include "process/child_process.hpp"
 #include "cli/command_line.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "panels/data_path.hpp"
@@ -103,12 +103,12 @@ struct DemoOptions {
 struct ChildProcessGuard {
   explicit ChildProcessGuard(const std::vector<std::string>& argv) : child(argv, "") {}
   ~ChildProcessGuard() { child.stop(3000); }
-  rise::app::ChildProcess child;
+  rise::process::ChildProcess child;
 };
 
 int run_demo(const DemoOptions& o) {
-  using rise::app::ChildProcess;
-  const std::string bin = rise::app::executable_dir();
+  using rise::process::ChildProcess;
+  const std::string bin = rise::process::executable_dir();
   const std::string log_dir =
       o.log_dir.empty() ? "/tmp/rise-demo-" + std::to_string(::getpid()) : o.log_dir;
   std::filesystem::create_directories(log_dir);
@@ -129,7 +129,7 @@ int run_demo(const DemoOptions& o) {
     for (int n = 2; busy.count(id) > 0; ++n) id = "demo-" + std::to_string(n);
     if (id != "demo") std::printf("rise demo: station 'demo' is in use, taking '%s'\n", id.c_str());
   }
-  rise::app::ChainMonitor monitor(o.lcm_url, id);
+  rise::process::ChainMonitor monitor(o.lcm_url, id);
   if (!monitor.good()) {
     std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
     return 2;
@@ -179,7 +179,7 @@ int run_demo(const DemoOptions& o) {
   bool ready = false;
   while (!ready && !g_stop) {
     ready = monitor.wait_until(
-        [](const rise::app::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; }, 50);
+        [](const rise::process::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; }, 50);
     if (!ready && child_died()) return 1;
     if (!ready && std::chrono::steady_clock::now() - up_since > std::chrono::seconds(15)) {
       std::fprintf(stderr, "rise demo: the chain did not come up within 15 s: %s\n", monitor.live_line().c_str());
@@ -252,7 +252,7 @@ int run_demo(const DemoOptions& o) {
                 rise::panels::describe(v.foreign, rise::panels::publisher_clock_us()).c_str());
   // A silent console is noticed after its timeout; a closed link at once.
   bool exceeded = false;
-  auto report = [&](const char* what, const rise::app::StopMeasurement& s, double detect_s, const char* detect) {
+  auto report = [&](const char* what, const rise::process::StopMeasurement& s, double detect_s, const char* detect) {
     if (s.stopped && robot) {
       const double bound_s =
           detect_s + 2 * publish_period_s + rise::sim::stop_time_s(*robot, s.speed_at_trigger_mps) + 0.02;
@@ -292,7 +292,7 @@ struct TrainingDemoOptions {
 };
 
 int run_training_demo(const TrainingDemoOptions& o) {
-  const std::string bin = rise::app::executable_dir();
+  const std::string bin = rise::process::executable_dir();
   const std::string out = o.out_dir.empty() ? "/tmp/rise-training-demo-" + std::to_string(::getpid()) : o.out_dir;
   std::printf("rise demo training: trainee '%s', LCM %s, %s → %s\n", o.id.c_str(), o.lcm_url.c_str(),
               o.training.c_str(), out.c_str());

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "firmware_protocol/console_can.hpp"
 #include "hil/io/can_bus.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -69,8 +69,8 @@ int main(int argc, char** argv) {
   Listener listener;
   lcm.subscribe("rise/" + id + "/panel_state", &Listener::on, &listener)->setQueueCapacity(1000);
 
-  const std::string bin = rise::app::executable_dir() + "/../bin/rise-hild";
-  rise::app::ChildProcess hild({bin, "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",
+  const std::string bin = rise::process::executable_dir() + "/../bin/rise-hild";
+  rise::process::ChildProcess hild({bin, "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",
                                 "--can", "socketcand://127.0.0.1:" + std::to_string(port) + "/can0", "--id", id,
                                 "--lcm", lcm_url, "--log-level", "warn"},
                                "/dev/null");

@@ -27,7 +27,7 @@
 #include <thread>
 #include <vector>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/RobotState.hpp"
 
 namespace {
@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
   // level that held and the first that failed (to within 2).
   int held = 0, failed = 0;
   for (int n = 1; n > 0 && n <= max_trainees;) {
-    std::vector<rise::app::ChildProcess> children;
+    std::vector<rise::process::ChildProcess> children;
     listener.latest.clear();
     for (int i = 0; i < n; ++i) {
       const std::string id = "bench" + std::to_string(i);

@@ -7,7 +7,7 @@ add_library(rise_instructor_web web_server.cpp virtual_panel.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::lcmtypes rise::command_auth
-  PRIVATE rise::sim rise::instructor rise::app PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
+  PRIVATE rise::sim rise::instructor rise::process PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
 
 # rise-instructor serve
 add_library(rise_instructor_serve STATIC app/serve_command.cpp)

@@ -28,7 +28,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "hil/io/host_port.hpp"
 #include "hil/panel_state_message.hpp"
 #include "instructor/scenario.hpp"
@@ -392,7 +392,7 @@ struct WebServer::Impl {
     std::string name;
     std::string file;
     uint64_t seed = 0;
-    std::unique_ptr<app::ChildProcess> process;
+    std::unique_ptr<process::ChildProcess> process;
   };
   std::mutex scenario_mutex;
   std::map<std::string, ScenarioRun> scenarios;
@@ -829,7 +829,7 @@ struct WebServer::Impl {
                                   "--issuer",
                                   settings.issuer};
     try {
-      on_launcher([&] { run.process = std::make_unique<app::ChildProcess>(argv, ""); });
+      on_launcher([&] { run.process = std::make_unique<process::ChildProcess>(argv, ""); });
     } catch (const std::exception& e) {
       return reply_error(res, 500, e.what());
     }

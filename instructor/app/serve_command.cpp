@@ -10,7 +10,7 @@
 #include <semaphore>
 #include <sstream>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "hil/io/host_port.hpp"
 #include "instructor/app/instructor_commands.hpp"
 #include "instructor/web_server.hpp"
@@ -70,7 +70,7 @@ int serve(const ServeOptions& o) {
   s.issuer = common.issuer;
   s.reports_dir = o.reports_dir;
   s.scenarios_dir = o.scenarios_dir.empty() ? "" : panels::find_data_file(o.scenarios_dir);
-  s.scenario_program = app::executable_dir() + "/rise-instructor";
+  s.scenario_program = process::executable_dir() + "/rise-instructor";
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;

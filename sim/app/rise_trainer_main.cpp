@@ -28,7 +28,7 @@
 #include <regex>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "cli/command_line.hpp"
 #include "panels/data_path.hpp"
 #include "panels/publisher_session.hpp"
@@ -388,7 +388,7 @@ int train(const TrainOptions& o) {
   if (!claim_station(lcm, o.id, o.scripted_console, o.allow_duplicate_id, guard)) return 2;
   Router router;
   subscribe(lcm, o.id, router);
-  const std::string bin = rise::app::executable_dir();
+  const std::string bin = rise::process::executable_dir();
   const auto write_training_report = [&] {
     report.visits = walker.visits();
     report.total_score = walker.total_score();
@@ -430,7 +430,7 @@ int train(const TrainOptions& o) {
     std::vector<std::string> argv{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url, "--robot", robot,
                                   "--world", task.world_file};
     if (o.fast) argv.push_back("--fast");
-    std::optional<rise::app::ChildProcess> sim;
+    std::optional<rise::process::ChildProcess> sim;
     try {
       sim.emplace(argv, (fs::path(o.out_dir) / (stem + ".sim.log")).string());
     } catch (const std::exception& e) {

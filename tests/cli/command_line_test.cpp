@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "cli/version.hpp"
 
 namespace {
@@ -33,7 +33,7 @@ Run run(const std::vector<std::string>& args) {
   argv[0] = std::string(RISE_BINARY_DIR) + "/bin/" + args[0];
   Run r;
   {
-    rise::app::ChildProcess child(argv, log.string());
+    rise::process::ChildProcess child(argv, log.string());
     r.status = child.wait_for(20000);
   }
   std::ifstream in(log);

@@ -13,14 +13,14 @@
 #include <fstream>
 #include <sstream>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "panels/command_auth.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
 using namespace rise::instructor_test;
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 
 namespace {
 const std::string kSource = RISE_SOURCE_DIR;

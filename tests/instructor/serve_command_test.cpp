@@ -12,13 +12,13 @@
 #include <sstream>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "panels/command_auth.hpp"
 #include "tests/process_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::instructor_test::free_port;
 using rise::instructor_test::kLcm;
 

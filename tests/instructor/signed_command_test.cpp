@@ -16,7 +16,7 @@
 #include <optional>
 #include <sstream>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "panels/command_auth.hpp"
 #include "sim/training/report.hpp"
 #include "rise_msgs/FaultCommand.hpp"
@@ -144,7 +144,7 @@ TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wr
   Station station(id);
   REQUIRE(station.good());
   const std::string log = (keys.dir / "rise-hild.log").string();
-  rise::app::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
+  rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
                                 "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",
                                 "--source", "mem://" + id, "--instructor-key", keys.key_file},
                                log);
@@ -180,14 +180,14 @@ TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wr
   }
   SECTION("rise-instructor inject is confirmed; without the key it sends nothing") {
     const std::string out = (keys.dir / "cli.out").string();
-    rise::app::ChildProcess cli({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "inject", "--lcm", kLcm,
+    rise::process::ChildProcess cli({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "inject", "--lcm", kLcm,
                                  "--instructor-key", keys.key_file, "--trainee", id, "offset", "drive_x", "--value",
                                  "0.2", "--id", "cli", "--confirm", "10"},
                                 out);
     CHECK(cli.wait_for(20000) == 0);
     CHECK_THAT(read_file(out), Catch::Contains("inject cli on " + id + ": confirmed"));
     const std::string out2 = (keys.dir / "cli2.out").string();
-    rise::app::ChildProcess nokey({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "clear", "--lcm", kLcm,
+    rise::process::ChildProcess nokey({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "clear", "--lcm", kLcm,
                                    "--instructor-key", (keys.dir / "missing.key").string(), "--trainee", id},
                                   out2);
     CHECK(nokey.wait_for(20000) == 2);
@@ -195,7 +195,7 @@ TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wr
   }
   SECTION("rise-instructor lists the trainee and runs a scenario against it") {
     const std::string out = (keys.dir / "list.out").string();
-    rise::app::ChildProcess list({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "list", "--lcm", kLcm,
+    rise::process::ChildProcess list({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "list", "--lcm", kLcm,
                                   "--wait", "1.5"},
                                  out);
     CHECK(list.wait_for(20000) == 0);
@@ -204,7 +204,7 @@ TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wr
     std::ofstream(file) << "scenario: s\nseed: 2\nfaults:\n"
                            "  - {id: sc, kind: stuck_at, target: drive_x, value: 0.3, at: 0.2, duration: 1.0}\n";
     const std::string out2 = (keys.dir / "scenario.out").string();
-    rise::app::ChildProcess run({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "scenario", file, "--lcm",
+    rise::process::ChildProcess run({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "scenario", file, "--lcm",
                                  kLcm, "--instructor-key", keys.key_file, "--trainee", id},
                                 out2);
     CHECK(station.panel_shows("sc: stuck_at drive_x"));
@@ -228,7 +228,7 @@ TEST_CASE("rise-instructor report prints the newest task report of a trainee", "
   r.end_reason = "event object_touched";
   rise::sim::training::write_file_atomically((dir / "01_approach_1.json").string(), rise::sim::training::task_result_json(r));
   const std::string out = (keys.dir / "report.out").string();
-  rise::app::ChildProcess report({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t9",
+  rise::process::ChildProcess report({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t9",
                                   "--reports-dir", (keys.dir / "reports").string()},
                                  out);
   CHECK(report.wait_for(20000) == 0);
@@ -238,7 +238,7 @@ TEST_CASE("rise-instructor report prints the newest task report of a trainee", "
   CHECK_THAT(text, Catch::Contains("score        17"));
   const std::string out2 = (keys.dir / "report2.out").string();
   fs::create_directories(keys.dir / "empty");  // a folder without a report: "no" (1); no folder: bad input (2)
-  rise::app::ChildProcess none({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t8",
+  rise::process::ChildProcess none({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "report", "--trainee", "t8",
                                 "--reports-dir", (keys.dir / "empty").string()},
                                out2);
   CHECK(none.wait_for(20000) == 1);
@@ -251,7 +251,7 @@ TEST_CASE("a station without the instructor key rejects every fault command", "[
   Station station(id);
   REQUIRE(station.good());
   const std::string log = (keys.dir / "rise-hild.log").string();
-  rise::app::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
+  rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
                                 "--source", "mem://" + id},
                                log);
   REQUIRE(station.wait_until([&] { return station.panel_.has_value(); }, 20000));
@@ -269,7 +269,7 @@ TEST_CASE("rise-sim applies a signed motor failure until its end and rejects for
   Station station(id);
   REQUIRE(station.good());
   const std::string log = (keys.dir / "rise-sim.log").string();
-  rise::app::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--lcm", kLcm, "--id", id, "--robot",
+  rise::process::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--lcm", kLcm, "--id", id, "--robot",
                                std::string(RISE_SOURCE_DIR) + "/sim/robots/tracked_eod.yaml", "--instructor-key",
                                keys.key_file},
                               log);
@@ -317,7 +317,7 @@ TEST_CASE("rise-sim applies a signed motor failure until its end and rejects for
   station.send(restart);
   CHECK(station.event("training_restarted", "task"));
   const std::string out = (keys.dir / "task.out").string();
-  rise::app::ChildProcess stop({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "task", "stop", "--lcm", kLcm,
+  rise::process::ChildProcess stop({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "task", "stop", "--lcm", kLcm,
                                 "--instructor-key", keys.key_file, "--trainee", id, "--confirm", "10"},
                                out);
   CHECK(stop.wait_for(20000) == 0);
@@ -336,10 +336,10 @@ TEST_CASE("a signed CAN drop over LCM makes the live daemon fail safe on the sta
   const std::string bus = "127.0.0.1:" + std::to_string(31000 + ::getpid() % 20000) + "/can0";
   Station station(id);
   REQUIRE(station.good());
-  rise::app::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id, "--source",
+  rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id, "--source",
                                 "socketcand://" + bus, "--instructor-key", keys.key_file},
                                (keys.dir / "rise-hild.log").string());
-  rise::app::ChildProcess panel({std::string(RISE_BINARY_DIR) + "/bin/rise-panel", "emulate", "--can",
+  rise::process::ChildProcess panel({std::string(RISE_BINARY_DIR) + "/bin/rise-panel", "emulate", "--can",
                                  "socketcand+listen://" + bus, "--script", script, "--hold", "--start-on-feedback"},
                                 (keys.dir / "rise-panel.log").string());
   const auto healthy = [&] { return station.panel_ && !station.panel_->failsafe && station.panel_->deadman; };

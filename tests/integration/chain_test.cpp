@@ -12,16 +12,16 @@
 #include <filesystem>
 #include <set>
 
-#include "app/chain_monitor.hpp"
-#include "app/child_process.hpp"
+#include "process/chain_monitor.hpp"
+#include "process/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "panels/panel_definition.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "sim/simulation.hpp"
 
-using rise::app::ChainView;
-using rise::app::ChildProcess;
+using rise::process::ChainView;
+using rise::process::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
 
@@ -48,7 +48,7 @@ TEST_CASE("the robot stops within two publish periods plus its own stop time aft
   std::filesystem::create_directories(dir);
   const std::string bus = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
 
-  rise::app::ChainMonitor monitor(kLcm, id);
+  rise::process::ChainMonitor monitor(kLcm, id);
   REQUIRE(monitor.good());
 
   const std::string log_file = dir + "/chain.lcmlog";

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 
 namespace {
 std::string read_all(const std::string& path) {
@@ -27,7 +27,7 @@ TEST_CASE("rise-hild dbc decode prints one line per frame and the coverage of a 
     return;
   }
   const std::string out = std::filesystem::temp_directory_path() / ("rise-dbc-" + std::to_string(::getpid()) + ".txt");
-  rise::app::ChildProcess p({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "dbc", "decode", dbc, log}, out);
+  rise::process::ChildProcess p({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "dbc", "decode", dbc, log}, out);
   REQUIRE(p.wait_for(30000) == 0);
   const std::string text = read_all(out);
   std::filesystem::remove(out);
@@ -48,7 +48,7 @@ TEST_CASE("rise-hild hid describe lists the fields of a real gamepad's descripto
   }
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-hid-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  rise::app::ChildProcess good({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "hid", "describe", file},
+  rise::process::ChildProcess good({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "hid", "describe", file},
                                dir + "/good.txt");
   REQUIRE(good.wait_for(30000) == 0);
   const std::string text = read_all(dir + "/good.txt");
@@ -58,7 +58,7 @@ TEST_CASE("rise-hild hid describe lists the fields of a real gamepad's descripto
   CHECK(text.find("button_10") != std::string::npos);
 
   { std::ofstream(dir + "/bad.hex") << "05 01 09\n"; }
-  rise::app::ChildProcess bad({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "hid", "describe", dir + "/bad.hex"},
+  rise::process::ChildProcess bad({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "hid", "describe", dir + "/bad.hex"},
                               dir + "/bad.txt");
   CHECK(bad.wait_for(30000) == 2);
   CHECK(read_all(dir + "/bad.txt").find("bad.hex:1:") != std::string::npos);

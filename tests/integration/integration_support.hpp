@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 
 namespace rise::test {
 
@@ -16,7 +16,7 @@ inline const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
 /// True when /usr/bin/python3 imports python-can (Debian's python3-can).
 inline bool python_can_available() {
   if (!std::filesystem::exists("/usr/bin/python3")) return false;
-  app::ChildProcess probe({"/usr/bin/python3", "-c", "import can"}, "/dev/null");
+  process::ChildProcess probe({"/usr/bin/python3", "-c", "import can"}, "/dev/null");
   return probe.wait_for(20000) == 0;
 }
 

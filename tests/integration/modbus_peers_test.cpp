@@ -23,14 +23,14 @@
 #include <sstream>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "tests/process_support.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
 namespace fp = rise::firmware_protocol;

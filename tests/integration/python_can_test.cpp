@@ -11,11 +11,11 @@
 #include <map>
 #include <sstream>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "firmware_protocol/dbc.hpp"
 
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
 using rise::test::python_can_available;

@@ -17,14 +17,14 @@
 #include <sstream>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "hil/io/can_log.hpp"
 #include "hil/io/hid_recording.hpp"
 #include "hil/io/recording_bus.hpp"
 #include "rise_msgs/PanelState.hpp"
 
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
 using rise::test::python_can_available;

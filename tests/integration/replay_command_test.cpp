@@ -10,11 +10,11 @@
 #include <fstream>
 #include <vector>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "hil/io/candump_log.hpp"
 
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
 using rise::test::python_can_available;

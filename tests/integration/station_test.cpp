@@ -19,13 +19,13 @@
 #include <sstream>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "panels/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "tests/process_support.hpp"
 
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::test::kBin;
 using rise::test::kSource;
 using rise::test::read_file;

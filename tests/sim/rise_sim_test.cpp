@@ -13,7 +13,7 @@
 #include <functional>
 #include <map>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimControl.hpp"
@@ -130,7 +130,7 @@ TEST_CASE("rise-sim with two robots publishes a RobotState and sound cues per ro
   REQUIRE(peer.good());
   const std::string robots = std::string(RISE_SOURCE_DIR) + "/sim/robots/";
   // A long panel timeout: the steps below run at once, however slow the machine.
-  rise::app::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--lcm", kLcm, "--robot",
+  rise::process::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--lcm", kLcm, "--robot",
                                a + "=" + robots + "skid4.yaml", "--robot", b + "=" + robots + "tracked_eod.yaml@0,3,90",
                                "--panel-timeout-ms", "10000"},
                               dir + "/rise-sim.log");

@@ -12,7 +12,7 @@
 #include <functional>
 #include <optional>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimControl.hpp"
@@ -115,7 +115,7 @@ TEST_CASE("rise-sim paused over LCM freezes sim time, steps exactly N ms and res
   INFO("rise-sim log in " << dir);
   SimPeer peer(id);
   REQUIRE(peer.good());
-  rise::app::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--id", id, "--lcm", kLcm, "--robot",
+  rise::process::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--id", id, "--lcm", kLcm, "--robot",
                                std::string(RISE_SOURCE_DIR) + "/sim/robots/tracked_eod.yaml"},
                               dir + "/rise-sim.log");
   // Ready: RobotState flows.

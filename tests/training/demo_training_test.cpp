@@ -3,11 +3,11 @@
 #include <catch2/catch.hpp>
 #include <unistd.h>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "sim/training/report.hpp"
 #include "tests/training/training_files.hpp"
 
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using Catch::Matchers::Contains;
 
 TEST_CASE("rise demo training runs the Fig. 10 example end to end and writes the reports", "[training]") {

@@ -12,14 +12,14 @@
 #include <functional>
 #include <set>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 #include "sim/training/report.hpp"
 #include "tests/training/training_files.hpp"
 
 using namespace rise::sim::training;
-using rise::app::ChildProcess;
+using rise::process::ChildProcess;
 using rise::test::src;
 
 namespace {

@@ -27,7 +27,7 @@
 #include <iterator>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "hil/bridge.hpp"
 #include "hil/io/hid_device.hpp"
 #include "hil/io/usb_hotplug.hpp"
@@ -150,7 +150,7 @@ TEST_CASE("a USB HID device re-plugged is reopened through libusb's arrival call
           "[vcan]") {
   // libusb's udev backend hears of devices from udevd, not from the kernel.
   fs::create_directories("/run");  // the VM's initramfs has none
-  rise::app::ChildProcess udevd({"/lib/systemd/systemd-udevd"}, "/tmp/udevd.log");
+  rise::process::ChildProcess udevd({"/lib/systemd/systemd-udevd"}, "/tmp/udevd.log");
   const bool udevd_ready = wait_for([] { return fs::exists("/run/udev/control"); });
   if (!udevd_ready) {
     std::ifstream log("/tmp/udevd.log");

@@ -24,7 +24,7 @@
 #include <span>
 #include <thread>
 
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/bridge.hpp"
 #include "hil/io/hid_device.hpp"
@@ -496,7 +496,7 @@ TEST_CASE("rise-panel emulate --hid is a HID device the bridge reads and lights"
     hex << "# the LED test pad of tests/hid_test_devices.hpp\n";
     for (const uint8_t b : led_pad_descriptor) hex << fmt_hex(b) << ' ';
   }
-  rise::app::ChildProcess panel({RISE_PANEL_BIN, "emulate", "--hid", "/tmp/led_pad.hex", "--hid-id", "1209:0003",
+  rise::process::ChildProcess panel({RISE_PANEL_BIN, "emulate", "--hid", "/tmp/led_pad.hex", "--hid-id", "1209:0003",
                                  "--hid-name", "rise-panel LED pad", "--panel", "/tmp/led_pad.yaml", "--script",
                                  "/tmp/led_pad_script.txt", "--hold"},
                                 "/tmp/rise-panel.log");

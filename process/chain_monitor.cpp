@@ -1,4 +1,4 @@
-#include "app/chain_monitor.hpp"
+#include "process/chain_monitor.hpp"
 
 #include "panels/publisher_session.hpp"
 
@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstdio>
 
-namespace rise::app {
+namespace rise::process {
 namespace {
 
 double yaw_deg(const rise_msgs::RobotState& r) {
@@ -164,4 +164,4 @@ std::string ChainMonitor::live_line() const {
   return line;
 }
 
-}  // namespace rise::app
+}  // namespace rise::process

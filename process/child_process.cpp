@@ -1,4 +1,4 @@
-#include "app/child_process.hpp"
+#include "process/child_process.hpp"
 
 #include <fcntl.h>
 #include <signal.h>
@@ -13,7 +13,7 @@
 #include <stdexcept>
 #include <thread>
 
-namespace rise::app {
+namespace rise::process {
 
 ChildProcess::ChildProcess(const std::vector<std::string>& argv, const std::string& log_file) {
   if (argv.empty()) throw std::runtime_error("ChildProcess: empty command");
@@ -112,4 +112,4 @@ std::string executable_dir() {
   return ec ? std::string(".") : exe.parent_path().string();
 }
 
-}  // namespace rise::app
+}  // namespace rise::process

@@ -18,7 +18,7 @@
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 
-namespace rise::app {
+namespace rise::process {
 
 /// Standstill: base speed below these (m/s, rad/s).
 inline constexpr double kStandstillSpeedMps = 0.01;
@@ -92,4 +92,4 @@ class ChainMonitor {
   std::thread thread_;
 };
 
-}  // namespace rise::app
+}  // namespace rise::process

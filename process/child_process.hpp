@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace rise::app {
+namespace rise::process {
 
 class ChildProcess {
  public:
@@ -43,4 +43,4 @@ class ChildProcess {
 /// Directory of the running executable (from /proc/self/exe).
 std::string executable_dir();
 
-}  // namespace rise::app
+}  // namespace rise::process
