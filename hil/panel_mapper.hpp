@@ -138,6 +138,9 @@ class PanelMapper {
   /// per-control transforms (shaping, low-pass, button modes, switches from
   /// bits) run; a control that was forced safe restarts its filters, so a
   /// toggle or a filtered axis never carries state across a source loss.
+  /// const, yet it advances those transforms' state (the `mutable`
+  /// filters_): call it with non-decreasing times, from one thread at a time
+  /// (the bridge holds its mutex); preview() leaves the state as it was.
   PanelSnapshot evaluate(int64_t now_us) const;
   /// What evaluate(now_us) would return, leaving the transforms' state as
   /// it was (an offline replay tries several candidate times this way).
@@ -211,8 +214,8 @@ class PanelMapper {
     std::optional<uint8_t> last_position;
   };
   mutable std::vector<ControlFilter> filters_;
-  std::vector<int> binding_of_control_;
-  std::vector<InputFault> input_faults_;  // injection order  // index into the source's dbc bindings, -1 if none
+  std::vector<int> binding_of_control_;  // index into the source's dbc bindings, -1 if none
+  std::vector<InputFault> input_faults_;  // injection order
 
   bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);
 };

@@ -202,13 +202,6 @@ class Simulation {
   /// The true world pose of the robot file's camera `camera`
   /// (sensors.cameras), nullopt for an unknown name. Safe in the cyclic path.
   std::optional<Eigen::Isometry3d> T_world_camera(const std::string& camera, std::size_t robot = 0) const;
-  /// Distance (m) from `origin_world` along the unit `direction_world` to the
-  /// first surface of the world — ground, ceiling, static boxes, props,
-  /// walls, stairs, doors, objects, the other robots; never robot
-  /// `own_robot`'s parts — or +infinity when there is none within
-  /// max_range_m. ODE ray casting (dCreateRay + dCollide), the laser
-  /// scanner's primitive. Safe in the cyclic path: no allocation, never
-  /// throws. It reuses one ray geom: not from two threads at once.
   /// Applies a physics or sensor fault (sim/sim_fault.hpp) to robot
   /// `robot` from now for its duration_s; one with the same id replaces it.
   /// Records a FaultInjected event. Returns "" or why it was refused (an
@@ -223,6 +216,13 @@ class Simulation {
   /// True while a camera_blackout fault covers robot `robot`'s camera `camera`.
   bool camera_blacked_out(const std::string& camera, std::size_t robot = 0) const;
 
+  /// Distance (m) from `origin_world` along the unit `direction_world` to the
+  /// first surface of the world — ground, ceiling, static boxes, props,
+  /// walls, stairs, doors, objects, the other robots; never robot
+  /// `own_robot`'s parts — or +infinity when there is none within
+  /// max_range_m. ODE ray casting (dCreateRay + dCollide), the laser
+  /// scanner's primitive. Safe in the cyclic path: no allocation, never
+  /// throws. It reuses one ray geom: not from two threads at once.
   double cast_ray_m(const Eigen::Vector3d& origin_world, const Eigen::Vector3d& direction_world,
                     double max_range_m, std::size_t own_robot = 0) const;
 

@@ -23,7 +23,9 @@ const char* to_string(IoStatus s);
 
 /// A CAN bus, whatever carries it. Backends: socketcan://IFACE,
 /// socketcand://HOST:PORT/BUS (client), socketcand+listen://HOST:PORT/BUS
-/// (server: serves one bus to socketcand clients), mem://NAME (in process).
+/// (server: serves one bus to socketcand clients), slcan://PATH?bitrate=N (a
+/// Lawicel serial-line adapter), replay://LOG (plays a candump/ASC/TRC log),
+/// mem://NAME (in process); their URLs in can_url.hpp.
 class CanBus {
  public:
   virtual ~CanBus() = default;

@@ -67,7 +67,10 @@ async def main():
     context = ModbusServerContext(slaves={1: slave}, single=False)
     asyncio.get_running_loop().create_task(firmware(context, axes, buttons))
     print(f"serving on 127.0.0.1:{port}", flush=True)
-    await StartAsyncTcpServer(context, address=("127.0.0.1", port))
+    # A restarted peer binds its port again at once: the killed one's
+    # connection lingers in TIME_WAIT on it (without SO_REUSEADDR the bind
+    # fails, and pymodbus only logs that).
+    await StartAsyncTcpServer(context, address=("127.0.0.1", port), allow_reuse_address=True)
 
 
 if __name__ == "__main__":

@@ -62,7 +62,10 @@ async def main():
     load(context[1], path)
     asyncio.get_running_loop().create_task(plc(context, path))
     print(f"serving on 127.0.0.1:{port}", flush=True)
-    await StartAsyncTcpServer(context, address=("127.0.0.1", port))
+    # A restarted peer binds its port again at once: the killed one's
+    # connection lingers in TIME_WAIT on it (without SO_REUSEADDR the bind
+    # fails, and pymodbus only logs that).
+    await StartAsyncTcpServer(context, address=("127.0.0.1", port), allow_reuse_address=True)
 
 
 if __name__ == "__main__":
