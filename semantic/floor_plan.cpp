@@ -208,39 +208,33 @@ double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eig
   return all == 0 ? 0.0 : free / static_cast<double>(all);
 }
 
-// Share of the cells along a0..a1 of wall p's line whose cross-section
-// through the wall holds an occupied cell.
+// Whether the cross-section through wall p at along `a` (its thickness
+// and a cell either side) holds an occupied cell.
+bool solid_across(const OccupancyGrid& grid, const Piece& p, double a) {
+  const double t = p.thickness / 2 + grid.resolution_m;
+  for (double o = -t; o <= t; o += grid.resolution_m) {
+    const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
+    if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) return true;
+  }
+  return false;
+}
+
+// Share of the cells along a0..a1 of wall p's line whose cross-section is solid.
 double solid_share(const OccupancyGrid& grid, const Piece& p, double a0, double a1) {
   int solid = 0, all = 0;
-  const double t = p.thickness / 2 + grid.resolution_m;
-  for (double a = a0; a <= a1; a += grid.resolution_m, ++all)
-    for (double o = -t; o <= t; o += grid.resolution_m) {
-      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
-      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) {
-        ++solid;
-        break;
-      }
-    }
+  for (double a = a0; a <= a1; a += grid.resolution_m, ++all) solid += solid_across(grid, p, a) ? 1 : 0;
   return all == 0 ? 0.0 : solid / static_cast<double>(all);
 }
 
 // The clear width of the gap around along `mid` of wall p's line on the
-// grid itself: from mid out to the first cross-section through the wall
-// (half its thickness and a cell either side) that holds an occupied cell.
+// grid itself: from mid out to the first solid cross-section either side.
 // The faces' cells come from a turned copy of the grid, which can move a
 // gap's ends by a cell.
 double clear_width(const OccupancyGrid& grid, const Piece& p, double mid, double limit) {
-  const double res = grid.resolution_m, t = p.thickness / 2 + res;
-  const auto solid_at = [&](double a) {
-    for (double o = -t; o <= t; o += res) {
-      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
-      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) return true;
-    }
-    return false;
-  };
+  const double step = grid.resolution_m / 2;
   double lo = mid, hi = mid;
-  while (mid - lo < limit && !solid_at(lo - res / 2)) lo -= res / 2;
-  while (hi - mid < limit && !solid_at(hi + res / 2)) hi += res / 2;
+  while (mid - lo < limit && !solid_across(grid, p, lo - step)) lo -= step;
+  while (hi - mid < limit && !solid_across(grid, p, hi + step)) hi += step;
   return hi - lo;
 }
 
@@ -611,10 +605,10 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     walls_of(grid, turned(grid, masks, theta), in_direction, pieces);
   }
 
+  join_across_doorways(grid, pieces, s);
   // Ends meet the crossing wall's centre line; a free end stops half a
   // thickness short of the last occupied cell (the world file's box
   // reaches thickness/2 past its line's ends).
-  join_across_doorways(grid, pieces, s);
   std::vector<Piece> met = pieces;
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const Piece& p = pieces[i];

@@ -705,9 +705,10 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
         if (g1 - g0 >= s.door_min_width_m && g1 - g0 <= s.door_max_width_m) rep = inspect_gap(slab, g0, g1, top_m, cell_m, s);
       }
       const double gap = g1 - g0;
-      // An open doorway: the floor is seen through it, on both sides (a
-      // gap in a face shadowed by something in front of it has none beyond).
-      const bool open = rep.free_below && !rep.panel && floor_through(w.line, half, g0, g1, floor_xy, s);
+      // The floor seen through a gap up to a doorway's width, on both sides
+      // (a gap in a face shadowed by something in front of it has none beyond).
+      const bool seen_through = gap <= s.door_max_width_m + 0.05 && floor_through(w.line, half, g0, g1, floor_xy, s);
+      const bool open = rep.free_below && !rep.panel && seen_through;  // an open doorway
       const bool door = !rep.window && ((rep.lintel && (rep.panel || open)) || (rep.panel && !rep.lintel));
       if (door) {
         Door d;
@@ -733,7 +734,7 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
       }
       // A gap no wider than a doorway with no floor seen through it is wall
       // the sensor did not see (behind something, in its shadow): closed.
-      if (gap <= s.door_max_width_m + 0.05 && !floor_through(w.line, half, g0, g1, floor_xy, s)) {
+      if (gap <= s.door_max_width_m + 0.05 && !seen_through) {
         cur.s1 = w.runs[k].second;
         continue;
       }

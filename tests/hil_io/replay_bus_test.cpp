@@ -245,6 +245,9 @@ TEST_CASE("replay in step mode hands out one frame per step and reports its prog
 
   // A step from another thread wakes a receive that waits for it.
   std::thread stepper([&] {
+    // Most likely after receive() below has begun to wait (nothing tells
+    // when it has); the assertions hold either way, a step before the
+    // receive is taken at once.
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     bus->step(8);
   });

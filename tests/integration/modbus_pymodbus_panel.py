@@ -15,7 +15,7 @@ import time
 
 from pymodbus.datastore import (ModbusSequentialDataBlock, ModbusServerContext,
                                 ModbusSlaveContext)
-from pymodbus.server import StartAsyncTcpServer
+from pymodbus_serve import serve
 
 
 def crc16_modbus(data: bytes) -> int:
@@ -66,11 +66,7 @@ async def main():
         zero_mode=True)
     context = ModbusServerContext(slaves={1: slave}, single=False)
     asyncio.get_running_loop().create_task(firmware(context, axes, buttons))
-    print(f"serving on 127.0.0.1:{port}", flush=True)
-    # A restarted peer binds its port again at once: the killed one's
-    # connection lingers in TIME_WAIT on it (without SO_REUSEADDR the bind
-    # fails, and pymodbus only logs that).
-    await StartAsyncTcpServer(context, address=("127.0.0.1", port), allow_reuse_address=True)
+    await serve(context, port)
 
 
 if __name__ == "__main__":

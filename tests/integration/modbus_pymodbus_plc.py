@@ -21,7 +21,7 @@ import sys
 
 from pymodbus.datastore import (ModbusSequentialDataBlock, ModbusServerContext,
                                 ModbusSlaveContext)
-from pymodbus.server import StartAsyncTcpServer
+from pymodbus_serve import serve
 
 TABLES = {"co": 1, "di": 2, "hr": 3, "ir": 4}  # the function codes that read them
 
@@ -61,11 +61,7 @@ async def main():
     context = ModbusServerContext(slaves={1: ModbusSlaveContext(**tables, zero_mode=True)}, single=False)
     load(context[1], path)
     asyncio.get_running_loop().create_task(plc(context, path))
-    print(f"serving on 127.0.0.1:{port}", flush=True)
-    # A restarted peer binds its port again at once: the killed one's
-    # connection lingers in TIME_WAIT on it (without SO_REUSEADDR the bind
-    # fails, and pymodbus only logs that).
-    await StartAsyncTcpServer(context, address=("127.0.0.1", port), allow_reuse_address=True)
+    await serve(context, port)
 
 
 if __name__ == "__main__":
