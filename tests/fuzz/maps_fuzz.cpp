@@ -34,7 +34,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   try {
     const sem::OctoMap m = fmt::parse_octomap("fuzz.bt", bytes);
     check(m.nodes == m.inner_nodes + m.leaves.size());
-    for (const auto& l : m.leaves) check(l.depth >= 1 && l.depth <= 16 && l.size_m > 0);
+    // Depth 0: a root without children (.ot), one leaf over the whole tree.
+    for (const auto& l : m.leaves) check(l.depth >= 0 && l.depth <= 16 && l.size_m > 0);
     // Few enough cells to expand in a fuzzer's memory.
     if (m.occupied_cells <= 100000) check(sem::occupied_voxels(m).size() == m.occupied_cells);
   } catch (const std::runtime_error& e) {

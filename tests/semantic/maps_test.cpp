@@ -38,6 +38,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <iterator>
 #include <random>
 #include <tuple>
@@ -235,6 +236,26 @@ TEST_CASE("OctoMap .ot reader reads octomap's OcTree, ColorOcTree and OcTreeStam
     fill(tree);
     check(tree, scratch("stamped.ot").string(), "OcTreeStamped");
   }
+}
+
+TEST_CASE("OctoMap .ot reader takes a root without children as one leaf over the whole tree, as octomap does", "[semantic]") {
+  // fuzz_maps found it (the harness took depth 0 for an error): a tree
+  // pruned to its root, occupied (log-odds 3.5), colour 1 2 3.
+  const std::string bytes("# Octomap OcTree file\nid ColorOcTree\nsize 1\nres 0.05\ndata\n\0\0`@\1\2\3\0", 66);
+  const auto file = scratch("root_leaf.ot");
+  std::ofstream(file, std::ios::binary) << bytes;
+  std::unique_ptr<octomap::AbstractOcTree> theirs_tree(octomap::AbstractOcTree::read(file.string()));
+  auto* tree = dynamic_cast<octomap::ColorOcTree*>(theirs_tree.get());
+  REQUIRE(tree != nullptr);
+  CHECK(tree->size() == 1);
+  CHECK(tree->getNumLeafNodes() == 1);
+  const sem::OctoMap map = sem::formats::parse_octomap(file.string(), bytes);
+  CHECK(map.nodes == 1);
+  CHECK(map.inner_nodes == 0);
+  REQUIRE(map.leaves.size() == 1);
+  CHECK(map.leaves[0].depth == 0);
+  CHECK(map.leaves[0].size_m == Approx(0.05 * 65536));
+  CHECK(map.occupied_cells == uint64_t{1} << 48);
 }
 
 TEST_CASE("OctoMap reader places child i along x, y, z by its bits and refuses bad files with the line or byte", "[semantic]") {
