@@ -21,13 +21,14 @@
 #include <set>
 #include <thread>
 
-#include "process/chain_monitor.hpp"
-#include "process/child_process.hpp"
 #include "cli/command_line.hpp"
-#include "rise_msgs/PanelState.hpp"
+#include "msgs/clock.hpp"
+#include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
-#include "panels/publisher_session.hpp"
+#include "process/chain_monitor.hpp"
+#include "process/child_process.hpp"
+#include "rise_msgs/PanelState.hpp"
 #include "sim/simulation.hpp"
 #include "sim/training/report.hpp"
 
@@ -124,7 +125,7 @@ int run_demo(const DemoOptions& o) {
       std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
       return 2;
     }
-    const auto busy = busy_station_ids(probe, rise::panels::kProbeMs);
+    const auto busy = busy_station_ids(probe, rise::msgs::kProbeMs);
     id = "demo";
     for (int n = 2; busy.count(id) > 0; ++n) id = "demo-" + std::to_string(n);
     if (id != "demo") std::printf("rise demo: station 'demo' is in use, taking '%s'\n", id.c_str());
@@ -249,7 +250,7 @@ int run_demo(const DemoOptions& o) {
   if (v.foreign_count > 0)
     std::printf("other publishers      %lld messages on rise/%s/* from %s, not counted\n",
                 static_cast<long long>(v.foreign_count), id.c_str(),
-                rise::panels::describe(v.foreign, rise::panels::publisher_clock_us()).c_str());
+                rise::msgs::describe(v.foreign, rise::msgs::wall_us()).c_str());
   // A silent console is noticed after its timeout; a closed link at once.
   bool exceeded = false;
   auto report = [&](const char* what, const rise::process::StopMeasurement& s, double detect_s, const char* detect) {
@@ -381,9 +382,9 @@ void print_panel(const rise_msgs::PanelState& p, const std::vector<rise_msgs::Pu
   }
   if (publishers.size() > 1) {
     std::printf("  DUPLICATE: %zu processes publish rise/%s/panel_state:\n", publishers.size(), p.trainee_id.c_str());
-    for (const auto& q : publishers) std::printf("    %s\n", rise::panels::describe(q, now).c_str());
+    for (const auto& q : publishers) std::printf("    %s\n", rise::msgs::describe(q, now).c_str());
   } else if (!publishers.empty()) {
-    std::printf("  from     %s\n", rise::panels::describe(publishers.front(), now).c_str());
+    std::printf("  from     %s\n", rise::msgs::describe(publishers.front(), now).c_str());
   }
 }
 
@@ -425,7 +426,7 @@ int run_status(const StatusOptions& o) {
     last_message = std::chrono::steady_clock::now();
     std::vector<rise_msgs::Publisher> publishers;
     for (const auto& [session, p] : latest.publishers) publishers.push_back(p);
-    print_panel(latest.msg, publishers, rise::panels::publisher_clock_us());
+    print_panel(latest.msg, publishers, rise::msgs::wall_us());
     std::fflush(stdout);
     latest.fresh = false;
     latest.publishers.clear();

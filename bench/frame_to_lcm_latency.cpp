@@ -21,9 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "process/child_process.hpp"
 #include "firmware_protocol/console_can.hpp"
 #include "hil/io/can_bus.hpp"
+#include "msgs/clock.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -119,8 +120,7 @@ int main(int argc, char** argv) {
     axis = static_cast<int16_t>(((i * 7919) % 60000) - 30000);
     const float expected = fp::axis_to_unit(axis);
     const auto t_send = Clock::now();
-    const int64_t send_wall_us = std::chrono::duration_cast<std::chrono::microseconds>(
-                                     std::chrono::system_clock::now().time_since_epoch()).count();
+    const int64_t send_wall_us = rise::msgs::wall_us();
     server->send(to_can(enc.next(fp::AxesFrame{0, {0, axis, 0}})));
     bool got = false;
     while (Clock::now() - t_send < std::chrono::milliseconds(100)) {

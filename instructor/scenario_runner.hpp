@@ -83,7 +83,7 @@ class ScenarioRunner {
 };
 
 /// The FaultCommand for an action (unsigned: sign it with
-/// panels::sign right before publishing).
+/// msgs::sign right before publishing).
 rise_msgs::FaultCommand to_command(const ScenarioAction& action, const std::string& trainee_id,
                                    const std::string& issuer);
 

@@ -6,7 +6,7 @@
 
 #include "hil/input_fault.hpp"
 #include "hil/panel_state_message.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 
 namespace rise::instructor {
 namespace fp = rise::firmware_protocol;
@@ -132,7 +132,7 @@ void VirtualPanel::note_rejected(const std::string& why, int64_t now_us) {
 rise_msgs::PanelState VirtualPanel::state(const std::string& trainee_id, int64_t now_us, int64_t utime) {
   const hil::PanelSnapshot snapshot = mapper_.evaluate(now_us);
   auto m = hil::to_message(mapper_.definition(), snapshot, trainee_id, ++seq_, utime, {url_});
-  m.publisher = panels::this_publisher();
+  m.publisher = msgs::this_publisher();
   if (now_us < rejected_until_us_) {
     m.active_faults.push_back(rejected_note_);
     m.num_faults = static_cast<int16_t>(m.active_faults.size());

@@ -6,7 +6,7 @@ pkg_check_modules(RISE_HTTPLIB REQUIRED IMPORTED_TARGET GLOBAL cpp-httplib)
 add_library(rise_instructor_web web_server.cpp virtual_panel.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
-target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::lcmtypes rise::command_auth
+target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs
   PRIVATE rise::sim rise::instructor rise::process PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
 
 # rise-instructor serve

@@ -28,15 +28,16 @@
 #include <stdexcept>
 #include <thread>
 
-#include "process/child_process.hpp"
 #include "hil/io/host_port.hpp"
 #include "hil/panel_state_message.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
 #include "instructor/virtual_panel.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/clock.hpp"
+#include "msgs/command_auth.hpp"
+#include "msgs/publisher_session.hpp"
 #include "panels/panel_definition.hpp"
-#include "panels/publisher_session.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -193,7 +194,7 @@ Json::Value publisher_json(const rise_msgs::Publisher& p) {
   v["pid"] = p.pid;
   v["session"] = Json::Int64(p.session_id);
   v["started_utime"] = Json::Int64(p.started_utime);
-  v["text"] = panels::describe(p, panels::publisher_clock_us());
+  v["text"] = msgs::describe(p, msgs::wall_us());
   return v;
 }
 
@@ -376,16 +377,16 @@ struct WebServer::Impl {
 
   // Other processes publishing the trainees' states (this process's own
   // virtual panels come back over LCM too and are not "others").
-  panels::PublisherWatch publishers{panels::this_publisher().session_id};
+  msgs::PublisherWatch publishers{msgs::this_publisher().session_id};
 
   // Virtual panels by trainee id.
   std::mutex virtual_mutex;
   std::map<std::string, std::unique_ptr<VirtualPanel>> virtual_panels;
   int64_t sim_control_seq = 0;
-  std::optional<panels::InstructorKey> key;
+  std::optional<msgs::InstructorKey> key;
   // Checks the fault commands meant for this server's virtual panels (they
   // come back over LCM like any receiver's; the LCM thread owns it).
-  std::unique_ptr<panels::CommandVerifier> verifier;
+  std::unique_ptr<msgs::CommandVerifier> verifier;
 
   // Running scenarios by trainee id.
   struct ScenarioRun {
@@ -441,8 +442,8 @@ struct WebServer::Impl {
     (void)virtual_definition(panel, settings.virtual_timeout_ms);  // fails here, not on the first page
     if (settings.push_hz < 20.0) throw std::runtime_error("push_hz must be at least 20");
     if (!settings.instructor_key_file.empty()) {
-      key = panels::load_instructor_key(settings.instructor_key_file);
-      verifier = std::make_unique<panels::CommandVerifier>(*key);
+      key = msgs::load_instructor_key(settings.instructor_key_file);
+      verifier = std::make_unique<msgs::CommandVerifier>(*key);
     }
   }
 
@@ -506,7 +507,7 @@ struct WebServer::Impl {
     }
     if (ours)
       settings.on_duplicate_publisher("another publisher on " + channel + ": " +
-                                      panels::describe(other->publisher, panels::publisher_clock_us()) +
+                                      msgs::describe(other->publisher, msgs::wall_us()) +
                                       ", beside this server's virtual panel for '" + trainee + "'");
   }
 
@@ -519,8 +520,8 @@ struct WebServer::Impl {
     const int64_t now = monotonic_us();
     if (c.trainee_id != trainee) return it->second->note_rejected("for trainee '" + c.trainee_id + "'", now);
     if (!verifier) return it->second->note_rejected("no instructor key on this server", now);
-    const auto verdict = verifier->check(c, panels::wall_clock_us());
-    if (verdict != panels::Verdict::Accepted) return it->second->note_rejected(panels::to_string(verdict), now);
+    const auto verdict = verifier->check(c, msgs::wall_us());
+    if (verdict != msgs::Verdict::Accepted) return it->second->note_rejected(msgs::to_string(verdict), now);
     // Other layers' faults (physics, sensors) are rise-sim's: not an error here.
     const std::string why = it->second->apply(c, now);
     (void)why;
@@ -577,7 +578,7 @@ struct WebServer::Impl {
       const auto parts = TraineeDirectory::split_channel(channel);
       if (!parts) continue;
       const auto& [id, what] = *parts;
-      if (what == "panel_state" && virtual_ids.count(id)) list.push_back(panels::this_publisher());
+      if (what == "panel_state" && virtual_ids.count(id)) list.push_back(msgs::this_publisher());
       if (list.size() < 2) continue;
       Json::Value& d = by_id[id]["duplicate_publishers"][what];
       for (const auto& p : list) d.append(publisher_json(p));
@@ -660,7 +661,7 @@ struct WebServer::Impl {
         if (o.channel == hil::channel(id, "panel_state")) {
           virtual_panels.erase(id);
           return reply_error(res, 409, o.channel + " is already published by " +
-                                           panels::describe(o.publisher, panels::publisher_clock_us()) +
+                                           msgs::describe(o.publisher, msgs::wall_us()) +
                                            ": a virtual panel there would mix with it");
         }
       vp = std::make_unique<VirtualPanel>(panel, settings.virtual_timeout_ms, req.remote_addr);
@@ -728,7 +729,7 @@ struct WebServer::Impl {
       if (c.fault_id.empty()) return reply_error(res, 400, "fault: a name is required to inject");
       c.seed = (*body).get("seed", 1).asInt64();
     }
-    panels::sign(c, *key);
+    msgs::sign(c, *key);
     lcm.publish(hil::channel(id, "fault_command"), &c);
     Json::Value v;
     v["published"] = hil::channel(id, "fault_command");

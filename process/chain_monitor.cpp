@@ -1,6 +1,6 @@
 #include "process/chain_monitor.hpp"
 
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 
 #include <poll.h>
 
@@ -62,7 +62,7 @@ void ChainMonitor::loop() {
 void ChainMonitor::accept_only(std::vector<int32_t> pids) {
   std::lock_guard lock(mutex_);
   accepted_pids_ = std::move(pids);
-  host_ = panels::this_publisher().host;
+  host_ = msgs::this_publisher().host;
 }
 
 bool ChainMonitor::accepted(const rise_msgs::Publisher& p) {

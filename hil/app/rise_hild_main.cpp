@@ -19,13 +19,13 @@
 #include "hil/app/verify_command.hpp"
 #include "hil/bridge.hpp"
 #include "hil/fault_injector.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "hil/io/replay_modbus_link.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
 #include "panels/data_path.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -222,10 +222,10 @@ int main(int argc, char** argv) {
     spdlog::info("recording into {}", record_dir);
   }
 
-  std::optional<rise::panels::CommandVerifier> verifier;
-  if (const std::string key_path = rise::panels::instructor_key_path(instructor_key_file); !key_path.empty()) {
+  std::optional<rise::msgs::CommandVerifier> verifier;
+  if (const std::string key_path = rise::msgs::instructor_key_path(instructor_key_file); !key_path.empty()) {
     try {
-      verifier.emplace(rise::panels::load_instructor_key(key_path), static_cast<int64_t>(command_window_s * 1e6));
+      verifier.emplace(rise::msgs::load_instructor_key(key_path), static_cast<int64_t>(command_window_s * 1e6));
     } catch (const std::exception& e) {
       spdlog::error("{}", e.what());
       return 2;
@@ -244,12 +244,12 @@ int main(int argc, char** argv) {
   const std::string feedback_channel = rise::hil::channel(id, "panel_feedback");
 
   // One publisher per station: listen before the first message.
-  const rise_msgs::Publisher self = rise::panels::init_publisher("rise-hild");
+  const rise_msgs::Publisher self = rise::msgs::init_publisher("rise-hild");
   if (!allow_duplicate_id)
-    if (const auto other = rise::panels::probe_channel<rise_msgs::PanelState>(lcm, state_channel, rise::panels::kProbeMs)) {
+    if (const auto other = rise::msgs::probe_channel<rise_msgs::PanelState>(lcm, state_channel, rise::msgs::kProbeMs)) {
       spdlog::error("{} is already published by {}: refusing to start a second publisher for station '{}' (give "
                     "another --id, or --allow-duplicate-id)",
-                    state_channel, rise::panels::describe(*other, wall_us()), id);
+                    state_channel, rise::msgs::describe(*other, wall_us()), id);
       return 2;
     }
 
@@ -314,7 +314,7 @@ int main(int argc, char** argv) {
     const int64_t now = rise::hil::monotonic_us();
     std::string why;
     if (!verifier) why = "no instructor key on this station";
-    else if (const auto v = verifier->check(c, wall_us()); v != rise::panels::Verdict::Accepted) why = rise::panels::to_string(v);
+    else if (const auto v = verifier->check(c, wall_us()); v != rise::msgs::Verdict::Accepted) why = rise::msgs::to_string(v);
     else if (c.trainee_id != id) why = "meant for trainee '" + c.trainee_id + "'";
     if (!why.empty()) {
       ++rejected;
@@ -354,10 +354,10 @@ int main(int argc, char** argv) {
   // Another process publishing on this station's channel: reported once by
   // each side; of two that started together, the later one gives way.
   int exit_code = 0;
-  rise::panels::PublisherListener<rise_msgs::PanelState> others(
-      self.session_id, [&](const rise::panels::PublisherWatch::Other& o) {
-        spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
-        if (allow_duplicate_id || !rise::panels::gives_way(self, o.publisher, wall_us())) return;
+  rise::msgs::PublisherListener<rise_msgs::PanelState> others(
+      self.session_id, [&](const rise::msgs::PublisherWatch::Other& o) {
+        spdlog::warn("another publisher on {}: {}", o.channel, rise::msgs::describe(o.publisher, wall_us()));
+        if (allow_duplicate_id || !rise::msgs::gives_way(self, o.publisher, wall_us())) return;
         spdlog::error("{} started first: this rise-hild stops (give another --id, or --allow-duplicate-id)",
                       o.publisher.program);
         exit_code = 2;

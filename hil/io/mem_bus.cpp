@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "hil/io/posix_io.hpp"
+#include "msgs/clock.hpp"
 
 namespace rise::io {
 
@@ -60,7 +61,7 @@ MemBus::~MemBus() {
 IoStatus MemBus::send(const CanFrame& frame) {
   if (!is_well_formed(frame)) return IoStatus::Invalid;
   CanFrame stamped = frame;
-  if (stamped.timestamp_us == 0) stamped.timestamp_us = detail::now_epoch_us();
+  if (stamped.timestamp_us == 0) stamped.timestamp_us = msgs::wall_us();
   std::lock_guard lock(channel_->mutex);
   for (FrameQueue* member : channel_->members) {
     if (member != &queue_) member->push(stamped);

@@ -9,12 +9,9 @@
 #include <cstdio>
 #include <cstring>
 
-namespace rise::io::detail {
+#include "msgs/clock.hpp"
 
-int64_t now_epoch_us() {
-  const auto since_epoch = std::chrono::system_clock::now().time_since_epoch();
-  return std::chrono::duration_cast<std::chrono::microseconds>(since_epoch).count();
-}
+namespace rise::io::detail {
 
 int remaining_ms(Clock::time_point deadline) {
   const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();

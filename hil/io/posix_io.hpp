@@ -16,9 +16,6 @@ namespace rise::io::detail {
 
 using Clock = std::chrono::steady_clock;
 
-/// Microseconds since the Unix epoch (CLOCK_REALTIME), as CAN timestamps use.
-int64_t now_epoch_us();
-
 /// Milliseconds left until deadline, never negative.
 int remaining_ms(Clock::time_point deadline);
 

@@ -1,6 +1,7 @@
 #include "hil/io/recording_bus.hpp"
 
 #include "hil/io/posix_io.hpp"
+#include "msgs/clock.hpp"
 
 namespace rise::io {
 
@@ -15,7 +16,7 @@ RecordingBus::~RecordingBus() = default;
 void RecordingBus::record(const CanFrame& frame, CandumpDirection direction) {
   CanFrame stamped = frame;
   if (stamped.timestamp_us == 0 || (stamp_ == Stamp::Receive && direction == CandumpDirection::Received))
-    stamped.timestamp_us = detail::now_epoch_us();
+    stamped.timestamp_us = msgs::wall_us();
   std::lock_guard lock(mutex_);
   line_.clear();
   append_candump_line(line_, stamped, interface_, direction);

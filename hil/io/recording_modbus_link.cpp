@@ -1,9 +1,9 @@
 #include "hil/io/recording_modbus_link.hpp"
 
 #include "hil/io/posix_io.hpp"
+#include "msgs/clock.hpp"
 
 namespace rise::io {
-using detail::now_epoch_us;
 
 RecordingModbusLink::RecordingModbusLink(std::unique_ptr<ModbusLink> link, const std::string& path,
                                          std::string source, int unit)
@@ -15,7 +15,7 @@ RecordingModbusLink::RecordingModbusLink(std::unique_ptr<ModbusLink> link, const
       "# rise-hild modbus trace v1: (request time) source unit= fc= addr= count= rtt_us= result [closed] [values]; "
       "see hil/io/modbus_trace.hpp");
   line_.clear();
-  append_modbus_event(line_, now_epoch_us(), source_, ModbusTraceRecord::Kind::Link, link_->is_open());
+  append_modbus_event(line_, msgs::wall_us(), source_, ModbusTraceRecord::Kind::Link, link_->is_open());
   file_.write_line(line_);
 }
 
@@ -33,48 +33,48 @@ ModbusResult RecordingModbusLink::transact(ModbusFunction function, uint16_t add
 }
 
 ModbusResult RecordingModbusLink::read_coils(uint16_t address, std::span<uint8_t> bits) {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const auto start = Clock::now();
   return transact(ModbusFunction::ReadCoils, address, bits, link_->read_coils(address, bits), time_us, start);
 }
 
 ModbusResult RecordingModbusLink::read_holding_registers(uint16_t address, std::span<uint16_t> registers) {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const auto start = Clock::now();
   return transact(ModbusFunction::ReadHoldingRegisters, address, registers,
                   link_->read_holding_registers(address, registers), time_us, start);
 }
 
 ModbusResult RecordingModbusLink::read_discrete_inputs(uint16_t address, std::span<uint8_t> bits) {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const auto start = Clock::now();
   return transact(ModbusFunction::ReadDiscreteInputs, address, bits, link_->read_discrete_inputs(address, bits),
                   time_us, start);
 }
 
 ModbusResult RecordingModbusLink::read_input_registers(uint16_t address, std::span<uint16_t> registers) {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const auto start = Clock::now();
   return transact(ModbusFunction::ReadInputRegisters, address, registers,
                   link_->read_input_registers(address, registers), time_us, start);
 }
 
 ModbusResult RecordingModbusLink::write_coils(uint16_t address, std::span<const uint8_t> bits) {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const auto start = Clock::now();
   return transact(ModbusFunction::WriteMultipleCoils, address, bits, link_->write_coils(address, bits), time_us,
                   start);
 }
 
 ModbusResult RecordingModbusLink::write_registers(uint16_t address, std::span<const uint16_t> registers) {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const auto start = Clock::now();
   return transact(ModbusFunction::WriteMultipleRegisters, address, registers,
                   link_->write_registers(address, registers), time_us, start);
 }
 
 ModbusStatus RecordingModbusLink::reopen() {
-  const int64_t time_us = now_epoch_us();
+  const int64_t time_us = msgs::wall_us();
   const ModbusStatus st = link_->reopen();
   if (st == ModbusStatus::Ok) ++counters_.reopens;
   line_.clear();
@@ -85,7 +85,7 @@ ModbusStatus RecordingModbusLink::reopen() {
 
 void RecordingModbusLink::close() {
   line_.clear();
-  append_modbus_event(line_, now_epoch_us(), source_, ModbusTraceRecord::Kind::Close, false);
+  append_modbus_event(line_, msgs::wall_us(), source_, ModbusTraceRecord::Kind::Close, false);
   file_.write_line(line_);
   link_->close();
 }

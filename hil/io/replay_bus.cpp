@@ -3,17 +3,9 @@
 #include <algorithm>
 #include <utility>
 
+#include "msgs/clock.hpp"
+
 namespace rise::io {
-
-namespace {
-
-int64_t wall_clock_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
-}  // namespace
 
 ReplayBus::ReplayBus(std::string url, ReplayAddress address)
     : url_(std::move(url)),
@@ -124,7 +116,7 @@ IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
   clock_.count_lateness();
   last_played_ts_us_ = pending_ts_us_;
   frame = pending_.frame;
-  frame.timestamp_us = wall_clock_us();
+  frame.timestamp_us = msgs::wall_us();
   have_pending_ = false;
   ++frames_played_;
   return IoStatus::Ok;

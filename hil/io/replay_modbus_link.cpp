@@ -11,16 +11,13 @@
 #include <thread>
 #include <variant>
 
+#include "msgs/clock.hpp"
+
 namespace rise::io {
 namespace {
 
 // Time between two passes of a window that holds at most one request.
 constexpr int64_t kSingleRequestLoopGapUs = 100'000;
-
-int64_t steady_now_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 int64_t seconds_to_us(double s) { return static_cast<int64_t>(std::llround(s * 1e6)); }
 
@@ -116,11 +113,11 @@ bool ReplayModbusLink::reach(int64_t elapsed, int64_t& trace_us) {
 int64_t ReplayModbusLink::elapsed_now() {
   if (!anchored_) {
     anchored_ = true;
-    t0_steady_us_ = steady_now_us();
+    t0_steady_us_ = msgs::monotonic_us();
   }
   if (address_.fast) return fast_elapsed_us_;
   return static_cast<int64_t>(
-      std::llround(static_cast<double>(steady_now_us() - t0_steady_us_.load()) * address_.speed));
+      std::llround(static_cast<double>(msgs::monotonic_us() - t0_steady_us_.load()) * address_.speed));
 }
 
 std::optional<int64_t> ReplayModbusLink::trace_time_us(int64_t steady_us) const {

@@ -10,6 +10,8 @@
 #include <cerrno>
 #include <cstring>
 
+#include "msgs/clock.hpp"
+
 // Wire format (Lawicel CANUSB manual; the CANable slcan firmware and Linux's
 // drivers/net/can/slcan agree). Every command and every received frame ends
 // with '\r'; the adapter answers a command with '\r' (OK) or '\a' (BELL).
@@ -386,7 +388,7 @@ bool SlcanBus::parse_line_locked(CanFrame& frame) {
   }
   parsed.timestamp_us = address_.timestamps && stamp_ms >= 0
                             ? adapter_time_us_locked(static_cast<unsigned>(stamp_ms))
-                            : detail::now_epoch_us();
+                            : msgs::wall_us();
   frame = parsed;
   return true;
 }
@@ -395,7 +397,7 @@ int64_t SlcanBus::adapter_time_us_locked(unsigned stamp_ms) {
   // The first stamp anchors the adapter clock to the host's; later ones step
   // from the previous by the adapter's own delta, so frame spacing has the
   // adapter's precision. Gaps over 60 s add the whole wraps the host saw.
-  const int64_t host_us = detail::now_epoch_us();
+  const int64_t host_us = msgs::wall_us();
   int64_t stamp_us = host_us;
   if (have_stamp_) {
     const int64_t delta_ms = (static_cast<int64_t>(stamp_ms) - last_stamp_ms_ + kStampWrapMs) % kStampWrapMs;

@@ -14,6 +14,8 @@
 #include <cstring>
 #include <vector>
 
+#include "msgs/clock.hpp"
+
 namespace rise::io {
 
 using detail::Clock;
@@ -235,7 +237,7 @@ IoStatus SocketCanBus::receive(CanFrame& frame, int timeout_ms) {
         frame.timestamp_us = static_cast<int64_t>(tv.tv_sec) * 1'000'000 + tv.tv_usec;
       }
     }
-    if (frame.timestamp_us == 0) frame.timestamp_us = detail::now_epoch_us();
+    if (frame.timestamp_us == 0) frame.timestamp_us = msgs::wall_us();
     return IoStatus::Ok;
   }
 }

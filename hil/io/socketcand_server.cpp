@@ -15,6 +15,7 @@
 
 #include "hil/io/host_port.hpp"
 #include "hil/io/socketcand_wire.hpp"
+#include "msgs/clock.hpp"
 
 namespace rise::io {
 
@@ -153,7 +154,7 @@ IoStatus SocketcandServer::reopen() {
 IoStatus SocketcandServer::send(const CanFrame& frame) {
   if (!listening_.load()) return IoStatus::Disconnected;
   socketcand::MessageBuffer message;
-  const int64_t stamp = frame.timestamp_us != 0 ? frame.timestamp_us : detail::now_epoch_us();
+  const int64_t stamp = frame.timestamp_us != 0 ? frame.timestamp_us : msgs::wall_us();
   const size_t length = socketcand::format_frame(frame, stamp, message);
   if (length == 0) return IoStatus::Invalid;
   const auto now = Clock::now();
@@ -301,7 +302,7 @@ void SocketcandServer::handle_locked(Peer& peer, std::string_view text) {
       return;
     case MessageKind::Send: {
       CanFrame frame = message.frame;
-      frame.timestamp_us = detail::now_epoch_us();
+      frame.timestamp_us = msgs::wall_us();
       inbound_.push(frame);
       return;
     }

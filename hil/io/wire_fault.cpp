@@ -1,6 +1,7 @@
 #include "hil/io/wire_fault.hpp"
 
 #include "hil/io/seeded_draw.hpp"
+#include "msgs/clock.hpp"
 
 #include <linux/can/error.h>
 
@@ -37,12 +38,6 @@ std::optional<WireFaultKind> parse_wire_fault_kind(std::string_view name) {
                  WireFaultKind::ModbusException, WireFaultKind::ModbusTimeout})
     if (name == to_string(k)) return k;
   return std::nullopt;
-}
-
-int64_t wire_clock_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 void WireFaultSet::inject(WireFault fault) {
@@ -87,9 +82,9 @@ int64_t FaultyCanBus::corrupted() const {
 }
 
 IoStatus FaultyCanBus::receive(CanFrame& frame, int timeout_ms) {
-  const int64_t deadline_us = wire_clock_us() + int64_t{timeout_ms} * 1000;
+  const int64_t deadline_us = msgs::monotonic_us() + int64_t{timeout_ms} * 1000;
   for (;;) {
-    int64_t now = wire_clock_us();
+    int64_t now = msgs::monotonic_us();
     {
       std::lock_guard lock(mutex_);
       const bool bus_off = hits(WireFaultKind::CanBusOff, now, 0) != nullptr;
@@ -115,7 +110,7 @@ IoStatus FaultyCanBus::receive(CanFrame& frame, int timeout_ms) {
     CanFrame f;
     const IoStatus st = inner_->receive(f, wait_ms);
     if (st != IoStatus::Ok && st != IoStatus::Timeout) return st;
-    now = wire_clock_us();
+    now = msgs::monotonic_us();
     if (st == IoStatus::Ok) {
       // A lost or held frame: look again at once, the bus may hold more.
       std::lock_guard lock(mutex_);
@@ -152,7 +147,7 @@ IoStatus FaultyCanBus::receive(CanFrame& frame, int timeout_ms) {
 FaultyModbusLink::FaultyModbusLink(std::unique_ptr<ModbusLink> inner) : inner_(std::move(inner)) {}
 
 std::optional<ModbusResult> FaultyModbusLink::faulted() {
-  const int64_t now = wire_clock_us();
+  const int64_t now = msgs::monotonic_us();
   std::lock_guard lock(mutex_);
   const uint64_t n = requests_++;
   if (hits(WireFaultKind::ModbusTimeout, now, n)) return count({ModbusStatus::Timeout, 0});

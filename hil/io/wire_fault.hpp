@@ -45,13 +45,10 @@ struct WireFault {
   double value = 0.0;    ///< probability per frame/request (0 or ≥ 1: always)
   double rate = 0.0;     ///< can_delay: ms; modbus_exception: the code
   uint64_t seed = 0;
-  int64_t start_us = 0;  ///< steady-clock µs (hil::monotonic_us)
+  int64_t start_us = 0;  ///< steady-clock µs (msgs::monotonic_us)
   int64_t end_us = 0;    ///< 0 = until cleared
   bool active(int64_t now_us) const { return now_us >= start_us && (end_us == 0 || now_us < end_us); }
 };
-
-/// Steady-clock microseconds, the clock of start_us/end_us.
-int64_t wire_clock_us();
 
 /// The faults of one transport, shared by both decorators.
 class WireFaultSet {

@@ -19,8 +19,9 @@
 #include "instructor/scenario.hpp"
 #include "instructor/scenario_runner.hpp"
 #include "instructor/trainee_directory.hpp"
-#include "panels/command_auth.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/clock.hpp"
+#include "msgs/command_auth.hpp"
+#include "msgs/publisher_session.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -50,10 +51,10 @@ std::unique_ptr<lcm::LCM> open_lcm() {
 }
 
 // The instructor's key: required to send anything (a trainee station has none).
-panels::InstructorKey instructor_key() {
-  const std::string path = panels::instructor_key_path(common_options().key_file);
+msgs::InstructorKey instructor_key() {
+  const std::string path = msgs::instructor_key_path(common_options().key_file);
   try {
-    return panels::load_instructor_key(path);
+    return msgs::load_instructor_key(path);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     fail(2);
@@ -104,7 +105,7 @@ struct Answer {
 // a refusal or rejection as fault_refused / command_rejected (sim) or a
 // "command_rejected" PanelState entry (daemon).
 Answer send_fault(lcm::LCM& lcm, rise_msgs::FaultCommand c, double confirm_s) {
-  panels::sign(c, instructor_key());
+  msgs::sign(c, instructor_key());
   const std::string prefix = "rise/" + c.trainee_id + "/";
   Answer answer;
   const bool daemon = c.action == "inject" ? is_daemon_kind(c.kind) : false;
@@ -198,7 +199,7 @@ void add_keygen_command(CLI::App& app) {
   sub->callback([file] {
     setup_logging();
     try {
-      panels::write_new_instructor_key(*file);
+      msgs::write_new_instructor_key(*file);
     } catch (const std::exception& e) {
       spdlog::error("{}", e.what());
       fail(2);
@@ -217,12 +218,12 @@ void add_list_command(CLI::App& app) {
     auto lcm = open_lcm();
     TraineeDirectory directory;
     RawHandler h{[&](const std::string& channel, const lcm::ReceiveBuffer* rbuf) {
-      directory.on_message(channel, rbuf->data, static_cast<int>(rbuf->data_size), panels::wall_clock_us());
+      directory.on_message(channel, rbuf->data, static_cast<int>(rbuf->data_size), msgs::wall_us());
     }};
     lcm->subscribe("rise/[^/]+/(panel_state|robot_state|task_status)", &RawHandler::on, &h);
     handle_until(*lcm, *wait_s, [] { return false; });
     const auto rows = directory.rows();
-    const int64_t now = panels::wall_clock_us();
+    const int64_t now = msgs::wall_us();
     std::printf("%-10s %-28s %-22s %-24s %-20s %s\n", "trainee", "panel", "robot", "task", "faults", "publishers");
     for (const auto& r : rows) {
       std::string panel = "-", robot = "-", task = "-", faults;
@@ -251,7 +252,7 @@ void add_list_command(CLI::App& app) {
         std::printf("  DUPLICATE: rise/%s/%s has more than one publisher:\n", r.id.c_str(), what.c_str());
         for (const auto& p : r.publishers)
           if (p.what == what && now - p.last_seen_us <= 2'000'000)
-            std::printf("    %s\n", panels::describe(p.publisher, now).c_str());
+            std::printf("    %s\n", msgs::describe(p.publisher, now).c_str());
       }
     }
     if (rows.empty()) std::printf("no trainee seen within %.1f s\n", *wait_s);
@@ -363,7 +364,7 @@ void add_scenario_command(CLI::App& app) {
     const auto send = [&](const std::vector<ScenarioAction>& actions) {
       for (const auto& a : actions) {
         auto c = to_command(a, o->trainee, common_options().issuer);
-        panels::sign(c, key);
+        msgs::sign(c, key);
         lcm->publish(prefix + "fault_command", &c);
         ++sent;
         spdlog::info("{:.3f} s: {} {} {} {} value {:.3f} for {} s", now_s(), c.action, c.fault_id, c.kind, c.target,
@@ -428,7 +429,7 @@ void add_task_command(CLI::App& app) {
     c.trainee_id = o->trainee;
     c.command = o->command;
     c.task = o->task;
-    panels::sign(c, key);
+    msgs::sign(c, key);
     std::string answer;
     RawHandler h{[&](const std::string&, const lcm::ReceiveBuffer* rbuf) {
       const auto e = decode<rise_msgs::SimEvent>(rbuf);

@@ -14,9 +14,9 @@
 #include "hil/io/host_port.hpp"
 #include "instructor/app/instructor_commands.hpp"
 #include "instructor/web_server.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
 #include "panels/data_path.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 
 namespace rise::instructor {
 namespace {
@@ -74,11 +74,11 @@ int serve(const ServeOptions& o) {
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
-  s.instructor_key_file = panels::instructor_key_path(common.key_file);
+  s.instructor_key_file = msgs::instructor_key_path(common.key_file);
   if (s.instructor_key_file.empty()) spdlog::warn("no instructor key: the fault buttons are off (--instructor-key FILE)");
 
   s.on_duplicate_publisher = [](const std::string& line) { spdlog::warn("{}", line); };
-  panels::init_publisher("rise-instructor");
+  msgs::init_publisher("rise-instructor");
   WebServer server(s);
   server.start();
   spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "

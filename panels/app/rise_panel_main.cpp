@@ -9,25 +9,20 @@
 #include <thread>
 
 #include "cli/command_line.hpp"
-#include "hil/io/can_bus.hpp"
 #include "firmware_protocol/hid_text.hpp"
+#include "hil/io/can_bus.hpp"
 #include "hil/io/hid_device.hpp"
 #include "hil/io/modbus_server.hpp"
 #include "hil/io/uhid_device.hpp"
+#include "msgs/clock.hpp"
 #include "panels/app/replay_command.hpp"
 #include "panels/console_emulator.hpp"
-#include "panels/hid_emulator.hpp"
 #include "panels/data_path.hpp"
+#include "panels/hid_emulator.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
-
-int64_t monotonic_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 struct EmulateOptions {
   std::string panel = "panels/definitions/rise_console.yaml";
@@ -142,10 +137,10 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
 
   ScriptClock script(timeline, o);
   bool started = !o.start_on_feedback;
-  script.start(monotonic_us());
+  script.start(rise::msgs::monotonic_us());
   io::UhidEvent event;
   while (!g_stop) {
-    const int64_t now = monotonic_us();
+    const int64_t now = rise::msgs::monotonic_us();
     // The scripted person starts once the host has opened the device.
     if (!started) {
       script.start(now);
@@ -216,12 +211,12 @@ int run_emulate(const EmulateOptions& o) {
                server ? o.modbus_url : o.can_url, port ? " port " : "", port ? std::to_string(port) : "");
 
   ScriptClock script(timeline, o);
-  script.start(monotonic_us());
+  script.start(rise::msgs::monotonic_us());
   io::CanFrame frame;
   int64_t next_reopen_us = 0;
   bool started = !o.start_on_feedback;
   while (!g_stop) {
-    const int64_t now = monotonic_us();
+    const int64_t now = rise::msgs::monotonic_us();
     // The firmware runs from power-up; the scripted person starts once the
     // host is there (its first feedback frame), so runs are repeatable.
     if (!started) {

@@ -36,9 +36,9 @@
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/TrainingControl.hpp"
 #include "cli/command_line.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
 #include "panels/data_path.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
 #include "sim/laser_scanner.hpp"
@@ -334,10 +334,10 @@ int main(int argc, char** argv) {
     return out;
   };
 
-  std::optional<rise::panels::CommandVerifier> verifier;
-  if (const std::string key_path = rise::panels::instructor_key_path(instructor_key_file); !key_path.empty()) {
+  std::optional<rise::msgs::CommandVerifier> verifier;
+  if (const std::string key_path = rise::msgs::instructor_key_path(instructor_key_file); !key_path.empty()) {
     try {
-      verifier.emplace(rise::panels::load_instructor_key(key_path),
+      verifier.emplace(rise::msgs::load_instructor_key(key_path),
                        static_cast<int64_t>(command_window_s * 1e6));
     } catch (const std::exception& e) {
       spdlog::error("{}", e.what());
@@ -353,24 +353,24 @@ int main(int argc, char** argv) {
     return 2;
   }
   // One publisher per station: listen before the first message.
-  const rise_msgs::Publisher self = rise::panels::init_publisher("rise-sim");
+  const rise_msgs::Publisher self = rise::msgs::init_publisher("rise-sim");
   std::vector<std::string> state_channels;
   for (const auto& st : stations) state_channels.push_back("rise/" + st->id + "/robot_state");
   if (!allow_duplicate_id)
     if (const auto other =
-            rise::panels::probe_channels<rise_msgs::RobotState>(lcm, state_channels, rise::panels::kProbeMs)) {
+            rise::msgs::probe_channels<rise_msgs::RobotState>(lcm, state_channels, rise::msgs::kProbeMs)) {
       spdlog::error("{} is already published by {}: refusing to start a second simulator for it (give another "
                     "--id, or --allow-duplicate-id)",
-                    other->channel, rise::panels::describe(other->publisher, wall_us()));
+                    other->channel, rise::msgs::describe(other->publisher, wall_us()));
       return 2;
     }
   // Another process publishing a robot's state: reported once by each side;
   // of two that started together, the later one gives way.
   int exit_code = 0;
-  rise::panels::PublisherListener<rise_msgs::RobotState> others(
-      self.session_id, [&](const rise::panels::PublisherWatch::Other& o) {
-        spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
-        if (allow_duplicate_id || !rise::panels::gives_way(self, o.publisher, wall_us())) return;
+  rise::msgs::PublisherListener<rise_msgs::RobotState> others(
+      self.session_id, [&](const rise::msgs::PublisherWatch::Other& o) {
+        spdlog::warn("another publisher on {}: {}", o.channel, rise::msgs::describe(o.publisher, wall_us()));
+        if (allow_duplicate_id || !rise::msgs::gives_way(self, o.publisher, wall_us())) return;
         spdlog::error("{} started first: this rise-sim stops (give another --id, or --allow-duplicate-id)",
                       o.publisher.program);
         exit_code = 2;
@@ -601,7 +601,7 @@ int main(int argc, char** argv) {
   const auto admit = [&](std::size_t robot, const auto& c, const std::string& channel) {
     std::string why;
     if (!verifier) why = "no instructor key on this station";
-    else if (const auto v = verifier->check(c, wall_us()); v != rise::panels::Verdict::Accepted) why = rise::panels::to_string(v);
+    else if (const auto v = verifier->check(c, wall_us()); v != rise::msgs::Verdict::Accepted) why = rise::msgs::to_string(v);
     else if (c.trainee_id != stations[robot]->id) why = "meant for trainee '" + c.trainee_id + "'";
     if (why.empty()) return true;
     ++rejected;

@@ -31,7 +31,7 @@
 #include "process/child_process.hpp"
 #include "cli/command_line.hpp"
 #include "panels/data_path.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
@@ -111,7 +111,7 @@ class TaskRun {
       console_->advance(m.sim_time_s - t0_s_);
       if (!console_->silent()) {
         auto ps = console_->panel_state(id_, ++panel_seq_, wall_us());
-        ps.publisher = rise::panels::this_publisher();
+        ps.publisher = rise::msgs::this_publisher();
         lcm_.publish("rise/" + id_ + "/panel_state", &ps);
       }
     }
@@ -132,7 +132,7 @@ class TaskRun {
     rise_msgs::TaskStatus s;
     s.utime = wall_us();
     s.trainee_id = id_;
-    s.publisher = rise::panels::this_publisher();
+    s.publisher = rise::msgs::this_publisher();
     s.training = progress_.training;
     s.node = progress_.node;
     s.task = executor_.task().name;
@@ -216,11 +216,11 @@ void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
 // publishes (TaskStatus; PanelState too with a scripted console) is refused
 // at start-up and reported while it runs.
 struct PublisherGuard {
-  static void report(const rise::panels::PublisherWatch::Other& o) {
-    spdlog::warn("another publisher on {}: {}", o.channel, rise::panels::describe(o.publisher, wall_us()));
+  static void report(const rise::msgs::PublisherWatch::Other& o) {
+    spdlog::warn("another publisher on {}: {}", o.channel, rise::msgs::describe(o.publisher, wall_us()));
   }
-  rise::panels::PublisherListener<rise_msgs::TaskStatus> status{rise::panels::this_publisher().session_id, report};
-  rise::panels::PublisherListener<rise_msgs::PanelState> panel{rise::panels::this_publisher().session_id, report};
+  rise::msgs::PublisherListener<rise_msgs::TaskStatus> status{rise::msgs::this_publisher().session_id, report};
+  rise::msgs::PublisherListener<rise_msgs::PanelState> panel{rise::msgs::this_publisher().session_id, report};
 };
 
 // False (logged) when another process already publishes there.
@@ -228,15 +228,15 @@ bool claim_station(lcm::LCM& lcm, const std::string& id, bool scripted_console, 
                    PublisherGuard& guard) {
   const std::string status_channel = "rise/" + id + "/task_status", panel_channel = "rise/" + id + "/panel_state";
   if (!allow_duplicate_id) {
-    std::optional<rise::panels::ChannelPublisher> other;
+    std::optional<rise::msgs::ChannelPublisher> other;
     if (scripted_console)
-      other = rise::panels::probe_channels<rise_msgs::PanelState>(lcm, {panel_channel}, rise::panels::kProbeMs);
+      other = rise::msgs::probe_channels<rise_msgs::PanelState>(lcm, {panel_channel}, rise::msgs::kProbeMs);
     if (!other)
-      other = rise::panels::probe_channels<rise_msgs::TaskStatus>(lcm, {status_channel}, rise::panels::kSlowProbeMs);
+      other = rise::msgs::probe_channels<rise_msgs::TaskStatus>(lcm, {status_channel}, rise::msgs::kSlowProbeMs);
     if (other) {
       spdlog::error("{} is already published by {}: refusing to start a second trainer for station '{}' (give "
                     "another --id, or --allow-duplicate-id)",
-                    other->channel, rise::panels::describe(other->publisher, wall_us()), id);
+                    other->channel, rise::msgs::describe(other->publisher, wall_us()), id);
       return false;
     }
   }
@@ -509,7 +509,7 @@ int train(const TrainOptions& o) {
   rise_msgs::TaskStatus s{};
   s.utime = wall_us();
   s.trainee_id = o.id;
-  s.publisher = rise::panels::this_publisher();
+  s.publisher = rise::msgs::this_publisher();
   s.training = graph.name;
   s.tasks_done = static_cast<int32_t>(walker.visits().size());
   s.state = "training_finished";
@@ -629,7 +629,7 @@ int main(int argc, char** argv) {
   if (const auto code = rise::cli::parse_command_line(app, "rise-trainer", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
-  rise::panels::init_publisher("rise-trainer");
+  rise::msgs::init_publisher("rise-trainer");
   // A relative file is looked up as every program does (as given, $RISE_ROOT,
   // the installed share/rise, the source tree): panels/data_path.hpp.
   for (std::string* file : {&rt.task_file, &to.training_file, &check_file})

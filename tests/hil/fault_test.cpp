@@ -15,6 +15,7 @@
 #include "hil/io/wire_fault.hpp"
 #include "hil/panel_mapper.hpp"
 #include "hil/source_input.hpp"
+#include "msgs/clock.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -219,8 +220,8 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
     for (int i = 0; i < 100; ++i) cycle();
     CHECK(bus.dropped() > 150);
     CHECK(mapper.evaluate(t).sources[0].frames_bad() > 0);
-    REQUIRE(bus.active(rise::io::wire_clock_us()).size() == 1);
-    CHECK(bus.clear("drop", rise::io::wire_clock_us()) == 1);
+    REQUIRE(bus.active(rise::msgs::monotonic_us()).size() == 1);
+    CHECK(bus.clear("drop", rise::msgs::monotonic_us()) == 1);
   }
   SECTION("every frame lost: failsafe once the source timeout has passed, healthy after the clear") {
     const int64_t last_good = t;
@@ -231,7 +232,7 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
     const PanelSnapshot late = cycle();
     CHECK(late.failsafe);
     CHECK_THAT(late.failsafe_reason, Catch::Contains("stale"));
-    bus.clear("", rise::io::wire_clock_us());
+    bus.clear("", rise::msgs::monotonic_us());
     for (int i = 0; i < 10; ++i) cycle();
     CHECK_FALSE(mapper.evaluate(t).failsafe);
   }
@@ -248,7 +249,7 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
     CHECK(s.sources[0].bus_state == rise::io::CanBusState::BusOff);
     CHECK(s.sources[0].bus_offs == 1);
     CHECK(s.failsafe);
-    bus.clear("off", rise::io::wire_clock_us());
+    bus.clear("off", rise::msgs::monotonic_us());
     for (int i = 0; i < 10; ++i) s = cycle();
     CHECK(s.sources[0].bus_state == rise::io::CanBusState::Active);
     CHECK_FALSE(s.failsafe);
@@ -283,12 +284,12 @@ TEST_CASE("Modbus exception and timeout faults answer in place of the slave and 
   const auto r = link.read_input_registers(0, regs);
   CHECK(r.status == rise::io::ModbusStatus::Exception);
   CHECK(r.exception_code == 4);
-  link.clear("", rise::io::wire_clock_us());
+  link.clear("", rise::msgs::monotonic_us());
   link.inject({"to", rise::io::WireFaultKind::ModbusTimeout, 1.0, 0, 1, 0, 0});
   CHECK(link.read_input_registers(0, regs).status == rise::io::ModbusStatus::Timeout);
   CHECK(link.counters().exceptions == 1);
   CHECK(link.counters().timeouts == 1);
-  link.clear("to", rise::io::wire_clock_us());
+  link.clear("to", rise::msgs::monotonic_us());
   CHECK(link.read_input_registers(0, regs).ok());
 }
 

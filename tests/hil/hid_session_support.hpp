@@ -23,6 +23,7 @@
 #include "hil/io/hid_recording.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
+#include "msgs/clock.hpp"
 #include "panels/hid_emulator.hpp"
 #include "panels/panel_definition.hpp"
 #include "panels/timeline.hpp"
@@ -93,9 +94,7 @@ class RecordedHidSession {
       throw std::runtime_error("RecordedHidSession: the HID device is not recorded");
     recording_ = static_cast<const io::RecordingInputDevice*>(transports[0].hid.get());
     bridge_ = std::make_unique<Bridge>(definition_, std::move(transports), [this](const PanelSnapshot& snap) {
-      const int64_t utime = std::chrono::duration_cast<std::chrono::microseconds>(
-                                std::chrono::system_clock::now().time_since_epoch())
-                                .count();
+      const int64_t utime = rise::msgs::wall_us();
       recorder_.record_message(channel_, to_message(definition_, snap, "rec", messages_++, utime, {}));
       published.add(snap);
     });

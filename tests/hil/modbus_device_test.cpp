@@ -18,6 +18,7 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
 #include "hil/session_recorder.hpp"
+#include "msgs/clock.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
 using namespace rise::hil;
@@ -85,11 +86,6 @@ class WriteLog final : public rise::io::ModbusLink {
 
 std::string temp_dir(const std::string& name) {
   return std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()));
-}
-
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 }  // namespace
@@ -398,7 +394,7 @@ TEST_CASE("the bridge polls a third-party Modbus device over TCP, writes its fee
     REQUIRE(recorder.record_source("plc", transports[0], 1));
     int64_t seq = 0;
     Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& snap) {
-      recorder.record_message(channel, to_message(def, snap, "dev", seq++, wall_us(), {}));
+      recorder.record_message(channel, to_message(def, snap, "dev", seq++, rise::msgs::wall_us(), {}));
       published.add(snap);
     });
     bridge.start();

@@ -12,6 +12,7 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
 #include "hil/session_recorder.hpp"
+#include "msgs/clock.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
 using namespace rise::hil;
@@ -25,11 +26,6 @@ std::string temp_dir(const std::string& name) {
   return std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()));
 }
 
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 }  // namespace
 
 TEST_CASE("a session recorded from a live bridge replays to the PanelState stream it published", "[hil]") {
@@ -47,7 +43,7 @@ TEST_CASE("a session recorded from a live bridge replays to the PanelState strea
     EmulatorThread emulator(def, "mem://session_recorder_test");
     int64_t seq = 0;
     Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& snap) {
-      recorder.record_message(channel, to_message(def, snap, "rec", seq++, wall_us(), {}));
+      recorder.record_message(channel, to_message(def, snap, "rec", seq++, rise::msgs::wall_us(), {}));
       published.add(snap);
     });
     bridge.start();
@@ -91,7 +87,7 @@ TEST_CASE("a session recorder on a full disk counts the lost PanelState events a
   SessionRecorder recorder(dir);
   const auto def = console();
   const PanelMapper mapper(def);
-  const auto message = to_message(def, mapper.preview(1), "full", 0, wall_us(), {});
+  const auto message = to_message(def, mapper.preview(1), "full", 0, rise::msgs::wall_us(), {});
   // Events are flushed every 100 ms; the first flush onto /dev/full fails.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   while (recorder.counts().write_errors == 0 && std::chrono::steady_clock::now() < deadline)

@@ -7,6 +7,7 @@
 
 #include "hil/io/can_log.hpp"
 #include "hil/io/recording_bus.hpp"
+#include "msgs/clock.hpp"
 
 using namespace rise::io;
 
@@ -74,12 +75,10 @@ TEST_CASE("a recorded bus marks sent frames T and received ones R, and can stamp
     RecordingBus recorded(open_can_bus("mem://recording_stamp"), path, "console", RecordingBus::Stamp::Receive);
     auto peer = open_can_bus("mem://recording_stamp");
     REQUIRE(peer->send(old) == IoStatus::Ok);
-    before = std::chrono::duration_cast<std::chrono::microseconds>(
-                 std::chrono::system_clock::now().time_since_epoch()).count();
+    before = rise::msgs::wall_us();
     CanFrame got;
     REQUIRE(recorded.receive(got, 1000) == IoStatus::Ok);
-    after = std::chrono::duration_cast<std::chrono::microseconds>(
-                std::chrono::system_clock::now().time_since_epoch()).count();
+    after = rise::msgs::wall_us();
     REQUIRE(recorded.send(old) == IoStatus::Ok);
   }
   const auto records = read_can_log(path);

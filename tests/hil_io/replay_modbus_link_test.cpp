@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "hil/io/replay_modbus_link.hpp"
+#include "msgs/clock.hpp"
 
 using namespace rise::io;
 
@@ -64,11 +65,6 @@ struct Outcome {
   int64_t took_us = 0;
   bool ended = false;
 };
-
-int64_t steady_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 }  // namespace
 
@@ -187,23 +183,23 @@ TEST_CASE("a Modbus replay in real time answers with the latest recorded answer 
   const auto link = replay(file, "?speed=" + std::to_string(speed));
   // A master's loop: poll every 10 ms (of the trace), reopen when closed.
   std::vector<Outcome> outcomes;
-  const int64_t start = steady_us();
+  const int64_t start = rise::msgs::monotonic_us();
   int64_t ended_after_us = -1;
-  while (steady_us() - start < 2'000'000) {
+  while (rise::msgs::monotonic_us() - start < 2'000'000) {
     Outcome o;
-    const int64_t t = steady_us();
+    const int64_t t = rise::msgs::monotonic_us();
     if (!link->is_open()) {
       o.reopen = true;
       o.result.status = link->reopen();
     } else {
       o.result = link->read_input_registers(0, o.registers);
     }
-    o.took_us = steady_us() - t;
+    o.took_us = rise::msgs::monotonic_us() - t;
     o.trace_us = link->last_request_trace_us();
     o.ended = link->ended();
     outcomes.push_back(o);
     if (link->ended()) {
-      ended_after_us = steady_us() - start;
+      ended_after_us = rise::msgs::monotonic_us() - start;
       break;
     }
     std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int64_t>(10'000 / speed)));

@@ -8,6 +8,7 @@
 #include "hil/io/can_bus.hpp"
 #include "hil/io/can_url.hpp"
 #include "hil/io/slcan_bus.hpp"
+#include "msgs/clock.hpp"
 #include "tests/hil_io/slcan_test_support.hpp"
 #include "tests/hil_io/test_support.hpp"
 
@@ -248,7 +249,7 @@ TEST_CASE("slcan timestamps come from the adapter clock across its 60 s wrap", "
   SECTION("timestamps=0: a stamped line still parses, with the host's receive time") {
     auto bus = open_can_bus(url_of(ptys));
     REQUIRE(bus->is_open());
-    const int64_t before_us = rise::io::detail::now_epoch_us();
+    const int64_t before_us = rise::msgs::wall_us();
     REQUIRE(adapter.write("t1231AA000A\r"));
     CanFrame got;
     REQUIRE(receive_frame(*bus, got) == IoStatus::Ok);

@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "process/child_process.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 #include "web_peer.hpp"
 
@@ -65,7 +65,7 @@ struct Stations {
   explicit Stations(bool emulated) {
     char tmpl[] = "/tmp/rise-browser-test-XXXXXX";
     dir = ::mkdtemp(tmpl);
-    rise::panels::write_new_instructor_key((dir / "instructor.key").string());
+    rise::msgs::write_new_instructor_key((dir / "instructor.key").string());
     const std::string key = (dir / "instructor.key").string();
     fs::create_directories(dir / "reports" / id);
     std::ofstream(dir / "reports" / id / "training.html") << "<html><body>training report</body></html>";
@@ -186,10 +186,10 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   REQUIRE(peer.wait_until([&] { return !peer.faults.empty(); }, 5000));
   CHECK(peer.faults[0].kind == "stuck_at");
   CHECK(peer.faults[0].trainee_id == st.id);
-  rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key((st.dir / "instructor.key").string()));
+  rise::msgs::CommandVerifier verifier(rise::msgs::load_instructor_key((st.dir / "instructor.key").string()));
   // Checked as of its own time: the page ran on for the camera blackout's 10 s,
   // past the 5 s window (the window itself is signed_command_test's).
-  CHECK(verifier.check(peer.faults[0], peer.faults[0].utime) == rise::panels::Verdict::Accepted);
+  CHECK(verifier.check(peer.faults[0], peer.faults[0].utime) == rise::msgs::Verdict::Accepted);
   // rise-hild took it: the fault is in PanelState.active_faults over LCM, and on the page.
   const auto has_fault = [](const rise_msgs::PanelState& p) {
     return std::any_of(p.active_faults.begin(), p.active_faults.end(),
@@ -205,7 +205,7 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   CHECK(listed);
   REQUIRE(peer.faults.size() >= 2);
   CHECK(peer.faults[1].kind == "camera_blackout");
-  CHECK(verifier.check(peer.faults[1], peer.faults[1].utime) == rise::panels::Verdict::Accepted);
+  CHECK(verifier.check(peer.faults[1], peer.faults[1].utime) == rise::msgs::Verdict::Accepted);
   CHECK(result["inset_before"]["mean"].asDouble() > 20.0);
   CHECK(result["inset_before"]["label"].asString().empty());
   CHECK(result["inset_blackout"]["max"].asDouble() < 8.0);

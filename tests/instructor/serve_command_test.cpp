@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "process/child_process.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
 #include "tests/process_support.hpp"
 #include "web_peer.hpp"
 
@@ -28,7 +28,6 @@ using rise::test::wait_until;
 
 const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
 
-
 // The pages and the key a server needs, in a folder of its own.
 struct ServeDir {
   fs::path dir;
@@ -37,7 +36,7 @@ struct ServeDir {
     dir = ::mkdtemp(tmpl);
     fs::create_directories(dir / "www");
     std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
-    rise::panels::write_new_instructor_key((dir / "instructor.key").string());
+    rise::msgs::write_new_instructor_key((dir / "instructor.key").string());
   }
   ~ServeDir() { fs::remove_all(dir); }
   std::vector<std::string> argv(const std::string& listen, const std::string& token) const {

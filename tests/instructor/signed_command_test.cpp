@@ -17,7 +17,7 @@
 #include <sstream>
 
 #include "process/child_process.hpp"
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
 #include "sim/training/report.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -104,21 +104,21 @@ rise_msgs::FaultCommand command(const std::string& trainee, const std::string& a
   return c;
 }
 
-rise_msgs::FaultCommand signed_with(rise_msgs::FaultCommand c, const rise::panels::InstructorKey& key) {
-  rise::panels::sign(c, key);
+rise_msgs::FaultCommand signed_with(rise_msgs::FaultCommand c, const rise::msgs::InstructorKey& key) {
+  rise::msgs::sign(c, key);
   return c;
 }
 
 struct KeyDir {
   fs::path dir;
   std::string key_file;
-  rise::panels::InstructorKey key;
+  rise::msgs::InstructorKey key;
   explicit KeyDir(const std::string& name) {
     dir = fs::temp_directory_path() / (name + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     key_file = (dir / "instructor.key").string();
-    key = rise::panels::write_new_instructor_key(key_file);
+    key = rise::msgs::write_new_instructor_key(key_file);
   }
 };
 
@@ -129,8 +129,8 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
-rise::panels::InstructorKey other_key() {
-  rise::panels::InstructorKey k;
+rise::msgs::InstructorKey other_key() {
+  rise::msgs::InstructorKey k;
   k.bytes.assign(32, 0x5a);
   return k;
 }
@@ -313,7 +313,7 @@ TEST_CASE("rise-sim applies a signed motor failure until its end and rejects for
   restart.signature_len = 0;
   station.send(restart);
   CHECK(station.event("command_rejected", "unsigned"));
-  rise::panels::sign(restart, keys.key);
+  rise::msgs::sign(restart, keys.key);
   station.send(restart);
   CHECK(station.event("training_restarted", "task"));
   const std::string out = (keys.dir / "task.out").string();

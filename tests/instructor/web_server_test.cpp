@@ -11,8 +11,9 @@
 #include <thread>
 
 #include "instructor/web_server.hpp"
+#include "msgs/clock.hpp"
+#include "msgs/command_auth.hpp"
 #include "rise_msgs/TaskStatus.hpp"
-#include "panels/command_auth.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -31,7 +32,7 @@ struct ServerFixture {
     std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
     fs::create_directories(dir / "reports" / "run1");
     std::ofstream(dir / "reports" / "run1" / "training.html") << "<html>report</html>";
-    rise::panels::write_new_instructor_key((dir / "instructor.key").string());
+    rise::msgs::write_new_instructor_key((dir / "instructor.key").string());
     settings.port = 0;
     settings.token = "tok-" + id;
     settings.web_dir = (dir / "www").string();
@@ -232,7 +233,7 @@ TEST_CASE("a fault button publishes a FaultCommand signed with the instructor ke
   server.start();
   TraineePeer peer(f.id);
   httplib::Client http("127.0.0.1", server.port());
-  rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key(f.settings.instructor_key_file));
+  rise::msgs::CommandVerifier verifier(rise::msgs::load_instructor_key(f.settings.instructor_key_file));
   SECTION("a preset is injected, then cleared") {
     auto r = http.Post("/api/fault/inject", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"stick-stuck"})",
                        "application/json");
@@ -246,14 +247,14 @@ TEST_CASE("a fault button publishes a FaultCommand signed with the instructor ke
     CHECK(c.value == Approx(0.6));
     CHECK(c.trainee_id == f.id);
     CHECK(c.signature_len == 32);
-    CHECK(verifier.check(c, rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
-    CHECK(verifier.check(c, rise::panels::wall_clock_us()) == rise::panels::Verdict::Replayed);
+    CHECK(verifier.check(c, rise::msgs::wall_us()) == rise::msgs::Verdict::Accepted);
+    CHECK(verifier.check(c, rise::msgs::wall_us()) == rise::msgs::Verdict::Replayed);
     REQUIRE(http.Post("/api/fault/clear", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"*"})", "application/json")
                 ->status == 200);
     REQUIRE(peer.wait_until([&] { return peer.faults.size() == 2; }, 5000));
     CHECK(peer.faults[1].action == "clear");
     CHECK(peer.faults[1].fault_id.empty());
-    CHECK(verifier.check(peer.faults[1], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+    CHECK(verifier.check(peer.faults[1], rise::msgs::wall_us()) == rise::msgs::Verdict::Accepted);
   }
   SECTION("an unknown preset without a kind, or a bad trainee id, is refused") {
     auto r = http.Post("/api/fault/inject", f.auth(), R"({"trainee":")" + f.id + R"(","fault":"nope"})",
@@ -406,8 +407,8 @@ TEST_CASE("scenario control runs a scenario file against a trainee and stops it"
     CHECK(peer.faults[0].action == "inject");
     CHECK(peer.faults[0].fault_id == "stuck");
     CHECK(peer.faults[0].kind == "stuck_at");
-    rise::panels::CommandVerifier verifier(rise::panels::load_instructor_key(f.settings.instructor_key_file));
-    CHECK(verifier.check(peer.faults[0], rise::panels::wall_clock_us()) == rise::panels::Verdict::Accepted);
+    rise::msgs::CommandVerifier verifier(rise::msgs::load_instructor_key(f.settings.instructor_key_file));
+    CHECK(verifier.check(peer.faults[0], rise::msgs::wall_us()) == rise::msgs::Verdict::Accepted);
     CHECK(parse_json(http.Get("/api/scenarios", f.auth())->body)["running"].isMember(f.id));
     REQUIRE(http.Post("/api/scenario/stop", f.auth(), R"({"trainee":")" + f.id + R"("})", "application/json")->status ==
             200);

@@ -23,12 +23,13 @@
 #include <sstream>
 #include <thread>
 
-#include "process/child_process.hpp"
-#include "tests/integration/integration_support.hpp"
-#include "tests/process_support.hpp"
 #include "firmware_protocol/console_modbus.hpp"
+#include "msgs/clock.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
+#include "tests/integration/integration_support.hpp"
+#include "tests/process_support.hpp"
 
 using rise::process::ChildProcess;
 using rise::test::kBin;
@@ -45,7 +46,6 @@ uint16_t free_port() {
   static uint16_t next = static_cast<uint16_t>(36000 + (::getpid() % 20000));
   return next++;
 }
-
 
 // mbpoll's "[address]: value" lines → value by address (unsigned column).
 std::map<int, long> parse_mbpoll(const std::string& text) {
@@ -114,11 +114,6 @@ std::string switch_label(const rise_msgs::PanelState& m, const std::string& name
 bool pymodbus_available() {
   ChildProcess probe({"/usr/bin/python3", "-c", "import pymodbus.server"}, "/dev/null");
   return probe.wait_for(20000) == 0;
-}
-
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
 }
 
 // Handles LCM on its own thread until it is destroyed (however the test ends).
@@ -355,7 +350,7 @@ TEST_CASE("rise-hild reads a pymodbus PLC through the points of its definition, 
   int sent = 0;
   CHECK(wait_until([&] {
     if (sent++ % 20 == 0) {
-      feedback.utime = wall_us();
+      feedback.utime = rise::msgs::wall_us();
       lcm.publish("rise/" + id + "/panel_feedback", &feedback);
     }
     const std::string log = read_file(dir + "/plc.log");
@@ -376,7 +371,7 @@ TEST_CASE("rise-hild reads a pymodbus PLC through the points of its definition, 
 
   // Kill the PLC: failsafe within a poll period and a publish period (plus scheduling).
   const std::size_t before = states.size();
-  const int64_t killed_us = wall_us();
+  const int64_t killed_us = rise::msgs::wall_us();
   plc->signal(SIGKILL);
   REQUIRE(plc->wait_for(5000) == 128 + SIGKILL);
   REQUIRE(wait_until([&] { return states.find([](const auto& m) { return m.failsafe; }, before).has_value(); }, 5000));

@@ -20,7 +20,7 @@
 #include <thread>
 
 #include "process/child_process.hpp"
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "tests/process_support.hpp"
@@ -97,7 +97,7 @@ TEST_CASE("a second rise-hild on a station refuses to start and names the first 
   const std::string log = read_file(dir.file("second.log"));
   INFO(log);
   CHECK(log.find("rise/" + id + "/panel_state is already published by rise-hild pid " + std::to_string(first.pid()) +
-                 " on " + rise::panels::this_publisher().host) != std::string::npos);
+                 " on " + rise::msgs::this_publisher().host) != std::string::npos);
   CHECK(log.find("--allow-duplicate-id") != std::string::npos);
   CHECK(first.running());
 }
@@ -235,7 +235,7 @@ TEST_CASE("rise demo takes a free station id when 'demo' is in use, and its summ
     lcm::LCM lcm(kLcm);
     rise_msgs::PanelState m{};
     m.trainee_id = "demo";
-    m.publisher = rise::panels::this_publisher();
+    m.publisher = rise::msgs::this_publisher();
     while (publishing) {
       ++m.seq;
       lcm.publish("rise/demo/panel_state", &m);

@@ -37,6 +37,7 @@
 #include "hil/io/can_url.hpp"
 #include "hil/io/candump_log.hpp"
 #include "hil/io/socketcan_bus.hpp"
+#include "msgs/clock.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
 extern char** environ;
@@ -49,12 +50,6 @@ using Clock = std::chrono::steady_clock;
 
 constexpr int kReceiveTimeoutMs = 2000;  // generous: the guest is emulated (TCG)
 constexpr int kPeerTimeoutMs = 10000;
-
-int64_t now_epoch_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 int remaining_ms(Clock::time_point deadline) {
   const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
@@ -226,9 +221,9 @@ TEST_CASE("socketcan carries classic and extended frames between two sockets wit
   }));
   INFO("id 0x" << std::hex << sent.id << (sent.extended ? " (29 bit)" : " (11 bit)"));
 
-  const int64_t before_us = now_epoch_us();
+  const int64_t before_us = rise::msgs::wall_us();
   REQUIRE(sender->send(sent) == IoStatus::Ok);
-  const int64_t after_send_us = now_epoch_us();
+  const int64_t after_send_us = rise::msgs::wall_us();
 
   CanFrame received;
   REQUIRE(receiver->receive(received, kReceiveTimeoutMs) == IoStatus::Ok);
@@ -685,9 +680,9 @@ TEST_CASE("the bridge fails safe within a publish period when the interface goes
       [&](const PanelSnapshot& s) { return !s.failsafe && b.value(s, "drive_y").axis > 0.3f; }, kPeerTimeoutMs));
 
   const std::size_t from = b.published.size();
-  const int64_t before_us = rise::hil::monotonic_us();
+  const int64_t before_us = rise::msgs::monotonic_us();
   REQUIRE(run({"ip", "link", "set", "vcan0", "down"}) == 0);
-  const int64_t after_us = rise::hil::monotonic_us();
+  const int64_t after_us = rise::msgs::monotonic_us();
   auto down = b.published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, kPeerTimeoutMs, from);
   REQUIRE(down);
   const int64_t period_us = b.def.publish_period_us();

@@ -1,4 +1,5 @@
-#include "panels/command_auth.hpp"
+#include "msgs/command_auth.hpp"
+#include "msgs/clock.hpp"
 
 #include <fcntl.h>
 #include <openssl/crypto.h>
@@ -9,13 +10,12 @@
 #include <unistd.h>
 
 #include <cerrno>
-#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
 
-namespace rise::panels {
+namespace rise::msgs {
 namespace {
 
 class Canonical {
@@ -50,7 +50,7 @@ int hex_digit(char c) {
 
 template <class Command>
 void set_signature(Command& c, const InstructorKey& key) {
-  if (c.utime == 0) c.utime = wall_clock_us();
+  if (c.utime == 0) c.utime = wall_us();
   if (c.nonce == 0) c.nonce = random_nonce();
   const auto mac = hmac_sha256(key, canonical_bytes(c));
   c.signature.assign(mac.begin(), mac.end());
@@ -174,12 +174,6 @@ int64_t random_nonce() {
   return n;
 }
 
-int64_t wall_clock_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
-
 void sign(rise_msgs::FaultCommand& command, const InstructorKey& key) { set_signature(command, key); }
 void sign(rise_msgs::TrainingControl& command, const InstructorKey& key) { set_signature(command, key); }
 
@@ -227,4 +221,4 @@ Verdict CommandVerifier::check(const std::string& issuer, int64_t utime, int64_t
   return verdict;
 }
 
-}  // namespace rise::panels
+}  // namespace rise::msgs

@@ -1,4 +1,5 @@
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
+#include "msgs/clock.hpp"
 
 #include <unistd.h>
 
@@ -7,7 +8,7 @@
 #include <cstdio>
 #include <random>
 
-namespace rise::panels {
+namespace rise::msgs {
 namespace {
 
 std::mutex g_mutex;
@@ -22,17 +23,12 @@ rise_msgs::Publisher& publisher_locked() {
     if (::gethostname(host, sizeof host - 1) != 0) std::snprintf(host, sizeof host, "unknown");
     q.host = host;
     q.pid = static_cast<int32_t>(::getpid());
-    q.started_utime = publisher_clock_us();
+    q.started_utime = wall_us();
     return q;
   }();
   return p;
 }
 }  // namespace
-
-int64_t publisher_clock_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 const rise_msgs::Publisher& init_publisher(const std::string& program) {
   std::lock_guard lock(g_mutex);
@@ -90,4 +86,4 @@ std::vector<PublisherWatch::Other> PublisherWatch::others(int64_t now_us) const 
   return out;
 }
 
-}  // namespace rise::panels
+}  // namespace rise::msgs

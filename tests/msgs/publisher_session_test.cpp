@@ -11,11 +11,11 @@
 #include <future>
 #include <thread>
 
-#include "panels/publisher_session.hpp"
+#include "msgs/publisher_session.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 
-using rise::panels::PublisherWatch;
+using rise::msgs::PublisherWatch;
 
 namespace {
 rise_msgs::Publisher other_process(int64_t session, int64_t started_utime = 1'000'000) {
@@ -30,14 +30,14 @@ rise_msgs::Publisher other_process(int64_t session, int64_t started_utime = 1'00
 }  // namespace
 
 TEST_CASE("this process is one publisher: a session id, its host, pid and start time, drawn once", "[panels]") {
-  const auto& p = rise::panels::init_publisher("rise-test");
+  const auto& p = rise::msgs::init_publisher("rise-test");
   CHECK(p.session_id > 0);
   CHECK(p.program == "rise-test");
   CHECK(p.pid == static_cast<int32_t>(::getpid()));
   CHECK_FALSE(p.host.empty());
   CHECK(p.started_utime > 0);
-  CHECK(rise::panels::this_publisher().session_id == p.session_id);
-  CHECK(rise::panels::describe(other_process(0x5f3a09c100000000), 13'000'000) ==
+  CHECK(rise::msgs::this_publisher().session_id == p.session_id);
+  CHECK(rise::msgs::describe(other_process(0x5f3a09c100000000), 13'000'000) ==
         "rise-hild pid 4242 on lab3 (session 5f3a09c1, started 12.0 s ago)");
 }
 
@@ -69,10 +69,10 @@ TEST_CASE("the publisher watch reports another process once per channel and agai
 
 TEST_CASE("of two publishers that started together the later one gives way, a tie to the lower session",
           "[panels]") {
-  CHECK(rise::panels::yields_to(other_process(1, 2000), other_process(2, 1000)));
-  CHECK_FALSE(rise::panels::yields_to(other_process(2, 1000), other_process(1, 2000)));
-  CHECK(rise::panels::yields_to(other_process(5, 1000), other_process(3, 1000)));
-  CHECK_FALSE(rise::panels::yields_to(other_process(3, 1000), other_process(5, 1000)));
+  CHECK(rise::msgs::yields_to(other_process(1, 2000), other_process(2, 1000)));
+  CHECK_FALSE(rise::msgs::yields_to(other_process(2, 1000), other_process(1, 2000)));
+  CHECK(rise::msgs::yields_to(other_process(5, 1000), other_process(3, 1000)));
+  CHECK_FALSE(rise::msgs::yields_to(other_process(3, 1000), other_process(5, 1000)));
 }
 
 TEST_CASE("the start-up probe finds another process on a station's channel and ignores this one's", "[panels]") {
@@ -89,20 +89,20 @@ TEST_CASE("the start-up probe finds another process on a station's channel and i
     });
   };
   rise_msgs::PanelState own{};
-  own.publisher = rise::panels::this_publisher();
+  own.publisher = rise::msgs::this_publisher();
   rise_msgs::PanelState foreign{};
   foreign.publisher = other_process(99);
   SECTION("nothing there") {
-    CHECK_FALSE(rise::panels::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 30));
+    CHECK_FALSE(rise::msgs::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 30));
   }
   SECTION("only this process's own messages there") {
     auto done = publishing("rise/t1/panel_state", own);
-    CHECK_FALSE(rise::panels::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 100));
+    CHECK_FALSE(rise::msgs::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 100));
   }
   SECTION("another process there, on one of several channels") {
     auto done = publishing("rise/t2/panel_state", foreign);
     const auto found =
-        rise::panels::probe_channels<rise_msgs::PanelState>(lcm, {"rise/t1/panel_state", "rise/t2/panel_state"}, 150);
+        rise::msgs::probe_channels<rise_msgs::PanelState>(lcm, {"rise/t1/panel_state", "rise/t2/panel_state"}, 150);
     REQUIRE(found);
     CHECK(found->channel == "rise/t2/panel_state");
     CHECK(found->publisher.session_id == 99);
@@ -112,14 +112,14 @@ TEST_CASE("the start-up probe finds another process on a station's channel and i
     rise_msgs::RobotState robot{};
     robot.publisher = other_process(99);
     auto done = publishing("rise/t1/robot_state", robot);
-    CHECK_FALSE(rise::panels::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 100));
+    CHECK_FALSE(rise::msgs::probe_channel<rise_msgs::PanelState>(lcm, "rise/t1/panel_state", 100));
   }
 }
 
 TEST_CASE("a publisher gives way only within its start-up window", "[panels]") {
   const auto self = other_process(5, 10'000'000);
   const auto earlier = other_process(3, 9'000'000);
-  CHECK(rise::panels::gives_way(self, earlier, 10'000'000 + rise::panels::kGiveWayWindowUs - 1));
-  CHECK_FALSE(rise::panels::gives_way(self, earlier, 10'000'000 + rise::panels::kGiveWayWindowUs));
-  CHECK_FALSE(rise::panels::gives_way(earlier, self, 9'000'001));  // the first one stays
+  CHECK(rise::msgs::gives_way(self, earlier, 10'000'000 + rise::msgs::kGiveWayWindowUs - 1));
+  CHECK_FALSE(rise::msgs::gives_way(self, earlier, 10'000'000 + rise::msgs::kGiveWayWindowUs));
+  CHECK_FALSE(rise::msgs::gives_way(earlier, self, 9'000'001));  // the first one stays
 }

@@ -3,7 +3,7 @@
 // One publisher per station id and channel. Every process that publishes a
 // station's periodic messages (rise-hild and virtual panels: PanelState;
 // rise-sim: RobotState; rise-trainer: TaskStatus) stamps them with its
-// Publisher (panels/lcmtypes/Publisher.lcm) and watches its own channel:
+// Publisher (msgs/lcmtypes/Publisher.lcm) and watches its own channel:
 //   - at start-up it listens before its first message (probe_channel) and
 //     refuses to start when another process already publishes there;
 //   - while it runs, a message from another process on its channel is
@@ -23,9 +23,10 @@
 #include <string>
 #include <vector>
 
+#include "msgs/clock.hpp"
 #include "rise_msgs/Publisher.hpp"
 
-namespace rise::panels {
+namespace rise::msgs {
 
 /// Names this process as a publisher ("rise-hild", ...) and returns it. The
 /// session id, host, pid and start time are drawn on the first call of
@@ -49,9 +50,6 @@ inline constexpr int64_t kGiveWayWindowUs = 5'000'000;
 /// Whether `self`, meeting `other` on its channel at now_utime, stops: it
 /// yields_to() the other and is still within kGiveWayWindowUs of its start.
 bool gives_way(const rise_msgs::Publisher& self, const rise_msgs::Publisher& other, int64_t now_utime);
-
-/// Microseconds since the Unix epoch, the clock Publisher::started_utime uses.
-int64_t publisher_clock_us();
 
 /// The other processes seen publishing on some channels. Thread-safe.
 class PublisherWatch {
@@ -98,7 +96,7 @@ class PublisherListener {
 
  private:
   void on(const lcm::ReceiveBuffer*, const std::string& channel, const Message* m) {
-    if (const auto other = watch_.observe(channel, m->publisher, publisher_clock_us())) on_other_(*other);
+    if (const auto other = watch_.observe(channel, m->publisher, wall_us())) on_other_(*other);
   }
   PublisherWatch watch_;
   OnOther on_other_;
@@ -147,4 +145,4 @@ std::optional<rise_msgs::Publisher> probe_channel(lcm::LCM& lcm, const std::stri
 inline constexpr int kProbeMs = 300;
 inline constexpr int kSlowProbeMs = 700;
 
-}  // namespace rise::panels
+}  // namespace rise::msgs

@@ -39,7 +39,7 @@
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/TrainingControl.hpp"
 
-namespace rise::panels {
+namespace rise::msgs {
 
 /// The instructor's secret (32..64 bytes).
 struct InstructorKey {
@@ -65,8 +65,6 @@ std::vector<uint8_t> canonical_bytes(const rise_msgs::TrainingControl& command);
 
 /// A random nonce from OpenSSL's CSPRNG.
 int64_t random_nonce();
-/// Wall clock, µs since the Unix epoch.
-int64_t wall_clock_us();
 
 /// Fills utime (when 0, with the wall clock) and nonce (when 0, random),
 /// then sets the signature. Use right before publishing.
@@ -107,4 +105,4 @@ class CommandVerifier {
   int64_t accepted_ = 0;
 };
 
-}  // namespace rise::panels
+}  // namespace rise::msgs
