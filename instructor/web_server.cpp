@@ -95,8 +95,8 @@ struct WebServer::Impl {
   }
 
   WebRouteContext route_context() {
-    return {settings, world_text, console,   key,        running, lcm,
-            cache,    *virtual_panels, scenarios, publishers, sim_control_seq};
+    return {settings, world_text, console, key, running, lcm, cache, *virtual_panels, scenarios, publishers,
+            sim_control_seq};
   }
 
   void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
