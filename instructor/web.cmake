@@ -3,14 +3,24 @@
 # packages at set-up into instructor/web/dist, see run.sh).
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(RISE_HTTPLIB REQUIRED IMPORTED_TARGET GLOBAL cpp-httplib)
-add_library(rise_instructor_web web_server.cpp virtual_panel.cpp)
+add_library(rise_instructor_web
+  web_server.cpp
+  web_routes.cpp
+  web_json.cpp
+  channel_cache.cpp
+  fault_presets.cpp
+  virtual_panel.cpp
+  virtual_panels.cpp
+  scenario_processes.cpp
+  launcher_thread.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs
-  PRIVATE rise::sim rise::instructor rise::process PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
+  PRIVATE rise::sim rise::instructor rise::process rise::hil_io PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
 
 # rise-instructor serve
 add_library(rise_instructor_serve STATIC app/serve_command.cpp)
 rise_target_options(rise_instructor_serve)
 target_compile_definitions(rise_instructor_serve PRIVATE RISE_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-target_link_libraries(rise_instructor_serve PUBLIC rise::instructor_web rise::panels rise::hil_io CLI11::CLI11 spdlog::spdlog)
+target_link_libraries(rise_instructor_serve PUBLIC rise::instructor_web rise::panels rise::hil_io rise::process CLI11::CLI11
+  spdlog::spdlog)

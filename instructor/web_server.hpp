@@ -13,7 +13,8 @@
 #include <functional>
 #include <memory>
 #include <string>
-#include <vector>
+
+#include "instructor/fault_presets.hpp"  // the console's fault buttons
 
 namespace rise::instructor {
 
@@ -36,28 +37,13 @@ struct WebServerSettings {
   std::string issuer = "instructor";  ///< FaultCommand.issuer
   /// Scenario control: the *.yaml scenario files offered (instructor/scenario.hpp)
   /// and the program that runs one (`rise-instructor scenario FILE --trainee ID`,
-  /// started per trainee, stopped with SIGINT so it clears its auto_clear faults).
+  /// started per trainee, stopped with SIGTERM, on which it clears its auto_clear faults).
   std::string scenarios_dir;        ///< "" → no scenarios
   std::string scenario_program;     ///< "" → scenario control off
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;
 };
-
-/// One fault button of the console: a FaultCommand's fields (hil/input_fault.hpp,
-/// hil/fault_injector.hpp, the sim's physics faults).
-struct FaultPreset {
-  std::string id;      ///< the fault instance's name (FaultCommand.fault_id)
-  std::string label;
-  std::string kind;
-  std::string target;
-  double value = 0.0;
-  double rate = 0.0;
-  double duration_s = 0.0;  ///< 0 = until cleared
-};
-
-/// The console's fault buttons for the reference console and robots.
-const std::vector<FaultPreset>& default_fault_presets();
 
 class WebServer {
  public:

@@ -1,0 +1,284 @@
+#include "instructor/web_json.hpp"
+
+#include <cmath>
+
+#include "panels/panel_definition.hpp"
+#include "msgs/publisher_session.hpp"
+#include "sim/robot_description.hpp"
+#include "sim/world_description.hpp"
+
+namespace rise::instructor {
+namespace {
+
+Json::Value xyz(const double* p) {
+  Json::Value a(Json::arrayValue);
+  for (int i = 0; i < 3; ++i) a.append(p[i]);
+  return a;
+}
+
+Json::Value box_json(const sim::BoxObstacle& b, const std::string& kind) {
+  Json::Value v;
+  v["name"] = b.name;
+  v["kind"] = kind;
+  v["center"] = xyz(b.center_m.data());
+  v["size"] = xyz(b.size_m.data());
+  v["yaw"] = b.yaw_rad;
+  return v;
+}
+
+}  // namespace
+
+std::string json_text(const Json::Value& v) {
+  Json::StreamWriterBuilder b;
+  b["indentation"] = "";
+  return Json::writeString(b, v);
+}
+
+Json::Value world_json(const sim::WorldDescription& w) {
+  Json::Value out;
+  out["name"] = w.name;
+  out["file"] = w.file;
+  Json::Value boxes(Json::arrayValue);
+  for (const auto& b : w.boxes) boxes.append(box_json(b, "box"));
+  for (const auto& p : w.props) boxes.append(box_json(p.box, p.kind.empty() ? "prop" : p.kind));
+  for (const auto& wall : w.walls)
+    for (const auto& b : sim::wall_boxes(wall)) boxes.append(box_json(b, "wall"));
+  for (const auto& d : w.doors) {
+    // Drawn closed: the panel runs from the hinge along its yaw.
+    sim::BoxObstacle b;
+    b.name = d.name;
+    b.center_m = {d.hinge_m[0] + 0.5 * d.width_m * std::cos(d.yaw_rad),
+                  d.hinge_m[1] + 0.5 * d.width_m * std::sin(d.yaw_rad), 0.5 * d.height_m};
+    b.size_m = {d.width_m, d.thickness_m, d.height_m};
+    b.yaw_rad = d.yaw_rad;
+    boxes.append(box_json(b, "door"));
+  }
+  for (const auto& s : w.stairs) {
+    // Step i covers [i, i+1] treads along the climb and rises to (i+1) risers; then the landing.
+    const double c = std::cos(s.yaw_rad), sn = std::sin(s.yaw_rad);
+    for (int i = 0; i <= s.steps; ++i) {
+      const bool landing = i == s.steps;
+      const double along0 = i * s.tread_m, len = landing ? s.landing_m : s.tread_m;
+      const double h = landing ? s.landing_height_m() : (i + 1) * s.riser_m;
+      sim::BoxObstacle b;
+      b.name = s.name;
+      b.center_m = {s.start_m[0] + (along0 + 0.5 * len) * c, s.start_m[1] + (along0 + 0.5 * len) * sn, 0.5 * h};
+      b.size_m = {len, s.width_m, h};
+      b.yaw_rad = s.yaw_rad;
+      boxes.append(box_json(b, "stairs"));
+    }
+  }
+  out["boxes"] = boxes;
+  Json::Value objects(Json::arrayValue);
+  for (const auto& o : w.objects) {
+    Json::Value v;
+    v["name"] = o.name;
+    v["center"] = xyz(o.center_m.data());
+    v["size"] = xyz(o.size_m.data());
+    objects.append(v);
+  }
+  out["objects"] = objects;
+  Json::Value regions(Json::arrayValue);
+  for (const auto& r : w.regions) {
+    Json::Value v;
+    v["name"] = r.name;
+    v["min"] = xyz(r.min_m.data());
+    v["max"] = xyz(r.max_m.data());
+    regions.append(v);
+  }
+  out["regions"] = regions;
+  if (w.ceiling) out["ceiling_height"] = w.ceiling->height_m;
+  Json::Value start(Json::arrayValue);
+  start.append(w.robot_start_m[0]);
+  start.append(w.robot_start_m[1]);
+  start.append(w.robot_start_yaw_rad);
+  out["robot_start"] = start;
+  return out;
+}
+
+Json::Value robot_json(const sim::RobotDescription& r) {
+  Json::Value v;
+  v["name"] = r.name;
+  v["file"] = r.file;
+  v["chassis_size"] = xyz(r.chassis.size_m.data());
+  Json::Value cameras(Json::arrayValue);
+  for (const auto& c : r.sensors.cameras) {
+    Json::Value cv;
+    cv["name"] = c.name;
+    cv["position"] = xyz(c.mount.position_m.data());
+    cv["rpy"] = xyz(c.mount.rpy_rad.data());
+    cameras.append(cv);
+  }
+  v["cameras"] = cameras;
+  return v;
+}
+
+Json::Value panel_definition_json(const panels::PanelDefinition& panel, uint32_t timeout_ms) {
+  Json::Value v;
+  v["name"] = panel.name;
+  v["file"] = panel.file;
+  v["publish_hz"] = panel.publish_hz;
+  v["timeout_ms"] = timeout_ms;
+  Json::Value controls(Json::arrayValue);
+  for (const auto& c : panel.controls) {
+    Json::Value cv;
+    cv["name"] = c.name;
+    cv["kind"] = c.kind == panels::ControlKind::Axis ? "axis" : c.kind == panels::ControlKind::Button ? "button" : "switch";
+    cv["role"] = c.role == panels::ControlRole::Deadman ? "deadman" : c.role == panels::ControlRole::Estop ? "estop" : "";
+    Json::Value positions(Json::arrayValue);
+    for (const auto& p : c.positions) positions.append(p);
+    cv["positions"] = positions;
+    controls.append(cv);
+  }
+  v["controls"] = controls;
+  return v;
+}
+
+Json::Value fault_buttons_json(const std::vector<FaultPreset>& presets, bool is_signed) {
+  Json::Value v;
+  v["signed"] = is_signed;
+  Json::Value list(Json::arrayValue);
+  for (const auto& p : presets) {
+    Json::Value f;
+    f["name"] = p.id;
+    f["label"] = p.label;
+    f["kind"] = p.kind;
+    f["target"] = p.target;
+    list.append(f);
+  }
+  v["faults"] = list;
+  return v;
+}
+
+Json::Value publisher_json(const rise_msgs::Publisher& p) {
+  Json::Value v;
+  v["program"] = p.program;
+  v["host"] = p.host;
+  v["pid"] = p.pid;
+  v["session"] = Json::Int64(p.session_id);
+  v["started_utime"] = Json::Int64(p.started_utime);
+  v["text"] = msgs::describe(p, msgs::wall_us());
+  return v;
+}
+
+Json::Value panel_json(const rise_msgs::PanelState& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["publisher"] = publisher_json(m.publisher);
+  v["seq"] = Json::Int64(m.seq);
+  v["panel_id"] = m.panel_id;
+  v["failsafe"] = m.failsafe;
+  v["failsafe_reason"] = m.failsafe_reason;
+  v["deadman"] = m.deadman;
+  Json::Value axes(Json::objectValue), buttons(Json::objectValue), switches(Json::objectValue);
+  for (const auto& a : m.axes) axes[a.name] = a.value;
+  for (const auto& b : m.buttons) buttons[b.name] = b.pressed;
+  for (const auto& s : m.switches) switches[s.name] = s.label;
+  v["axes"] = axes;
+  v["buttons"] = buttons;
+  v["switches"] = switches;
+  Json::Value sources(Json::arrayValue);
+  for (const auto& s : m.sources) {
+    Json::Value h;
+    h["name"] = s.name;
+    h["url"] = s.url;
+    h["connected"] = s.connected;
+    h["stale"] = s.stale;
+    h["age_ms"] = s.last_frame_age_us < 0 ? -1.0 : static_cast<double>(s.last_frame_age_us) / 1000.0;
+    h["frames_ok"] = Json::Int64(s.frames_ok);
+    h["frames_bad"] = Json::Int64(s.frames_bad);
+    h["status"] = s.status;
+    h["bus_state"] = s.bus_state;
+    h["down_reason"] = s.down_reason;
+    sources.append(h);
+  }
+  v["sources"] = sources;
+  Json::Value faults(Json::arrayValue);
+  for (const auto& f : m.active_faults) faults.append(f);
+  v["active_faults"] = faults;
+  return v;
+}
+
+Json::Value robot_json(const rise_msgs::RobotState& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["publisher"] = publisher_json(m.publisher);
+  v["sim_time_s"] = m.sim_time_s;
+  v["robot_id"] = m.robot_id;
+  v["position"] = xyz(m.position_m);
+  Json::Value q(Json::arrayValue);
+  for (double c : m.orientation_wxyz) q.append(c);
+  v["orientation_wxyz"] = q;
+  const double w = m.orientation_wxyz[0], x = m.orientation_wxyz[1], y = m.orientation_wxyz[2],
+               z = m.orientation_wxyz[3];
+  v["yaw"] = std::atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z));
+  v["speed_mps"] = m.linear_velocity_mps[0];
+  v["yaw_rate_radps"] = m.angular_velocity_radps[2];
+  v["damage"] = m.damage;
+  v["battery"] = m.battery;
+  v["motors_enabled"] = m.motors_enabled;
+  v["stop_reason"] = m.stop_reason;
+  v["gripper"] = xyz(m.gripper_position_m);
+  Json::Value objects(Json::arrayValue);
+  for (int i = 0; i < m.num_objects; ++i) {
+    Json::Value o;
+    o["name"] = m.object_names[static_cast<std::size_t>(i)];
+    o["position"] = xyz(m.object_positions_m[static_cast<std::size_t>(i)].data());
+    objects.append(o);
+  }
+  v["objects"] = objects;
+  Json::Value contacts(Json::arrayValue);
+  for (const auto& c : m.contacts) contacts.append(c);
+  v["contacts"] = contacts;
+  Json::Value faults(Json::arrayValue);
+  for (const auto& f : m.active_faults) faults.append(f);
+  v["active_faults"] = faults;  // "id: kind target", as rise-sim lists them
+  return v;
+}
+
+Json::Value task_status_json(const rise_msgs::TaskStatus& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["publisher"] = publisher_json(m.publisher);
+  v["training"] = m.training;
+  v["node"] = m.node;
+  v["task"] = m.task;
+  v["attempt"] = m.attempt;
+  v["tasks_done"] = m.tasks_done;
+  v["state"] = m.state;
+  v["task_time_s"] = m.task_time_s;
+  v["time_limit_s"] = m.time_limit_s;
+  v["score"] = m.score;
+  v["events_fired"] = m.events_fired;
+  v["success"] = m.success;
+  v["end_reason"] = m.end_reason;
+  v["training_score"] = m.training_score;
+  return v;
+}
+
+Json::Value sim_event_json(const rise_msgs::SimEvent& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["sim_time_s"] = m.sim_time_s;
+  v["kind"] = m.kind;
+  v["a"] = m.a;
+  v["b"] = m.b;
+  v["detail"] = m.detail;
+  return v;
+}
+
+Json::Value task_event_json(const rise_msgs::TaskEvent& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["task"] = m.task;
+  v["attempt"] = m.attempt;
+  v["task_time_s"] = m.task_time_s;
+  v["name"] = m.name;
+  v["kind"] = m.kind;
+  v["points"] = m.points;
+  v["score"] = m.score;
+  v["detail"] = m.detail;
+  return v;
+}
+
+}  // namespace rise::instructor

@@ -1,0 +1,412 @@
+#include "instructor/web_routes.hpp"
+
+#include <httplib.h>
+#include <json/json.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <regex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "hil/panel_state_message.hpp"
+#include "instructor/fault_presets.hpp"
+#include "instructor/scenario.hpp"
+#include "instructor/trainee_directory.hpp"
+#include "instructor/web_clock.hpp"
+#include "instructor/web_json.hpp"
+#include "rise_msgs/FaultCommand.hpp"
+#include "rise_msgs/SimControl.hpp"
+
+namespace rise::instructor {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Comparison whose time does not depend on where the strings differ.
+bool same_token(const std::string& a, const std::string& b) {
+  unsigned char diff = a.size() == b.size() ? 0 : 1;
+  for (std::size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i % (b.empty() ? 1 : b.size())]);
+  return diff == 0 && !b.empty();
+}
+
+std::string cookie_token(const httplib::Request& req) {
+  const std::string cookies = req.get_header_value("Cookie");
+  const std::string key = "rise_token=";
+  for (std::size_t pos = 0; pos < cookies.size();) {
+    std::size_t end = cookies.find(';', pos);
+    if (end == std::string::npos) end = cookies.size();
+    std::string part = cookies.substr(pos, end - pos);
+    part.erase(0, part.find_first_not_of(' '));
+    if (part.rfind(key, 0) == 0) return part.substr(key.size());
+    pos = end + 1;
+  }
+  return "";
+}
+
+bool authorised(const httplib::Request& req, const std::string& token) {
+  if (req.has_param("token") && same_token(req.get_param_value("token"), token)) return true;
+  const std::string auth = req.get_header_value("Authorization");
+  if (auth.rfind("Bearer ", 0) == 0 && same_token(auth.substr(7), token)) return true;
+  if (same_token(req.get_header_value("X-Rise-Token"), token)) return true;
+  return same_token(cookie_token(req), token);
+}
+
+bool valid_id(const std::string& id) {
+  static const std::regex re("[A-Za-z0-9_.-]{1,64}");
+  return std::regex_match(id, re);
+}
+
+void reply_json(httplib::Response& res, const Json::Value& v, int status = 200) {
+  res.status = status;
+  res.set_content(json_text(v), "application/json");
+}
+
+void reply_error(httplib::Response& res, int status, const std::string& message) {
+  Json::Value v;
+  v["error"] = message;
+  reply_json(res, v, status);
+}
+
+std::optional<Json::Value> parse_body(const httplib::Request& req, std::string* error) {
+  Json::CharReaderBuilder b;
+  Json::Value v;
+  std::string errs;
+  std::unique_ptr<Json::CharReader> reader(b.newCharReader());
+  if (!reader->parse(req.body.data(), req.body.data() + req.body.size(), &v, &errs)) {
+    *error = "body: " + errs;
+    return std::nullopt;
+  }
+  return v;
+}
+
+// The body as a JSON object; nullopt after replying 400.
+std::optional<Json::Value> object_body(const httplib::Request& req, httplib::Response& res) {
+  std::string error;
+  auto body = parse_body(req, &error);
+  if (body && body->isObject()) return body;
+  reply_error(res, 400, error.empty() ? "body: not a JSON object" : error);
+  return std::nullopt;
+}
+
+// Every trainee heard or driven from here, with every channel on which more
+// than one process publishes now.
+Json::Value trainees_json(const WebRouteContext& ctx) {
+  std::map<std::string, Json::Value> by_id = ctx.cache.trainees();
+  const std::set<std::string> virtual_ids = ctx.virtual_panels.ids();
+  for (const auto& id : virtual_ids) {
+    by_id[id]["id"] = id;
+    by_id[id]["virtual_panel"] = true;
+  }
+  std::map<std::string, std::vector<rise_msgs::Publisher>> by_channel;
+  for (const auto& o : ctx.publishers.others(monotonic_us())) by_channel[o.channel].push_back(o.publisher);
+  for (auto& [channel, list] : by_channel) {
+    const auto parts = TraineeDirectory::split_channel(channel);
+    if (!parts) continue;
+    const auto& [id, what] = *parts;
+    if (what == "panel_state" && virtual_ids.count(id)) list.push_back(msgs::this_publisher());
+    if (list.size() < 2) continue;
+    Json::Value& d = by_id[id]["duplicate_publishers"][what];
+    for (const auto& p : list) d.append(publisher_json(p));
+  }
+  Json::Value out(Json::arrayValue);
+  for (auto& [id, t] : by_id) out.append(t);
+  return out;
+}
+
+Json::Value reports_json(const std::string& reports_dir) {
+  Json::Value out(Json::arrayValue);
+  if (reports_dir.empty() || !fs::is_directory(reports_dir)) return out;
+  std::vector<std::string> files;
+  for (const auto& e : fs::recursive_directory_iterator(reports_dir)) {
+    if (!e.is_regular_file()) continue;
+    const auto ext = e.path().extension().string();
+    if (ext == ".html" || ext == ".json") files.push_back(fs::relative(e.path(), reports_dir).string());
+  }
+  std::sort(files.begin(), files.end());
+  for (const auto& f : files) {
+    Json::Value v;
+    v["path"] = f;
+    v["url"] = "/reports/" + f;
+    out.append(v);
+  }
+  return out;
+}
+
+// Reports: only the .html / .json files /api/reports lists, never
+// whatever else the folder holds (a key file, a journal).
+void handle_report(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
+  const std::string& reports_dir = ctx.settings.reports_dir;
+  const std::string rel = req.matches[1];
+  const fs::path path = fs::path(reports_dir) / rel;
+  const auto ext = path.extension().string();
+  const bool inside = !reports_dir.empty() && rel.find("..") == std::string::npos && rel[0] != '/';
+  if (!inside || (ext != ".html" && ext != ".json") || !fs::is_regular_file(path))
+    return reply_error(res, 404, "no report '" + rel + "'");
+  std::ifstream in(path, std::ios::binary);
+  std::string body((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  res.set_content(body, ext == ".html" ? "text/html" : "application/json");
+}
+
+// One SSE stream: the channels that changed since the client's last push,
+// and the new events, at most push_hz times a second, at least every second.
+void handle_stream(std::shared_ptr<const WebRouteContext> ctx, httplib::Response& res) {
+  res.set_header("Cache-Control", "no-cache");
+  auto last = std::make_shared<uint64_t>(0);
+  const auto period = std::chrono::microseconds(static_cast<int64_t>(1e6 / ctx->settings.push_hz));
+  auto next = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+  res.set_chunked_content_provider("text/event-stream", [ctx, last, period, next](size_t, httplib::DataSink& sink) {
+    if (!ctx->running) return false;
+    std::this_thread::sleep_until(*next);
+    *next = std::max(*next + period, std::chrono::steady_clock::now());
+    auto update = ctx->cache.changes_since(last.get(), std::chrono::seconds(1));
+    if (!update || !ctx->running) return false;
+    (*update)["server_utime"] = Json::Int64(wall_us());
+    const std::string text = "data: " + json_text(*update) + "\n\n";
+    return sink.write(text.data(), text.size());
+  });
+}
+
+void handle_virtual(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
+  const std::string id = req.matches[1];
+  if (!valid_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
+  const auto body = object_body(req, res);
+  if (!body) return;
+  VirtualControls controls;
+  try {
+    for (const auto& name : (*body)["axes"].getMemberNames()) controls.axes[name] = (*body)["axes"][name].asFloat();
+    for (const auto& name : (*body)["buttons"].getMemberNames())
+      controls.buttons[name] = (*body)["buttons"][name].asBool();
+    for (const auto& name : (*body)["switches"].getMemberNames())
+      controls.switches[name] = (*body)["switches"][name].asString();
+  } catch (const std::exception& e) {
+    return reply_error(res, 400, std::string("body: ") + e.what());
+  }
+  if (const auto refused = ctx.virtual_panels.update(id, controls, req.remote_addr))
+    return reply_error(res, refused->channel_taken ? 409 : 400, refused->message);
+  res.status = 204;
+}
+
+void handle_virtual_close(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
+  if (!ctx.virtual_panels.disconnect(req.matches[1]))
+    return reply_error(res, 404, "no virtual panel '" + std::string(req.matches[1]) + "'");
+  res.status = 204;
+}
+
+void handle_sim_control(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
+  const std::string id = req.matches[1], command = req.matches[2];
+  if (!valid_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
+  rise_msgs::SimControl c;
+  c.utime = wall_us();
+  c.issuer = "rise-instructor";
+  c.seq = ++ctx.sim_control_seq;
+  c.command = command;
+  c.steps = command == "step" ? 100 : 0;
+  ctx.lcm.publish(hil::channel(id, "sim_control"), &c);
+  Json::Value v;
+  v["published"] = hil::channel(id, "sim_control");
+  v["command"] = command;
+  v["seq"] = Json::Int64(c.seq);
+  reply_json(res, v);
+}
+
+// The fault an inject names: a preset ("fault"), or the body's own fields
+// (kind, target, value, rate, duration_s). False when it names neither.
+bool take_fault_fields(const Json::Value& body, const std::string& name, rise_msgs::FaultCommand& c) {
+  if (const FaultPreset* preset = find_fault_preset(name)) {
+    c.kind = preset->kind;
+    c.target = preset->target;
+    c.value = preset->value;
+    c.rate = preset->rate;
+    c.duration_s = preset->duration_s;
+    return true;
+  }
+  if (!body.isMember("kind")) return false;
+  c.kind = body["kind"].asString();
+  c.target = body.get("target", "").asString();
+  c.value = body.get("value", 0.0).asDouble();
+  c.rate = body.get("rate", 0.0).asDouble();
+  c.duration_s = body.get("duration_s", 0.0).asDouble();
+  return true;
+}
+
+// Inject or clear one fault: a FaultCommand signed with the instructor key
+// on rise/<trainee>/fault_command. The body names a preset ("fault") or
+// gives the fields (kind, target, value, rate, duration_s, seed).
+void handle_fault(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res,
+                  const std::string& action) {
+  if (!ctx.key) return reply_error(res, 503, "no instructor key (rise-instructor serve --instructor-key FILE)");
+  const auto body = object_body(req, res);
+  if (!body) return;
+  const std::string id = body->get("trainee", "").asString();
+  if (!valid_id(id)) return reply_error(res, 400, "trainee '" + id + "': letters, digits, _ . - only");
+  rise_msgs::FaultCommand c{};
+  c.utime = 0;
+  c.nonce = 0;
+  c.issuer = ctx.settings.issuer;
+  c.trainee_id = id;
+  c.action = action;
+  const std::string name = body->get("fault", "").asString();
+  c.fault_id = name == "*" ? "" : name;
+  if (action == "inject") {
+    if (!take_fault_fields(*body, name, c))
+      return reply_error(res, 400, "fault '" + name + "': no such preset, and no kind given");
+    if (c.fault_id.empty()) return reply_error(res, 400, "fault: a name is required to inject");
+    c.seed = body->get("seed", 1).asInt64();
+  }
+  msgs::sign(c, *ctx.key);
+  ctx.lcm.publish(hil::channel(id, "fault_command"), &c);
+  Json::Value v;
+  v["published"] = hil::channel(id, "fault_command");
+  v["action"] = action;
+  v["fault_id"] = c.fault_id;
+  v["kind"] = c.kind;
+  v["target"] = c.target;
+  v["nonce"] = Json::Int64(c.nonce);
+  reply_json(res, v);
+}
+
+// The scenario files offered: name (the file's `scenario:`), file, faults,
+// and which trainees run one now.
+Json::Value scenarios_json(const WebRouteContext& ctx) {
+  Json::Value v;
+  v["enabled"] = !ctx.settings.scenario_program.empty() && ctx.key.has_value();
+  Json::Value files(Json::arrayValue);
+  const std::string& dir = ctx.settings.scenarios_dir;
+  if (!dir.empty() && fs::is_directory(dir)) {
+    std::vector<fs::path> paths;
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.is_regular_file() && e.path().extension() == ".yaml") paths.push_back(e.path());
+    std::sort(paths.begin(), paths.end());
+    for (const auto& p : paths) {
+      Json::Value f;
+      f["file"] = p.filename().string();
+      try {
+        const Scenario s = load_scenario(p.string());
+        f["name"] = s.name;
+        f["faults"] = static_cast<Json::UInt64>(s.faults.size());
+        f["seed"] = static_cast<Json::UInt64>(s.seed);
+      } catch (const std::exception& e) {
+        f["error"] = e.what();
+      }
+      files.append(f);
+    }
+  }
+  v["files"] = files;
+  Json::Value running(Json::objectValue);
+  for (const auto& run : ctx.scenarios.running()) {
+    Json::Value r;
+    r["file"] = run.file;
+    r["seed"] = static_cast<Json::UInt64>(run.seed);
+    r["pid"] = run.pid;
+    running[run.trainee] = r;
+  }
+  v["running"] = running;
+  return v;
+}
+
+// Starts the body's scenario file for its trainee (seed: the body's, else the file's).
+void start_scenario(const WebRouteContext& ctx, const Json::Value& body, ScenarioRun run, httplib::Response& res) {
+  const std::string& dir = ctx.settings.scenarios_dir;
+  run.file = body.get("file", "").asString();
+  const fs::path path = fs::path(dir) / run.file;
+  if (run.file.empty() || run.file.find('/') != std::string::npos || path.extension() != ".yaml" ||
+      !fs::is_regular_file(path))
+    return reply_error(res, 400, "scenario file '" + run.file + "': not a .yaml file in " + dir);
+  run.path = path.string();
+  try {
+    const Scenario s = load_scenario(run.path);
+    run.name = s.name;
+    run.seed = body.isMember("seed") ? body.get("seed", 0).asUInt64() : s.seed;
+  } catch (const std::exception& e) {
+    return reply_error(res, 400, e.what());
+  }
+  try {
+    run = ctx.scenarios.start(run);
+  } catch (const std::exception& e) {
+    return reply_error(res, 500, e.what());
+  }
+  Json::Value v;
+  v["trainee"] = run.trainee;
+  v["file"] = run.file;
+  v["name"] = run.name;
+  v["seed"] = static_cast<Json::UInt64>(run.seed);
+  v["pid"] = run.pid;
+  reply_json(res, v);
+}
+
+void handle_scenario(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res, bool start) {
+  if (ctx.settings.scenario_program.empty() || ctx.settings.scenarios_dir.empty())
+    return reply_error(res, 503, "scenario control is off (rise-instructor serve --scenarios-dir DIR)");
+  if (!ctx.key) return reply_error(res, 503, "no instructor key (rise-instructor serve --instructor-key FILE)");
+  const auto body = object_body(req, res);
+  if (!body) return;
+  ScenarioRun run;
+  run.trainee = body->get("trainee", "").asString();
+  if (!valid_id(run.trainee)) return reply_error(res, 400, "trainee '" + run.trainee + "': letters, digits, _ . - only");
+  // Stopping (or replacing) a run.
+  ctx.scenarios.stop(run.trainee);
+  if (start) return start_scenario(ctx, *body, run, res);
+  Json::Value v;
+  v["trainee"] = run.trainee;
+  v["stopped"] = true;
+  reply_json(res, v);
+}
+
+// The token on every request; a request that carries it as ?token= gets
+// the cookie too.
+void check_tokens(httplib::Server& http, const std::string& token) {
+  http.set_pre_routing_handler([&token](const httplib::Request& req, httplib::Response& res) {
+    if (authorised(req, token)) {
+      // The pages load their scripts by plain URLs: a cookie carries the token on.
+      if (req.has_param("token"))
+        res.set_header("Set-Cookie", "rise_token=" + token + "; Path=/; HttpOnly; SameSite=Strict");
+      return httplib::Server::HandlerResponse::Unhandled;
+    }
+    reply_error(res, 401, "token required (?token=, Authorization: Bearer, or X-Rise-Token)");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+}
+
+}  // namespace
+
+void add_routes(httplib::Server& http, const WebRouteContext& context) {
+  using Req = httplib::Request;
+  using Res = httplib::Response;
+  const std::size_t threads = std::max<std::size_t>(context.settings.http_threads, 4);
+  http.new_task_queue = [threads] { return new httplib::ThreadPool(threads); };
+  check_tokens(http, context.settings.token);
+  if (!http.set_mount_point("/", context.settings.web_dir))
+    throw std::runtime_error(context.settings.web_dir + ": cannot serve this folder");
+  // The handlers outlive this call: they share one copy of the context.
+  const auto ctx = std::make_shared<const WebRouteContext>(context);
+  http.Get(R"(/reports/(.+))", [ctx](const Req& req, Res& res) { handle_report(*ctx, req, res); });
+  http.Get("/api/world", [ctx](const Req&, Res& res) { res.set_content(ctx->world_text, "application/json"); });
+  http.Get("/api/trainees", [ctx](const Req&, Res& res) { reply_json(res, trainees_json(*ctx)); });
+  http.Get("/api/reports", [ctx](const Req&, Res& res) { reply_json(res, reports_json(ctx->settings.reports_dir)); });
+  http.Get("/api/panel", [ctx](const Req&, Res& res) {
+    reply_json(res, panel_definition_json(ctx->console, ctx->settings.virtual_timeout_ms));
+  });
+  http.Get("/api/stream", [ctx](const Req&, Res& res) { handle_stream(ctx, res); });
+  http.Post(R"(/api/virtual/([^/]+))", [ctx](const Req& req, Res& res) { handle_virtual(*ctx, req, res); });
+  http.Post(R"(/api/virtual/([^/]+)/close)", [ctx](const Req& req, Res& res) { handle_virtual_close(*ctx, req, res); });
+  http.Get("/api/faults", [ctx](const Req&, Res& res) {
+    reply_json(res, fault_buttons_json(default_fault_presets(), ctx->key.has_value()));
+  });
+  http.Post("/api/fault/inject", [ctx](const Req& req, Res& res) { handle_fault(*ctx, req, res, "inject"); });
+  http.Post("/api/fault/clear", [ctx](const Req& req, Res& res) { handle_fault(*ctx, req, res, "clear"); });
+  http.Get("/api/scenarios", [ctx](const Req&, Res& res) { reply_json(res, scenarios_json(*ctx)); });
+  http.Post("/api/scenario/start", [ctx](const Req& req, Res& res) { handle_scenario(*ctx, req, res, true); });
+  http.Post("/api/scenario/stop", [ctx](const Req& req, Res& res) { handle_scenario(*ctx, req, res, false); });
+  http.Post(R"(/api/sim/([^/]+)/(pause|resume|step|reset))",
+            [ctx](const Req& req, Res& res) { handle_sim_control(*ctx, req, res); });
+}
+
+}  // namespace rise::instructor

@@ -1,0 +1,80 @@
+// The web console's JSON on its own: what the map and the 3D view draw of
+// the world, and a RobotState as the pages read it.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "instructor/web_json.hpp"
+#include "sim/world_description.hpp"
+
+namespace {
+using rise::instructor::robot_json;
+using rise::instructor::world_json;
+
+// The boxes of `kind`, in the order world_json lists them.
+std::vector<Json::Value> boxes_of(const Json::Value& world, const std::string& kind) {
+  std::vector<Json::Value> out;
+  for (const auto& b : world["boxes"])
+    if (b["kind"].asString() == kind) out.push_back(b);
+  return out;
+}
+}  // namespace
+
+TEST_CASE("the world JSON draws a door closed from its hinge and a staircase as steps and a landing", "[instructor]") {
+  rise::sim::WorldDescription w;
+  rise::sim::Door door;
+  door.name = "door1";
+  door.hinge_m = {2.0, 1.0};
+  door.width_m = 0.9;
+  door.height_m = 2.0;
+  door.yaw_rad = M_PI / 2;
+  w.doors.push_back(door);
+  rise::sim::Stairs stairs;
+  stairs.name = "stairs1";
+  stairs.start_m = {5.0, 0.0};
+  stairs.steps = 3;
+  stairs.riser_m = 0.2;
+  stairs.tread_m = 0.3;
+  stairs.landing_m = 1.0;
+  w.stairs.push_back(stairs);
+
+  const Json::Value v = world_json(w);
+  const auto doors = boxes_of(v, "door");
+  REQUIRE(doors.size() == 1);
+  CHECK(doors[0]["name"].asString() == "door1");
+  CHECK(doors[0]["center"][0].asDouble() == Approx(2.0).margin(1e-9));
+  CHECK(doors[0]["center"][1].asDouble() == Approx(1.45).margin(1e-9));  // half the width along the yaw
+  CHECK(doors[0]["center"][2].asDouble() == Approx(1.0).margin(1e-9));
+  CHECK(doors[0]["size"][0].asDouble() == Approx(0.9).margin(1e-9));
+
+  const auto steps = boxes_of(v, "stairs");
+  REQUIRE(steps.size() == 4);  // three steps and the landing
+  CHECK(steps[0]["center"][0].asDouble() == Approx(5.15).margin(1e-9));
+  CHECK(steps[0]["size"][2].asDouble() == Approx(0.2).margin(1e-9));
+  CHECK(steps[2]["size"][2].asDouble() == Approx(0.6).margin(1e-9));
+  CHECK(steps[3]["center"][0].asDouble() == Approx(5.0 + 0.9 + 0.5).margin(1e-9));
+  CHECK(steps[3]["size"][0].asDouble() == Approx(1.0).margin(1e-9));
+  CHECK(steps[3]["size"][2].asDouble() == Approx(0.6).margin(1e-9));
+  CHECK(v["robot_start"].size() == 3);
+}
+
+TEST_CASE("the RobotState JSON gives the yaw of the orientation and names the objects", "[instructor]") {
+  rise_msgs::RobotState m{};
+  m.robot_id = "r1";
+  const double yaw = GENERATE(0.0, 0.7, -2.5);
+  m.orientation_wxyz[0] = std::cos(yaw / 2);
+  m.orientation_wxyz[3] = std::sin(yaw / 2);
+  m.num_objects = 1;
+  m.object_names = {"crate"};
+  m.object_positions_m = {{1.0, 2.0, 0.15}};
+
+  const Json::Value v = robot_json(m);
+  CHECK(v["robot_id"].asString() == "r1");
+  CHECK(v["yaw"].asDouble() == Approx(yaw).margin(1e-9));
+  REQUIRE(v["objects"].size() == 1);
+  CHECK(v["objects"][0]["name"].asString() == "crate");
+  CHECK(v["objects"][0]["position"][1].asDouble() == Approx(2.0).margin(1e-12));
+}
