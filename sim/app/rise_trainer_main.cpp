@@ -330,55 +330,253 @@ struct TrainOptions {
   double ready_timeout_s = 20.0;
 };
 
+// The training file with every task checked against its world, and the
+// output folder made. Throws naming the file and what is wrong.
+tr::TrainingGraph load_checked_training(const TrainOptions& o) {
+  tr::TrainingGraph graph = tr::load_training_graph(o.training_file);
+  for (const auto& n : graph.nodes) {
+    const auto world = rise::sim::load_world_description(n.task->world_file);
+    tr::check_against_world(*n.task, world);
+  }
+  fs::create_directories(o.out_dir);
+  return graph;
+}
+
+// One attempt at a node of the graph, and its files' stem in --out.
+struct Attempt {
+  std::string node;
+  int attempt = 1;
+  std::string stem;
+};
+
+// A training on LCM: the graph, its journal in --out, and one rise-sim per
+// task attempt.
+class Trainer {
+ public:
+  Trainer(const TrainOptions& o, const tr::TrainingGraph& graph)
+      : o_(o),
+        graph_(graph),
+        journal_((fs::path(o.out_dir) / "journal.jsonl").string()),
+        walker_(graph),
+        report_{graph.name, graph.title, graph.file, o.id, {}, false, "", 0, {}} {}
+
+  void resume();
+  bool ended() const { return walker_.ended(); }
+  std::optional<int> run_next_task(lcm::LCM& lcm, Router& router);
+  int finish(lcm::LCM& lcm);
+
+ private:
+  enum class AttemptEnd { Finished, SimulatorLost, Interrupted, NotReady };
+  std::vector<std::string> simulator_argv(const tr::TaskDescription& task) const;
+  AttemptEnd wait_for_task(lcm::LCM& lcm, TaskRun& run, rise::process::ChildProcess& sim, const Attempt& a) const;
+  int abort_attempt(TaskRun& run, rise::process::ChildProcess& sim, const Attempt& a, bool sim_died);
+  std::optional<int> record_attempt(TaskRun& run, const rise::sim::WorldDescription& world, const Attempt& a);
+  void write_training_report();
+
+  const TrainOptions& o_;
+  const tr::TrainingGraph& graph_;
+  const std::string journal_;
+  tr::TrainingWalker walker_;
+  tr::TrainingReport report_;
+  bool already_finished_ = false;
+  const std::string bin_ = rise::process::executable_dir();
+};
+
+// Replays the journal of an earlier run (--resume), or starts a new one.
+// Throws naming the journal and what does not fit.
+void Trainer::resume() {
+  const auto entries = tr::read_journal(journal_);
+  if (!entries.empty() && !o_.resume)
+    throw std::runtime_error(journal_ + " exists: resume it with --resume, or use another --out");
+  for (const auto& e : entries) {
+    if (e.type == "training_started" && e.training != graph_.name)
+      throw std::runtime_error(journal_ + ": journal of training '" + e.training + "', not '" + graph_.name + "'");
+    if (e.type == "training_started" && e.trainee_id != o_.id)
+      throw std::runtime_error(journal_ + ": journal of trainee '" + e.trainee_id + "': resume it with --id " +
+                               e.trainee_id);
+    if (e.type == "training_finished") {
+      spdlog::info("{}: the training is already finished", journal_);
+      already_finished_ = true;
+    }
+    if (e.type != "task_finished" || !e.result) continue;
+    const auto cur = walker_.current();
+    if (!cur || cur->first != e.node || cur->second != e.attempt)
+      throw std::runtime_error(journal_ + ": task_finished " + e.node + " attempt " + std::to_string(e.attempt) +
+                               " does not follow the graph (expected " +
+                               (cur ? cur->first + " attempt " + std::to_string(cur->second) : "the end") + ")");
+    walker_.record(*e.result);
+    report_.task_report_files.push_back(stem_of(static_cast<int>(walker_.visits().size()), e.node, e.attempt) + ".html");
+    spdlog::info("{}: resumed {} attempt {}: score {}", o_.id, e.node, e.attempt, e.result->score);
+  }
+  if (entries.empty()) tr::append_journal(journal_, {"training_started", graph_.name, o_.id, "", 0, std::nullopt, graph_.file});
+}
+
+void Trainer::write_training_report() {
+  report_.visits = walker_.visits();
+  report_.total_score = walker_.total_score();
+  report_.finished = walker_.ended();
+  report_.end_reason = walker_.end_reason();
+  tr::write_file_atomically((fs::path(o_.out_dir) / "training.json").string(), tr::training_report_json(report_));
+  tr::write_file_atomically((fs::path(o_.out_dir) / "training.html").string(), tr::training_report_html(report_));
+}
+
+// rise-sim's command line for a task: its robot at its start pose, its world.
+std::vector<std::string> Trainer::simulator_argv(const tr::TaskDescription& task) const {
+  std::string robot = task.robot_file;
+  if (task.start) {
+    char pose[96];
+    std::snprintf(pose, sizeof pose, "@%.4f,%.4f,%.4f", task.start->xy_m[0], task.start->xy_m[1],
+                  task.start->yaw_rad * 180.0 / M_PI);
+    robot += pose;
+  }
+  std::vector<std::string> argv{bin_ + "/rise-sim", "--id", o_.id, "--lcm", o_.lcm_url, "--robot", robot,
+                                "--world", task.world_file};
+  if (o_.fast) argv.push_back("--fast");
+  return argv;
+}
+
+// The graph's current node, one attempt: its own rise-sim and executor.
+// An exit code when the training stops here; nullopt to go on.
+std::optional<int> Trainer::run_next_task(lcm::LCM& lcm, Router& router) {
+  const auto [node_name, attempt] = *walker_.current();
+  const auto& task = *graph_.node(node_name)->task;
+  const Attempt a{node_name, attempt, stem_of(static_cast<int>(walker_.visits().size()) + 1, node_name, attempt)};
+  rise::sim::WorldDescription world;
+  std::optional<TaskRun> run;
+  try {
+    world = rise::sim::load_world_description(task.world_file);
+    Progress p{graph_.name, node_name, attempt, static_cast<int>(walker_.visits().size()), walker_.total_score()};
+    run.emplace(lcm, o_.id, task, world, console_for(task, o_.scripted_console), p, true);
+    tr::append_journal(journal_, {"task_started", graph_.name, o_.id, node_name, attempt, std::nullopt, task.file});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  // The previous simulator's last messages must not reach this task.
+  router.run = nullptr;
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  router.run = &*run;
+  std::optional<rise::process::ChildProcess> sim;
+  try {
+    sim.emplace(simulator_argv(task), (fs::path(o_.out_dir) / (a.stem + ".sim.log")).string());
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  spdlog::info("{}: {} attempt {}: task {} on rise-sim pid {}", o_.id, node_name, attempt, task.name, sim->pid());
+  const AttemptEnd end = wait_for_task(lcm, *run, *sim, a);
+  if (end == AttemptEnd::NotReady) return 1;
+  if (end != AttemptEnd::Finished) return abort_attempt(*run, *sim, a, end == AttemptEnd::SimulatorLost);
+  sim->stop(2000);
+  return record_attempt(*run, world, a);
+}
+
+// Runs the task until it finishes, the simulator dies or goes silent, or a
+// signal stops the training.
+Trainer::AttemptEnd Trainer::wait_for_task(lcm::LCM& lcm, TaskRun& run, rise::process::ChildProcess& sim,
+                                           const Attempt& a) const {
+  const auto launched = std::chrono::steady_clock::now();
+  while (!g_stop && !run.finished()) {
+    lcm.handleTimeout(50);
+    run.publish_status();
+    if (!sim.running()) return AttemptEnd::SimulatorLost;
+    const double since_launch = std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count();
+    if (!run.started() && since_launch > o_.ready_timeout_s) {
+      spdlog::error("{}: rise-sim sent no RobotState within {:.0f} s (see {}.sim.log)", o_.id, o_.ready_timeout_s, a.stem);
+      sim.stop(2000);
+      return AttemptEnd::NotReady;
+    }
+    if (run.started() && run.seconds_since_state() > o_.sim_timeout_s) return AttemptEnd::SimulatorLost;
+  }
+  return g_stop ? AttemptEnd::Interrupted : AttemptEnd::Finished;
+}
+
+// The attempt did not finish: nothing of it goes into the results, so
+// --resume runs it again. Returns the exit code.
+int Trainer::abort_attempt(TaskRun& run, rise::process::ChildProcess& sim, const Attempt& a, bool sim_died) {
+  sim.stop(1000);
+  run.abort(sim_died ? "simulator lost" : "interrupted");
+  run.publish_status(true);
+  try {
+    tr::append_journal(journal_, {"task_aborted", graph_.name, o_.id, a.node, a.attempt, std::nullopt,
+                                  sim_died ? "simulator lost" : "interrupted"});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+  }
+  spdlog::error("{}: {} attempt {}: {}; the finished tasks are in {}: rerun with --resume", o_.id, a.node, a.attempt,
+                sim_died ? "the simulator died" : "interrupted", journal_);
+  try {
+    write_training_report();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+  }
+  return sim_died ? 3 : 130;
+}
+
+// A finished attempt: its report, the journal, the walk on. An exit code
+// when that fails.
+std::optional<int> Trainer::record_attempt(TaskRun& run, const rise::sim::WorldDescription& world, const Attempt& a) {
+  auto result = run.result();
+  result.node = a.node;
+  result.attempt = a.attempt;
+  try {
+    write_task_report(o_.out_dir, a.stem, result, world);
+    tr::append_journal(journal_, {"task_finished", graph_.name, o_.id, a.node, a.attempt, result, ""});
+    walker_.record(result);
+    report_.task_report_files.push_back(a.stem + ".html");
+    write_training_report();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  print_result(o_.id, result);
+  std::printf("%s:   → %s\n", o_.id.c_str(), walker_.visits().back().transition.c_str());
+  return std::nullopt;
+}
+
+// The graph has ended: the training report, the journal's end, a last
+// TaskStatus. Returns the exit code.
+int Trainer::finish(lcm::LCM& lcm) {
+  try {
+    write_training_report();
+    if (!already_finished_)
+      tr::append_journal(journal_, {"training_finished", graph_.name, o_.id, "", 0, std::nullopt, walker_.end_reason()});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  rise_msgs::TaskStatus s{};
+  s.utime = wall_us();
+  s.trainee_id = o_.id;
+  s.publisher = rise::panels::this_publisher();
+  s.training = graph_.name;
+  s.tasks_done = static_cast<int32_t>(walker_.visits().size());
+  s.state = "training_finished";
+  s.end_reason = walker_.end_reason();
+  s.training_score = walker_.total_score();
+  lcm.publish("rise/" + o_.id + "/task_status", &s);
+  std::printf("%s: training %s finished (%s): %zu tasks, total score %d\nreport: %s/training.html, training.json\n",
+              o_.id.c_str(), graph_.name.c_str(), walker_.end_reason().c_str(), walker_.visits().size(),
+              walker_.total_score(), o_.out_dir.c_str());
+  return 0;
+}
+
 int train(const TrainOptions& o) {
   tr::TrainingGraph graph;
   try {
-    graph = tr::load_training_graph(o.training_file);
-    for (const auto& n : graph.nodes) {
-      const auto world = rise::sim::load_world_description(n.task->world_file);
-      tr::check_against_world(*n.task, world);
-    }
-    fs::create_directories(o.out_dir);
+    graph = load_checked_training(o);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
-  const std::string journal = (fs::path(o.out_dir) / "journal.jsonl").string();
-  tr::TrainingWalker walker(graph);
-  tr::TrainingReport report{graph.name, graph.title, graph.file, o.id, {}, false, "", 0, {}};
-  bool already_finished = false;
+  Trainer trainer(o, graph);
   try {
-    const auto entries = tr::read_journal(journal);
-    if (!entries.empty() && !o.resume) {
-      spdlog::error("{} exists: resume it with --resume, or use another --out", journal);
-      return 2;
-    }
-    for (const auto& e : entries) {
-      if (e.type == "training_started" && e.training != graph.name)
-        throw std::runtime_error(journal + ": journal of training '" + e.training + "', not '" + graph.name + "'");
-      if (e.type == "training_started" && e.trainee_id != o.id)
-        throw std::runtime_error(journal + ": journal of trainee '" + e.trainee_id + "': resume it with --id " +
-                                 e.trainee_id);
-      if (e.type == "training_finished") {
-        spdlog::info("{}: the training is already finished", journal);
-        already_finished = true;
-      }
-      if (e.type != "task_finished" || !e.result) continue;
-      const auto cur = walker.current();
-      if (!cur || cur->first != e.node || cur->second != e.attempt)
-        throw std::runtime_error(journal + ": task_finished " + e.node + " attempt " + std::to_string(e.attempt) +
-                                 " does not follow the graph (expected " +
-                                 (cur ? cur->first + " attempt " + std::to_string(cur->second) : "the end") + ")");
-      walker.record(*e.result);
-      report.task_report_files.push_back(stem_of(static_cast<int>(walker.visits().size()), e.node, e.attempt) + ".html");
-      spdlog::info("{}: resumed {} attempt {}: score {}", o.id, e.node, e.attempt, e.result->score);
-    }
-    if (entries.empty()) tr::append_journal(journal, {"training_started", graph.name, o.id, "", 0, std::nullopt, graph.file});
+    trainer.resume();
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
-
   lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
     spdlog::error("cannot open LCM at {}", o.lcm_url);
@@ -388,138 +586,11 @@ int train(const TrainOptions& o) {
   if (!claim_station(lcm, o.id, o.scripted_console, o.allow_duplicate_id, guard)) return 2;
   Router router;
   subscribe(lcm, o.id, router);
-  const std::string bin = rise::process::executable_dir();
-  const auto write_training_report = [&] {
-    report.visits = walker.visits();
-    report.total_score = walker.total_score();
-    report.finished = walker.ended();
-    report.end_reason = walker.end_reason();
-    tr::write_file_atomically((fs::path(o.out_dir) / "training.json").string(), tr::training_report_json(report));
-    tr::write_file_atomically((fs::path(o.out_dir) / "training.html").string(), tr::training_report_html(report));
-  };
-
-  while (!g_stop && !walker.ended()) {
-    const auto [node_name, attempt] = *walker.current();
-    const auto* node = graph.node(node_name);
-    const auto& task = *node->task;
-    const int index = static_cast<int>(walker.visits().size()) + 1;
-    const std::string stem = stem_of(index, node_name, attempt);
-    rise::sim::WorldDescription world;
-    std::optional<TaskRun> run;
-    try {
-      world = rise::sim::load_world_description(task.world_file);
-      Progress p{graph.name, node_name, attempt, static_cast<int>(walker.visits().size()), walker.total_score()};
-      run.emplace(lcm, o.id, task, world, console_for(task, o.scripted_console), p, true);
-      tr::append_journal(journal, {"task_started", graph.name, o.id, node_name, attempt, std::nullopt, task.file});
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    // The previous simulator's last messages must not reach this task.
-    router.run = nullptr;
-    while (lcm.handleTimeout(0) > 0) {
-    }
-    router.run = &*run;
-    std::string robot = task.robot_file;
-    if (task.start) {
-      char pose[96];
-      std::snprintf(pose, sizeof pose, "@%.4f,%.4f,%.4f", task.start->xy_m[0], task.start->xy_m[1],
-                    task.start->yaw_rad * 180.0 / M_PI);
-      robot += pose;
-    }
-    std::vector<std::string> argv{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url, "--robot", robot,
-                                  "--world", task.world_file};
-    if (o.fast) argv.push_back("--fast");
-    std::optional<rise::process::ChildProcess> sim;
-    try {
-      sim.emplace(argv, (fs::path(o.out_dir) / (stem + ".sim.log")).string());
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    spdlog::info("{}: {} attempt {}: task {} on rise-sim pid {}", o.id, node_name, attempt, task.name, sim->pid());
-    const auto launched = std::chrono::steady_clock::now();
-    bool sim_died = false;
-    while (!g_stop && !run->finished()) {
-      lcm.handleTimeout(50);
-      run->publish_status();
-      if (!sim->running()) {
-        sim_died = true;
-        break;
-      }
-      const double since_launch = std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count();
-      if (!run->started() && since_launch > o.ready_timeout_s) {
-        spdlog::error("{}: rise-sim sent no RobotState within {:.0f} s (see {}.sim.log)", o.id, o.ready_timeout_s, stem);
-        sim->stop(2000);
-        return 1;
-      }
-      if (run->started() && run->seconds_since_state() > o.sim_timeout_s) {
-        sim_died = true;
-        break;
-      }
-    }
-    if (sim_died || g_stop) {
-      // The attempt did not finish: nothing of it goes into the results, so
-      // --resume runs it again.
-      sim->stop(1000);
-      run->abort(sim_died ? "simulator lost" : "interrupted");
-      run->publish_status(true);
-      try {
-        tr::append_journal(journal, {"task_aborted", graph.name, o.id, node_name, attempt, std::nullopt,
-                                     sim_died ? "simulator lost" : "interrupted"});
-      } catch (const std::exception& e) {
-        spdlog::error("{}", e.what());
-      }
-      spdlog::error("{}: {} attempt {}: {}; the finished tasks are in {}: rerun with --resume", o.id, node_name,
-                    attempt, sim_died ? "the simulator died" : "interrupted", journal);
-      try {
-        write_training_report();
-      } catch (const std::exception& e) {
-        spdlog::error("{}", e.what());
-      }
-      return sim_died ? 3 : 130;
-    }
-    sim->stop(2000);
-    auto result = run->result();
-    result.node = node_name;
-    result.attempt = attempt;
-    try {
-      write_task_report(o.out_dir, stem, result, world);
-      tr::append_journal(journal, {"task_finished", graph.name, o.id, node_name, attempt, result, ""});
-      walker.record(result);
-      report.task_report_files.push_back(stem + ".html");
-      write_training_report();
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    print_result(o.id, result);
-    std::printf("%s:   → %s\n", o.id.c_str(), walker.visits().back().transition.c_str());
-  }
+  while (!g_stop && !trainer.ended())
+    if (const auto code = trainer.run_next_task(lcm, router)) return *code;
   router.run = nullptr;
   if (g_stop) return 130;
-  try {
-    write_training_report();
-    if (!already_finished)
-      tr::append_journal(journal, {"training_finished", graph.name, o.id, "", 0, std::nullopt, walker.end_reason()});
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  }
-  rise_msgs::TaskStatus s{};
-  s.utime = wall_us();
-  s.trainee_id = o.id;
-  s.publisher = rise::panels::this_publisher();
-  s.training = graph.name;
-  s.tasks_done = static_cast<int32_t>(walker.visits().size());
-  s.state = "training_finished";
-  s.end_reason = walker.end_reason();
-  s.training_score = walker.total_score();
-  lcm.publish("rise/" + o.id + "/task_status", &s);
-  std::printf("%s: training %s finished (%s): %zu tasks, total score %d\nreport: %s/training.html, training.json\n",
-              o.id.c_str(), graph.name.c_str(), walker.end_reason().c_str(), walker.visits().size(),
-              walker.total_score(), o.out_dir.c_str());
-  return 0;
+  return trainer.finish(lcm);
 }
 
 // ---- status ---------------------------------------------------------------
