@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "cli/command_line.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
@@ -90,7 +91,7 @@ std::set<std::string> busy_station_ids(lcm::LCM& lcm, int wait_ms) {
 
 struct DemoOptions {
   std::string id;  ///< "" → the first free one of demo, demo-2, demo-3, ...
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   std::string script = "panels/scripts/demo_drive.txt";
   std::string panel = "panels/definitions/rise_console.yaml";
   std::string robot = "sim/robots/skid4.yaml";
@@ -287,7 +288,7 @@ int run_demo(const DemoOptions& o) {
 // console on LCM — then the summary from the journal and the reports.
 struct TrainingDemoOptions {
   std::string id = "demo";
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   std::string training = "sim/training/examples/fig10_training.yaml";
   std::string out_dir;
 };
@@ -344,7 +345,7 @@ int run_training_demo(const TrainingDemoOptions& o) {
 // station are shown as such). One table per --every seconds.
 struct StatusOptions {
   std::string id = "t1";
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   double every_s = 1.0;
   int count = 0;          ///< stop after N tables (0: until Ctrl-C or --timeout)
   double timeout_s = 0.0; ///< give up when no PanelState came for this long (0: never)
@@ -406,7 +407,7 @@ int run_status(const StatusOptions& o) {
     std::fprintf(stderr, "rise status: cannot open LCM at %s\n", o.lcm_url.c_str());
     return 2;
   }
-  const std::string channel = "rise/" + o.id + "/panel_state";
+  const std::string channel = rise::msgs::panel_state_channel(o.id);
   lcm.subscribe(channel, &Latest::on, &latest)->setQueueCapacity(200);
   const auto period = std::chrono::microseconds(static_cast<int64_t>(o.every_s * 1e6));
   auto last_message = std::chrono::steady_clock::now();

@@ -23,6 +23,7 @@
 
 #include "firmware_protocol/console_can.hpp"
 #include "hil/io/can_bus.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -61,14 +62,14 @@ double percentile(std::vector<double> v, double p) {
 
 int main(int argc, char** argv) {
   const int samples = argc > 1 ? std::stoi(argv[1]) : 2000;
-  const std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  const std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   const std::string id = "bench" + std::to_string(::getpid());
   auto server = rise::io::open_can_bus("socketcand+listen://127.0.0.1:0/can0?settle_ms=0");
   const uint16_t port = rise::io::listening_port(*server);
 
   lcm::LCM lcm(lcm_url);
   Listener listener;
-  lcm.subscribe("rise/" + id + "/panel_state", &Listener::on, &listener)->setQueueCapacity(1000);
+  lcm.subscribe(rise::msgs::panel_state_channel(id), &Listener::on, &listener)->setQueueCapacity(1000);
 
   const std::string bin = rise::process::executable_dir() + "/../bin/rise-hild";
   rise::process::ChildProcess hild({bin, "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",

@@ -2,19 +2,12 @@
 
 #include <algorithm>
 
+#include "msgs/channels.hpp"
+
 namespace rise::instructor {
 
-std::optional<std::pair<std::string, std::string>> TraineeDirectory::split_channel(const std::string& channel) {
-  if (channel.rfind("rise/", 0) != 0) return std::nullopt;
-  const auto slash = channel.find('/', 5);
-  if (slash == std::string::npos || slash == 5) return std::nullopt;
-  const std::string what = channel.substr(slash + 1);
-  if (what.empty() || what.find('/') != std::string::npos) return std::nullopt;
-  return std::make_pair(channel.substr(5, slash - 5), what);
-}
-
 bool TraineeDirectory::on_message(const std::string& channel, const void* data, int size, int64_t now_us) {
-  const auto parts = split_channel(channel);
+  const auto parts = msgs::parse_station_channel(channel);
   if (!parts) return false;
   const auto& [id, what] = *parts;
   const auto take = [&](auto slot, auto message) {

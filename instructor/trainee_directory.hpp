@@ -44,9 +44,6 @@ class TraineeDirectory {
   bool on_message(const std::string& channel, const void* data, int size, int64_t now_us);
   std::vector<TraineeRow> rows() const;
 
-  /// The trainee id of rise/<id>/<what>, with `what`; nullopt otherwise.
-  static std::optional<std::pair<std::string, std::string>> split_channel(const std::string& channel);
-
  private:
   std::map<std::string, TraineeRow> rows_;
 };

@@ -7,7 +7,8 @@
 #include <vector>
 
 #include "hil/panel_state_message.hpp"
-#include "instructor/web_clock.hpp"
+#include "msgs/channels.hpp"
+#include "msgs/clock.hpp"
 #include "rise_msgs/PanelState.hpp"
 
 namespace rise::instructor {
@@ -38,8 +39,8 @@ std::optional<VirtualRefusal> VirtualPanels::update(const std::string& id, const
   auto& vp = panels_[id];
   if (!vp) {
     // One publisher per station: not beside a console's rise-hild (or another server's panel).
-    for (const auto& o : publishers_.others(monotonic_us()))
-      if (o.channel == hil::channel(id, "panel_state")) {
+    for (const auto& o : publishers_.others(msgs::monotonic_us()))
+      if (o.channel == msgs::panel_state_channel(id)) {
         panels_.erase(id);
         return VirtualRefusal{true, o.channel + " is already published by " +
                                         msgs::describe(o.publisher, msgs::wall_us()) +
@@ -47,7 +48,7 @@ std::optional<VirtualRefusal> VirtualPanels::update(const std::string& id, const
       }
     vp = std::make_unique<VirtualPanel>(console_, timeout_ms_, client);
   }
-  if (auto e = vp->update(controls, monotonic_us())) return VirtualRefusal{false, *e};
+  if (auto e = vp->update(controls, msgs::monotonic_us())) return VirtualRefusal{false, *e};
   return std::nullopt;
 }
 
@@ -55,7 +56,7 @@ bool VirtualPanels::disconnect(const std::string& id) {
   std::lock_guard lock(mutex_);
   const auto it = panels_.find(id);
   if (it == panels_.end()) return false;
-  it->second->disconnect(monotonic_us());
+  it->second->disconnect(msgs::monotonic_us());
   return true;
 }
 
@@ -63,7 +64,7 @@ void VirtualPanels::on_fault_command(const std::string& trainee, const rise_msgs
   std::lock_guard lock(mutex_);
   const auto it = panels_.find(trainee);
   if (it == panels_.end()) return;
-  const int64_t now = monotonic_us();
+  const int64_t now = msgs::monotonic_us();
   if (c.trainee_id != trainee) return it->second->note_rejected("for trainee '" + c.trainee_id + "'", now);
   if (!verifier_) return it->second->note_rejected("no instructor key on this server", now);
   const auto verdict = verifier_->check(c, msgs::wall_us());
@@ -95,10 +96,10 @@ void VirtualPanels::publish_loop() {
     std::vector<std::pair<std::string, rise_msgs::PanelState>> out;
     {
       std::lock_guard lock(mutex_);
-      const int64_t now = monotonic_us(), utime = wall_us();
+      const int64_t now = msgs::monotonic_us(), utime = msgs::wall_us();
       for (auto& [id, vp] : panels_) out.emplace_back(id, vp->state(id, now, utime));
     }
-    for (auto& [id, state] : out) lcm_.publish(hil::channel(id, "panel_state"), &state);
+    for (auto& [id, state] : out) lcm_.publish(msgs::panel_state_channel(id), &state);
   }
 }
 

@@ -20,8 +20,9 @@
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
-#include "instructor/web_clock.hpp"
 #include "instructor/web_json.hpp"
+#include "msgs/channels.hpp"
+#include "msgs/clock.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/SimControl.hpp"
 
@@ -106,9 +107,9 @@ Json::Value trainees_json(const WebRouteContext& ctx) {
     by_id[id]["virtual_panel"] = true;
   }
   std::map<std::string, std::vector<rise_msgs::Publisher>> by_channel;
-  for (const auto& o : ctx.publishers.others(monotonic_us())) by_channel[o.channel].push_back(o.publisher);
+  for (const auto& o : ctx.publishers.others(msgs::monotonic_us())) by_channel[o.channel].push_back(o.publisher);
   for (auto& [channel, list] : by_channel) {
-    const auto parts = TraineeDirectory::split_channel(channel);
+    const auto parts = msgs::parse_station_channel(channel);
     if (!parts) continue;
     const auto& [id, what] = *parts;
     if (what == "panel_state" && virtual_ids.count(id)) list.push_back(msgs::this_publisher());
@@ -168,7 +169,7 @@ void handle_stream(std::shared_ptr<const WebRouteContext> ctx, httplib::Response
     *next = std::max(*next + period, std::chrono::steady_clock::now());
     auto update = ctx->cache.changes_since(last.get(), std::chrono::seconds(1));
     if (!update || !ctx->running) return false;
-    (*update)["server_utime"] = Json::Int64(wall_us());
+    (*update)["server_utime"] = Json::Int64(msgs::wall_us());
     const std::string text = "data: " + json_text(*update) + "\n\n";
     return sink.write(text.data(), text.size());
   });
@@ -204,14 +205,14 @@ void handle_sim_control(const WebRouteContext& ctx, const httplib::Request& req,
   const std::string id = req.matches[1], command = req.matches[2];
   if (!valid_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
   rise_msgs::SimControl c;
-  c.utime = wall_us();
+  c.utime = msgs::wall_us();
   c.issuer = "rise-instructor";
   c.seq = ++ctx.sim_control_seq;
   c.command = command;
   c.steps = command == "step" ? 100 : 0;
-  ctx.lcm.publish(hil::channel(id, "sim_control"), &c);
+  ctx.lcm.publish(msgs::sim_control_channel(id), &c);
   Json::Value v;
-  v["published"] = hil::channel(id, "sim_control");
+  v["published"] = msgs::sim_control_channel(id);
   v["command"] = command;
   v["seq"] = Json::Int64(c.seq);
   reply_json(res, v);
@@ -262,9 +263,9 @@ void handle_fault(const WebRouteContext& ctx, const httplib::Request& req, httpl
     c.seed = body->get("seed", 1).asInt64();
   }
   msgs::sign(c, *ctx.key);
-  ctx.lcm.publish(hil::channel(id, "fault_command"), &c);
+  ctx.lcm.publish(msgs::fault_command_channel(id), &c);
   Json::Value v;
-  v["published"] = hil::channel(id, "fault_command");
+  v["published"] = msgs::fault_command_channel(id);
   v["action"] = action;
   v["fault_id"] = c.fault_id;
   v["kind"] = c.kind;

@@ -23,12 +23,13 @@
 #include "instructor/channel_cache.hpp"
 #include "instructor/scenario_processes.hpp"
 #include "instructor/virtual_panels.hpp"
-#include "instructor/web_clock.hpp"
 #include "instructor/web_json.hpp"
 #include "instructor/web_routes.hpp"
+#include "msgs/channels.hpp"
+#include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
-#include "panels/panel_definition.hpp"
 #include "msgs/publisher_session.hpp"
+#include "panels/panel_definition.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -131,9 +132,9 @@ struct WebServer::Impl {
   // A second publisher beside one of this server's virtual panels is told
   // to the program (it logs it); /api/trainees lists every duplicate.
   void watch_publisher(const std::string& channel, const std::string& trainee, const rise_msgs::Publisher& p) {
-    const auto other = publishers.observe(channel, p, monotonic_us());
+    const auto other = publishers.observe(channel, p, msgs::monotonic_us());
     if (!other || !settings.on_duplicate_publisher) return;
-    const bool ours = channel == hil::channel(trainee, "panel_state") && virtual_panels->has(trainee);
+    const bool ours = channel == msgs::panel_state_channel(trainee) && virtual_panels->has(trainee);
     if (ours)
       settings.on_duplicate_publisher("another publisher on " + channel + ": " +
                                       msgs::describe(other->publisher, msgs::wall_us()) +

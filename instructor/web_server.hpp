@@ -15,6 +15,7 @@
 #include <string>
 
 #include "instructor/fault_presets.hpp"  // the console's fault buttons
+#include "msgs/channels.hpp"
 
 namespace rise::instructor {
 
@@ -25,7 +26,7 @@ struct WebServerSettings {
   std::string web_dir;              ///< the built pages (instructor/web/dist)
   std::string world_file;           ///< "" → the built-in yard
   std::string robot_file;           ///< the robot file the 3D view takes chassis and cameras from; "" → none
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = msgs::kDefaultLcmUrl;
   std::string reports_dir;          ///< "" → no reports
   std::string panel_file;           ///< the console definition the virtual panel copies
   uint32_t virtual_timeout_ms = 200;  ///< a virtual panel without an update for this long fails safe

@@ -1,5 +1,6 @@
 #include "process/chain_monitor.hpp"
 
+#include "msgs/channels.hpp"
 #include "msgs/publisher_session.hpp"
 
 #include <poll.h>
@@ -38,8 +39,8 @@ std::string switch_label(const rise_msgs::PanelState& p, const std::string& name
 ChainMonitor::ChainMonitor(const std::string& lcm_url, const std::string& trainee_id) : lcm_(lcm_url) {
   good_ = lcm_.good();
   if (!good_) return;
-  auto* p = lcm_.subscribe("rise/" + trainee_id + "/panel_state", &ChainMonitor::on_panel, this);
-  auto* r = lcm_.subscribe("rise/" + trainee_id + "/robot_state", &ChainMonitor::on_robot, this);
+  auto* p = lcm_.subscribe(msgs::panel_state_channel(trainee_id), &ChainMonitor::on_panel, this);
+  auto* r = lcm_.subscribe(msgs::robot_state_channel(trainee_id), &ChainMonitor::on_robot, this);
   // Every message counts for the measurements: a queue deep enough for a
   // second of traffic at 100 + 50 Hz.
   p->setQueueCapacity(200);

@@ -259,6 +259,141 @@ std::vector<std::pair<double, double>> apply_urdf(const YamlReader& r, const YAM
   return {u.arm_limits_rad.begin(), u.arm_limits_rad.end()};
 }
 
+// The chassis of a robot file without a URDF.
+void parse_chassis(const YamlReader& r, const YAML::Node& root, ChassisDescription& c) {
+  const YAML::Node chassis = root["chassis"];
+  if (!chassis) r.fail(root, "chassis", "missing");
+  r.only_keys(chassis, "chassis", {"size_m", "mass_kg", "clearance_m"});
+  if (const YAML::Node size = chassis["size_m"]) {
+    if (!size.IsSequence() || size.size() != 3) r.fail(size, "chassis.size_m", "expected [length, width, height]");
+    for (std::size_t i = 0; i < 3; ++i) {
+      c.size_m[i] = r.as<double>(size[i], "chassis.size_m");
+      if (!(c.size_m[i] > 0)) r.fail(size[i], "chassis.size_m", "must be > 0");
+    }
+  }
+  c.mass_kg = r.positive(chassis, "mass_kg", "chassis", c.mass_kg);
+  c.clearance_m = r.positive(chassis, "clearance_m", "chassis", c.clearance_m, true);
+}
+
+// A skid-steer's wheels (their geometry from the URDF when there is one).
+void parse_wheels(const YamlReader& r, const YAML::Node& wheels, bool urdf, RobotDescription& d) {
+  auto& w = d.wheels;
+  if (urdf) {
+    r.only_keys(wheels, "wheels", {"joints", "friction", "max_torque_nm", "max_speed_radps"});
+  } else {
+    r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",
+                                   "max_torque_nm", "max_speed_radps"});
+    w.radius_m = r.positive(wheels, "radius_m", "wheels", w.radius_m);
+    w.width_m = r.positive(wheels, "width_m", "wheels", w.width_m);
+    w.mass_kg = r.positive(wheels, "mass_kg", "wheels", w.mass_kg);
+    w.wheelbase_m = r.positive(wheels, "wheelbase_m", "wheels", w.wheelbase_m);
+    w.track_m = r.positive(wheels, "track_m", "wheels", w.track_m);
+    if (w.track_m <= w.width_m) r.fail(wheels["track_m"], "wheels.track_m", "must be wider than a wheel");
+    if (w.radius_m <= d.chassis.clearance_m)
+      r.fail(wheels["radius_m"], "wheels.radius_m", "must exceed chassis.clearance_m");
+  }
+  w.friction = r.positive(wheels, "friction", "wheels", w.friction);
+  w.max_torque_nm = r.positive(wheels, "max_torque_nm", "wheels", w.max_torque_nm);
+  w.max_speed_radps = r.positive(wheels, "max_speed_radps", "wheels", w.max_speed_radps);
+}
+
+void parse_tracks(const YamlReader& r, const YAML::Node& root, RobotDescription& d) {
+  const YAML::Node tracks = root["tracks"];
+  if (!tracks) r.fail(root, "tracks", "missing");
+  r.only_keys(tracks, "tracks", {"length_m", "radius_m", "gauge_m", "approach_deg", "approach_length_m", "friction",
+                                 "lateral_friction", "max_speed_mps"});
+  auto& t = d.tracks;
+  t.length_m = r.positive(tracks, "length_m", "tracks", t.length_m);
+  t.radius_m = r.positive(tracks, "radius_m", "tracks", t.radius_m);
+  t.gauge_m = r.positive(tracks, "gauge_m", "tracks", t.gauge_m);
+  t.approach_rad = r.positive(tracks, "approach_deg", "tracks", t.approach_rad * 180.0 / M_PI, true) * M_PI / 180.0;
+  if (t.approach_rad > M_PI / 2) r.fail(tracks["approach_deg"], "tracks.approach_deg", "must be <= 90");
+  t.approach_length_m = r.positive(tracks, "approach_length_m", "tracks", t.approach_length_m, true);
+  t.friction = r.positive(tracks, "friction", "tracks", t.friction);
+  t.lateral_friction = r.positive(tracks, "lateral_friction", "tracks", t.lateral_friction);
+  t.max_speed_mps = r.positive(tracks, "max_speed_mps", "tracks", t.max_speed_mps);
+  if (t.radius_m * 2 <= d.chassis.clearance_m)
+    r.fail(tracks["radius_m"], "tracks.radius_m", "the tracks must reach above chassis.clearance_m");
+}
+
+// The arm of a robot file without a URDF.
+ArmDescription parse_arm(const YamlReader& r, const YAML::Node& arm) {
+  r.only_keys(arm, "arm", {"mount_m", "upper_length_m", "forearm_length_m", "link_mass_kg", "link_width_m",
+                           "gripper_stroke_m"});
+  ArmDescription a;
+  if (const YAML::Node m = arm["mount_m"]) {
+    if (!m.IsSequence() || m.size() != 2) r.fail(m, "arm.mount_m", "expected [x, y]");
+    for (std::size_t i = 0; i < 2; ++i) a.mount_m[i] = r.as<double>(m[i], "arm.mount_m");
+  }
+  a.upper_length_m = r.positive(arm, "upper_length_m", "arm", a.upper_length_m);
+  a.forearm_length_m = r.positive(arm, "forearm_length_m", "arm", a.forearm_length_m);
+  a.link_mass_kg = r.positive(arm, "link_mass_kg", "arm", a.link_mass_kg);
+  a.link_width_m = r.positive(arm, "link_width_m", "arm", a.link_width_m);
+  a.gripper_stroke_m = r.positive(arm, "gripper_stroke_m", "arm", a.gripper_stroke_m);
+  return a;
+}
+
+std::pair<std::string, std::vector<double>> parse_speed_scale(const YamlReader& r, const YAML::Node& s) {
+  r.only_keys(s, "control.speed_scale", {"switch", "values"});
+  const YAML::Node values = s["values"];
+  if (!s["switch"] || !values || !values.IsSequence() || values.size() == 0)
+    r.fail(s, "control.speed_scale", "needs switch and a list of values");
+  std::vector<double> scale;
+  for (const auto& v : values) {
+    const double x = r.as<double>(v, "control.speed_scale.values");
+    if (!(x >= 0.0 && x <= 1.0)) r.fail(v, "control.speed_scale.values", "must be in 0..1");
+    scale.push_back(x);
+  }
+  return std::make_pair(r.as<std::string>(s["switch"], "control.speed_scale.switch"), scale);
+}
+
+// control.arm; the joints' limits from the URDF when it gave them
+// (urdf_arm_limits, in joint order), else from here.
+ArmMapping parse_arm_mapping(const YamlReader& r, const YAML::Node& arm_control,
+                             const std::vector<std::pair<double, double>>& urdf_arm_limits) {
+  r.only_keys(arm_control, "control.arm", {"enable", "shoulder_yaw", "shoulder_pitch", "elbow_pitch", "gripper"});
+  ArmMapping a;
+  if (const YAML::Node e = arm_control["enable"]) a.enable = parse_enable(r, e, "control.arm.enable");
+  for (const char* joint : {"shoulder_yaw", "shoulder_pitch", "elbow_pitch"}) {
+    const std::string where = std::string("control.arm.") + joint;
+    if (!arm_control[joint]) r.fail(arm_control, where, "missing");
+    a.joints.push_back(parse_arm_joint(r, arm_control[joint], joint, where, urdf_arm_limits.empty()));
+    if (!urdf_arm_limits.empty()) std::tie(a.joints.back().min_rad, a.joints.back().max_rad) = urdf_arm_limits[a.joints.size() - 1];
+  }
+  const YAML::Node g = arm_control["gripper"];
+  if (!g) r.fail(arm_control, "control.arm.gripper", "missing");
+  r.only_keys(g, "control.arm.gripper", {"open", "close", "speed_mps", "max_force_n"});
+  if (!g["open"] || !g["close"]) r.fail(g, "control.arm.gripper", "needs open and close buttons");
+  a.open_button = r.as<std::string>(g["open"], "control.arm.gripper.open");
+  a.close_button = r.as<std::string>(g["close"], "control.arm.gripper.close");
+  a.gripper_speed_mps = r.positive(g, "speed_mps", "control.arm.gripper", a.gripper_speed_mps);
+  a.gripper_max_force_n = r.positive(g, "max_force_n", "control.arm.gripper", a.gripper_max_force_n);
+  return a;
+}
+
+// Which panel controls drive the robot and move its arm.
+void parse_control(const YamlReader& r, const YAML::Node& root,
+                   const std::vector<std::pair<double, double>>& urdf_arm_limits, RobotDescription& d) {
+  const YAML::Node control = root["control"];
+  if (!control) r.fail(root, "control", "missing: which panel controls drive the robot");
+  r.only_keys(control, "control", {"linear", "angular", "enable", "speed_scale", "estop", "arm"});
+  if (!control["linear"]) r.fail(control, "control.linear", "missing");
+  if (!control["angular"]) r.fail(control, "control.angular", "missing");
+  d.control.linear = parse_axis(r, control["linear"], "control.linear");
+  d.control.angular = parse_axis(r, control["angular"], "control.angular");
+  if (const YAML::Node e = control["enable"]) d.control.enable = parse_enable(r, e, "control.enable");
+  if (const YAML::Node s = control["speed_scale"]) d.control.speed_scale = parse_speed_scale(r, s);
+  if (const YAML::Node e = control["estop"]) {
+    r.only_keys(e, "control.estop", {"button"});
+    if (!e["button"]) r.fail(e, "control.estop.button", "missing");
+    d.control.estop_button = r.as<std::string>(e["button"], "control.estop.button");
+  }
+  const YAML::Node arm_control = control["arm"];
+  if (d.arm && !arm_control) r.fail(control, "control.arm", "missing: which panel controls move the arm");
+  if (!d.arm && arm_control) r.fail(arm_control, "control.arm", "the robot has no arm section");
+  if (arm_control) d.control.arm = parse_arm_mapping(r, arm_control, urdf_arm_limits);
+}
+
 }  // namespace
 
 std::string read_text_file(const std::string& path) {
@@ -288,131 +423,18 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
 
   const YAML::Node urdf = root["urdf"];
   std::vector<std::pair<double, double>> urdf_arm_limits;
-  const YAML::Node chassis = root["chassis"];
   const YAML::Node wheels = root["wheels"];
   if (d.kind == RobotKind::Tracked && wheels) r.fail(wheels, "wheels", "a tracked robot has tracks, not wheels");
   if (d.kind == RobotKind::SkidSteer && root["tracks"])
     r.fail(root["tracks"], "tracks", "a skid_steer robot has wheels");
   if (d.kind == RobotKind::SkidSteer && !wheels) r.fail(root, "wheels", "missing");
-  if (urdf) {
-    urdf_arm_limits = apply_urdf(r, root, d);
-  } else {
-    if (!chassis) r.fail(root, "chassis", "missing");
-    r.only_keys(chassis, "chassis", {"size_m", "mass_kg", "clearance_m"});
-    if (const YAML::Node size = chassis["size_m"]) {
-      if (!size.IsSequence() || size.size() != 3) r.fail(size, "chassis.size_m", "expected [length, width, height]");
-      for (std::size_t i = 0; i < 3; ++i) {
-        d.chassis.size_m[i] = r.as<double>(size[i], "chassis.size_m");
-        if (!(d.chassis.size_m[i] > 0)) r.fail(size[i], "chassis.size_m", "must be > 0");
-      }
-    }
-    d.chassis.mass_kg = r.positive(chassis, "mass_kg", "chassis", d.chassis.mass_kg);
-    d.chassis.clearance_m = r.positive(chassis, "clearance_m", "chassis", d.chassis.clearance_m, true);
-  }
+  if (urdf) urdf_arm_limits = apply_urdf(r, root, d);
+  else parse_chassis(r, root, d.chassis);
 
-  if (d.kind == RobotKind::SkidSteer) {
-    auto& w = d.wheels;
-    if (urdf) {
-      r.only_keys(wheels, "wheels", {"joints", "friction", "max_torque_nm", "max_speed_radps"});
-    } else {
-      r.only_keys(wheels, "wheels", {"radius_m", "width_m", "mass_kg", "friction", "wheelbase_m", "track_m",
-                                     "max_torque_nm", "max_speed_radps"});
-      w.radius_m = r.positive(wheels, "radius_m", "wheels", w.radius_m);
-      w.width_m = r.positive(wheels, "width_m", "wheels", w.width_m);
-      w.mass_kg = r.positive(wheels, "mass_kg", "wheels", w.mass_kg);
-      w.wheelbase_m = r.positive(wheels, "wheelbase_m", "wheels", w.wheelbase_m);
-      w.track_m = r.positive(wheels, "track_m", "wheels", w.track_m);
-      if (w.track_m <= w.width_m) r.fail(wheels["track_m"], "wheels.track_m", "must be wider than a wheel");
-      if (w.radius_m <= d.chassis.clearance_m)
-        r.fail(wheels["radius_m"], "wheels.radius_m", "must exceed chassis.clearance_m");
-    }
-    w.friction = r.positive(wheels, "friction", "wheels", w.friction);
-    w.max_torque_nm = r.positive(wheels, "max_torque_nm", "wheels", w.max_torque_nm);
-    w.max_speed_radps = r.positive(wheels, "max_speed_radps", "wheels", w.max_speed_radps);
-  } else {
-    const YAML::Node tracks = root["tracks"];
-    if (!tracks) r.fail(root, "tracks", "missing");
-    r.only_keys(tracks, "tracks", {"length_m", "radius_m", "gauge_m", "approach_deg", "approach_length_m", "friction",
-                                   "lateral_friction", "max_speed_mps"});
-    auto& t = d.tracks;
-    t.length_m = r.positive(tracks, "length_m", "tracks", t.length_m);
-    t.radius_m = r.positive(tracks, "radius_m", "tracks", t.radius_m);
-    t.gauge_m = r.positive(tracks, "gauge_m", "tracks", t.gauge_m);
-    t.approach_rad = r.positive(tracks, "approach_deg", "tracks", t.approach_rad * 180.0 / M_PI, true) * M_PI / 180.0;
-    if (t.approach_rad > M_PI / 2) r.fail(tracks["approach_deg"], "tracks.approach_deg", "must be <= 90");
-    t.approach_length_m = r.positive(tracks, "approach_length_m", "tracks", t.approach_length_m, true);
-    t.friction = r.positive(tracks, "friction", "tracks", t.friction);
-    t.lateral_friction = r.positive(tracks, "lateral_friction", "tracks", t.lateral_friction);
-    t.max_speed_mps = r.positive(tracks, "max_speed_mps", "tracks", t.max_speed_mps);
-    if (t.radius_m * 2 <= d.chassis.clearance_m)
-      r.fail(tracks["radius_m"], "tracks.radius_m", "the tracks must reach above chassis.clearance_m");
-  }
-
-  if (const YAML::Node arm = root["arm"]; arm && !urdf) {
-    r.only_keys(arm, "arm", {"mount_m", "upper_length_m", "forearm_length_m", "link_mass_kg", "link_width_m",
-                             "gripper_stroke_m"});
-    ArmDescription a;
-    if (const YAML::Node m = arm["mount_m"]) {
-      if (!m.IsSequence() || m.size() != 2) r.fail(m, "arm.mount_m", "expected [x, y]");
-      for (std::size_t i = 0; i < 2; ++i) a.mount_m[i] = r.as<double>(m[i], "arm.mount_m");
-    }
-    a.upper_length_m = r.positive(arm, "upper_length_m", "arm", a.upper_length_m);
-    a.forearm_length_m = r.positive(arm, "forearm_length_m", "arm", a.forearm_length_m);
-    a.link_mass_kg = r.positive(arm, "link_mass_kg", "arm", a.link_mass_kg);
-    a.link_width_m = r.positive(arm, "link_width_m", "arm", a.link_width_m);
-    a.gripper_stroke_m = r.positive(arm, "gripper_stroke_m", "arm", a.gripper_stroke_m);
-    d.arm = a;
-  }
-
-  const YAML::Node control = root["control"];
-  if (!control) r.fail(root, "control", "missing: which panel controls drive the robot");
-  r.only_keys(control, "control", {"linear", "angular", "enable", "speed_scale", "estop", "arm"});
-  if (!control["linear"]) r.fail(control, "control.linear", "missing");
-  if (!control["angular"]) r.fail(control, "control.angular", "missing");
-  d.control.linear = parse_axis(r, control["linear"], "control.linear");
-  d.control.angular = parse_axis(r, control["angular"], "control.angular");
-  if (const YAML::Node e = control["enable"]) d.control.enable = parse_enable(r, e, "control.enable");
-  if (const YAML::Node s = control["speed_scale"]) {
-    r.only_keys(s, "control.speed_scale", {"switch", "values"});
-    const YAML::Node values = s["values"];
-    if (!s["switch"] || !values || !values.IsSequence() || values.size() == 0)
-      r.fail(s, "control.speed_scale", "needs switch and a list of values");
-    std::vector<double> scale;
-    for (const auto& v : values) {
-      const double x = r.as<double>(v, "control.speed_scale.values");
-      if (!(x >= 0.0 && x <= 1.0)) r.fail(v, "control.speed_scale.values", "must be in 0..1");
-      scale.push_back(x);
-    }
-    d.control.speed_scale = std::make_pair(r.as<std::string>(s["switch"], "control.speed_scale.switch"), scale);
-  }
-  if (const YAML::Node e = control["estop"]) {
-    r.only_keys(e, "control.estop", {"button"});
-    if (!e["button"]) r.fail(e, "control.estop.button", "missing");
-    d.control.estop_button = r.as<std::string>(e["button"], "control.estop.button");
-  }
-  const YAML::Node arm_control = control["arm"];
-  if (d.arm && !arm_control) r.fail(control, "control.arm", "missing: which panel controls move the arm");
-  if (!d.arm && arm_control) r.fail(arm_control, "control.arm", "the robot has no arm section");
-  if (arm_control) {
-    r.only_keys(arm_control, "control.arm", {"enable", "shoulder_yaw", "shoulder_pitch", "elbow_pitch", "gripper"});
-    ArmMapping a;
-    if (const YAML::Node e = arm_control["enable"]) a.enable = parse_enable(r, e, "control.arm.enable");
-    for (const char* joint : {"shoulder_yaw", "shoulder_pitch", "elbow_pitch"}) {
-      const std::string where = std::string("control.arm.") + joint;
-      if (!arm_control[joint]) r.fail(arm_control, where, "missing");
-      a.joints.push_back(parse_arm_joint(r, arm_control[joint], joint, where, urdf_arm_limits.empty()));
-      if (!urdf_arm_limits.empty()) std::tie(a.joints.back().min_rad, a.joints.back().max_rad) = urdf_arm_limits[a.joints.size() - 1];
-    }
-    const YAML::Node g = arm_control["gripper"];
-    if (!g) r.fail(arm_control, "control.arm.gripper", "missing");
-    r.only_keys(g, "control.arm.gripper", {"open", "close", "speed_mps", "max_force_n"});
-    if (!g["open"] || !g["close"]) r.fail(g, "control.arm.gripper", "needs open and close buttons");
-    a.open_button = r.as<std::string>(g["open"], "control.arm.gripper.open");
-    a.close_button = r.as<std::string>(g["close"], "control.arm.gripper.close");
-    a.gripper_speed_mps = r.positive(g, "speed_mps", "control.arm.gripper", a.gripper_speed_mps);
-    a.gripper_max_force_n = r.positive(g, "max_force_n", "control.arm.gripper", a.gripper_max_force_n);
-    d.control.arm = a;
-  }
+  if (d.kind == RobotKind::SkidSteer) parse_wheels(r, wheels, static_cast<bool>(urdf), d);
+  else parse_tracks(r, root, d);
+  if (const YAML::Node arm = root["arm"]; arm && !urdf) d.arm = parse_arm(r, arm);
+  parse_control(r, root, urdf_arm_limits, d);
   if (const YAML::Node sensors = root["sensors"]) d.sensors = parse_sensors(r, sensors);
   if (const YAML::Node sounds = root["sounds"]) d.sounds = parse_sounds(r, sounds, d.arm.has_value());
   return d;

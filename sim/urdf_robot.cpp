@@ -14,7 +14,7 @@ namespace rise::sim {
 namespace {
 
 constexpr double kTol = 1e-6;
-// The simulator's arm (sim/simulation.cpp build_arm): a turret box on the
+// The simulator's arm (sim/simulation_robots.cpp build_arm): a turret box on the
 // chassis top, the upper arm rising 45° at zero angles, a fixed jaw and a
 // finger of this size and mass.
 constexpr std::array<double, 3> kTurretSize_m{0.14, 0.14, 0.08};

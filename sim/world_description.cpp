@@ -93,6 +93,111 @@ std::vector<WallOpening> read_openings(const YamlReader& r, const YAML::Node& wa
   return out;
 }
 
+// Appends read(r, node, "key[i]", names) for each item of the list
+// root[key], if there is one.
+template <typename T, typename Read>
+void read_list(const YamlReader& r, const YAML::Node& root, const char* key, Names& names, std::vector<T>& out,
+               Read read) {
+  if (const YAML::Node items = list(r, root, key))
+    for (std::size_t i = 0; i < items.size(); ++i) out.push_back(read(r, items[i], item(key, i), names));
+}
+
+RobotStart read_robot_start(const YamlReader& r, const YAML::Node& s, const std::string& where) {
+  r.only_keys(s, where, {"xy_m", "yaw_deg"});
+  RobotStart start;
+  start.xy_m = r.vector<2>(s, "xy_m", where);
+  start.yaw_rad = degrees(r, s, "yaw_deg", where, 0.0);
+  return start;
+}
+
+BoxObstacle read_listed_box(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "center_m", "size_m", "yaw_deg"});
+  return read_box(r, n, where, names);
+}
+
+Prop read_prop(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "kind", "center_m", "size_m", "yaw_deg"});
+  Prop p;
+  p.box = read_box(r, n, where, names);
+  if (!n["kind"]) r.fail(n, where + ".kind", "missing");
+  p.kind = r.as<std::string>(n["kind"], where + ".kind");
+  if (p.kind.empty()) r.fail(n["kind"], where + ".kind", "must not be empty");
+  return p;
+}
+
+Wall read_wall(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "from", "to", "height", "thickness", "openings"});
+  Wall wall;
+  wall.name = names.take(r, n, where);
+  wall.from_m = r.vector<2>(n, "from", where);
+  wall.to_m = r.vector<2>(n, "to", where);
+  wall.height_m = r.positive(n, "height", where, wall.height_m);
+  wall.thickness_m = r.positive(n, "thickness", where, wall.thickness_m);
+  if (std::hypot(wall.to_m[0] - wall.from_m[0], wall.to_m[1] - wall.from_m[1]) < 1e-3)
+    r.fail(n["to"], where + ".to", "must differ from 'from'");
+  wall.openings = read_openings(r, n, wall, where);
+  return wall;
+}
+
+Door read_door(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "hinge", "width", "height", "thickness", "yaw_deg", "open_deg_max",
+                         "break_torque_nm", "break_time_ms", "mass_kg", "friction_torque_nm", "return_nm_per_rad"});
+  Door d;
+  d.name = names.take(r, n, where);
+  d.hinge_m = r.vector<2>(n, "hinge", where);
+  d.width_m = r.positive(n, "width", where, d.width_m);
+  d.height_m = r.positive(n, "height", where, d.height_m);
+  d.thickness_m = r.positive(n, "thickness", where, d.thickness_m);
+  d.yaw_rad = degrees(r, n, "yaw_deg", where, 0.0);
+  d.open_max_rad = r.positive(n, "open_deg_max", where, d.open_max_rad / kDegToRad) * kDegToRad;
+  if (d.open_max_rad > M_PI) r.fail(n["open_deg_max"], where + ".open_deg_max", "must be <= 180");
+  d.break_torque_nm = r.positive(n, "break_torque_nm", where, d.break_torque_nm);
+  d.break_time_ms = r.positive(n, "break_time_ms", where, d.break_time_ms);
+  d.mass_kg = r.positive(n, "mass_kg", where, d.mass_kg);
+  d.friction_torque_nm = r.positive(n, "friction_torque_nm", where, d.friction_torque_nm, true);
+  d.return_nm_per_rad = r.positive(n, "return_nm_per_rad", where, d.return_nm_per_rad, true);
+  return d;
+}
+
+Stairs read_stairs(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "start", "yaw_deg", "steps", "riser_m", "tread_m", "width_m", "landing_m"});
+  Stairs s;
+  s.name = names.take(r, n, where);
+  s.start_m = r.vector<2>(n, "start", where);
+  s.yaw_rad = degrees(r, n, "yaw_deg", where, 0.0);
+  if (n["steps"]) {
+    s.steps = r.as<int>(n["steps"], where + ".steps");
+    if (s.steps < 1 || s.steps > 100) r.fail(n["steps"], where + ".steps", "must be in 1..100");
+  }
+  s.riser_m = r.positive(n, "riser_m", where, s.riser_m);
+  s.tread_m = r.positive(n, "tread_m", where, s.tread_m);
+  s.width_m = r.positive(n, "width_m", where, s.width_m);
+  s.landing_m = r.positive(n, "landing_m", where, s.landing_m);
+  return s;
+}
+
+MovableObject read_object(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "size_m", "mass_kg", "center_m"});
+  MovableObject o;
+  o.name = names.take(r, n, where);
+  o.size_m = sizes(r, n, where);
+  if (!n["mass_kg"]) r.fail(n, where + ".mass_kg", "missing");
+  o.mass_kg = r.positive(n, "mass_kg", where, o.mass_kg);
+  o.center_m = r.vector<3>(n, "center_m", where);
+  return o;
+}
+
+Region read_region(const YamlReader& r, const YAML::Node& n, const std::string& where, Names& names) {
+  r.only_keys(n, where, {"name", "min", "max"});
+  Region g;
+  g.name = names.take(r, n, where);
+  g.min_m = r.vector<3>(n, "min", where);
+  g.max_m = r.vector<3>(n, "max", where);
+  for (std::size_t k = 0; k < 3; ++k)
+    if (!(g.max_m[k] > g.min_m[k])) r.fail(n["max"], where + ".max", "must exceed min on every axis");
+  return g;
+}
+
 Ceiling read_ceiling(const YamlReader& r, const YAML::Node& n, const WorldDescription& w, const Names& names) {
   r.only_keys(n, "ceiling", {"height_m", "thickness_m", "min", "max"});
   Ceiling c;
@@ -184,126 +289,17 @@ WorldDescription parse_world_description(const std::string& text, const std::str
     if (s["xy_m"]) w.robot_start_m = r.vector<2>(s, "xy_m", "robot_start");
     w.robot_start_yaw_rad = degrees(r, s, "yaw_deg", "robot_start", 0.0);
   }
-  if (const YAML::Node starts = list(r, root, "robot_starts")) {
-    for (std::size_t i = 0; i < starts.size(); ++i) {
-      const YAML::Node s = starts[i];
-      const std::string where = item("robot_starts", i);
-      r.only_keys(s, where, {"xy_m", "yaw_deg"});
-      RobotStart start;
-      start.xy_m = r.vector<2>(s, "xy_m", where);
-      start.yaw_rad = degrees(r, s, "yaw_deg", where, 0.0);
-      w.robot_starts.push_back(start);
-    }
-  }
-  if (const YAML::Node boxes = list(r, root, "boxes")) {
-    for (std::size_t i = 0; i < boxes.size(); ++i) {
-      const YAML::Node b = boxes[i];
-      const std::string where = item("boxes", i);
-      r.only_keys(b, where, {"name", "center_m", "size_m", "yaw_deg"});
-      w.boxes.push_back(read_box(r, b, where, names));
-    }
-  }
-  if (const YAML::Node props = list(r, root, "props")) {
-    for (std::size_t i = 0; i < props.size(); ++i) {
-      const YAML::Node n = props[i];
-      const std::string where = item("props", i);
-      r.only_keys(n, where, {"name", "kind", "center_m", "size_m", "yaw_deg"});
-      Prop p;
-      p.box = read_box(r, n, where, names);
-      if (!n["kind"]) r.fail(n, where + ".kind", "missing");
-      p.kind = r.as<std::string>(n["kind"], where + ".kind");
-      if (p.kind.empty()) r.fail(n["kind"], where + ".kind", "must not be empty");
-      w.props.push_back(p);
-    }
-  }
-  if (const YAML::Node walls = list(r, root, "walls")) {
-    for (std::size_t i = 0; i < walls.size(); ++i) {
-      const YAML::Node n = walls[i];
-      const std::string where = item("walls", i);
-      r.only_keys(n, where, {"name", "from", "to", "height", "thickness", "openings"});
-      Wall wall;
-      wall.name = names.take(r, n, where);
-      wall.from_m = r.vector<2>(n, "from", where);
-      wall.to_m = r.vector<2>(n, "to", where);
-      wall.height_m = r.positive(n, "height", where, wall.height_m);
-      wall.thickness_m = r.positive(n, "thickness", where, wall.thickness_m);
-      if (std::hypot(wall.to_m[0] - wall.from_m[0], wall.to_m[1] - wall.from_m[1]) < 1e-3)
-        r.fail(n["to"], where + ".to", "must differ from 'from'");
-      wall.openings = read_openings(r, n, wall, where);
-      w.walls.push_back(wall);
-    }
-  }
-  if (const YAML::Node doors = list(r, root, "doors")) {
-    for (std::size_t i = 0; i < doors.size(); ++i) {
-      const YAML::Node n = doors[i];
-      const std::string where = item("doors", i);
-      r.only_keys(n, where, {"name", "hinge", "width", "height", "thickness", "yaw_deg", "open_deg_max",
-                             "break_torque_nm", "break_time_ms", "mass_kg", "friction_torque_nm", "return_nm_per_rad"});
-      Door d;
-      d.name = names.take(r, n, where);
-      d.hinge_m = r.vector<2>(n, "hinge", where);
-      d.width_m = r.positive(n, "width", where, d.width_m);
-      d.height_m = r.positive(n, "height", where, d.height_m);
-      d.thickness_m = r.positive(n, "thickness", where, d.thickness_m);
-      d.yaw_rad = degrees(r, n, "yaw_deg", where, 0.0);
-      d.open_max_rad = r.positive(n, "open_deg_max", where, d.open_max_rad / kDegToRad) * kDegToRad;
-      if (d.open_max_rad > M_PI) r.fail(n["open_deg_max"], where + ".open_deg_max", "must be <= 180");
-      d.break_torque_nm = r.positive(n, "break_torque_nm", where, d.break_torque_nm);
-      d.break_time_ms = r.positive(n, "break_time_ms", where, d.break_time_ms);
-      d.mass_kg = r.positive(n, "mass_kg", where, d.mass_kg);
-      d.friction_torque_nm = r.positive(n, "friction_torque_nm", where, d.friction_torque_nm, true);
-      d.return_nm_per_rad = r.positive(n, "return_nm_per_rad", where, d.return_nm_per_rad, true);
-      w.doors.push_back(d);
-    }
-  }
-  if (const YAML::Node stairs = list(r, root, "stairs")) {
-    for (std::size_t i = 0; i < stairs.size(); ++i) {
-      const YAML::Node n = stairs[i];
-      const std::string where = item("stairs", i);
-      r.only_keys(n, where, {"name", "start", "yaw_deg", "steps", "riser_m", "tread_m", "width_m", "landing_m"});
-      Stairs s;
-      s.name = names.take(r, n, where);
-      s.start_m = r.vector<2>(n, "start", where);
-      s.yaw_rad = degrees(r, n, "yaw_deg", where, 0.0);
-      if (n["steps"]) {
-        s.steps = r.as<int>(n["steps"], where + ".steps");
-        if (s.steps < 1 || s.steps > 100) r.fail(n["steps"], where + ".steps", "must be in 1..100");
-      }
-      s.riser_m = r.positive(n, "riser_m", where, s.riser_m);
-      s.tread_m = r.positive(n, "tread_m", where, s.tread_m);
-      s.width_m = r.positive(n, "width_m", where, s.width_m);
-      s.landing_m = r.positive(n, "landing_m", where, s.landing_m);
-      w.stairs.push_back(s);
-    }
-  }
-  if (const YAML::Node objects = list(r, root, "objects")) {
-    for (std::size_t i = 0; i < objects.size(); ++i) {
-      const YAML::Node n = objects[i];
-      const std::string where = item("objects", i);
-      r.only_keys(n, where, {"name", "size_m", "mass_kg", "center_m"});
-      MovableObject o;
-      o.name = names.take(r, n, where);
-      o.size_m = sizes(r, n, where);
-      if (!n["mass_kg"]) r.fail(n, where + ".mass_kg", "missing");
-      o.mass_kg = r.positive(n, "mass_kg", where, o.mass_kg);
-      o.center_m = r.vector<3>(n, "center_m", where);
-      w.objects.push_back(o);
-    }
-  }
-  if (const YAML::Node regions = list(r, root, "regions")) {
-    for (std::size_t i = 0; i < regions.size(); ++i) {
-      const YAML::Node n = regions[i];
-      const std::string where = item("regions", i);
-      r.only_keys(n, where, {"name", "min", "max"});
-      Region g;
-      g.name = names.take(r, n, where);
-      g.min_m = r.vector<3>(n, "min", where);
-      g.max_m = r.vector<3>(n, "max", where);
-      for (std::size_t k = 0; k < 3; ++k)
-        if (!(g.max_m[k] > g.min_m[k])) r.fail(n["max"], where + ".max", "must exceed min on every axis");
-      w.regions.push_back(g);
-    }
-  }
+  read_list(r, root, "robot_starts", names, w.robot_starts,
+            [](const YamlReader& rr, const YAML::Node& n, const std::string& where, Names&) {
+              return read_robot_start(rr, n, where);
+            });
+  read_list(r, root, "boxes", names, w.boxes, read_listed_box);
+  read_list(r, root, "props", names, w.props, read_prop);
+  read_list(r, root, "walls", names, w.walls, read_wall);
+  read_list(r, root, "doors", names, w.doors, read_door);
+  read_list(r, root, "stairs", names, w.stairs, read_stairs);
+  read_list(r, root, "objects", names, w.objects, read_object);
+  read_list(r, root, "regions", names, w.regions, read_region);
   if (const YAML::Node c = root["ceiling"]) w.ceiling = read_ceiling(r, c, w, names);
   return w;
 }

@@ -19,6 +19,7 @@
 #include "instructor/scenario.hpp"
 #include "instructor/scenario_runner.hpp"
 #include "instructor/trainee_directory.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
 #include "msgs/publisher_session.hpp"
@@ -106,12 +107,11 @@ struct Answer {
 // "command_rejected" PanelState entry (daemon).
 Answer send_fault(lcm::LCM& lcm, rise_msgs::FaultCommand c, double confirm_s) {
   msgs::sign(c, instructor_key());
-  const std::string prefix = "rise/" + c.trainee_id + "/";
   Answer answer;
   const bool daemon = c.action == "inject" ? is_daemon_kind(c.kind) : false;
   const int64_t sent_us = c.utime;
   RawHandler h{[&](const std::string& channel, const lcm::ReceiveBuffer* rbuf) {
-    if (channel == prefix + "panel_state") {
+    if (channel == msgs::panel_state_channel(c.trainee_id)) {
       const auto m = decode<rise_msgs::PanelState>(rbuf);
       if (!m || m->utime < sent_us) return;
       bool present = false;
@@ -122,18 +122,18 @@ Answer send_fault(lcm::LCM& lcm, rise_msgs::FaultCommand c, double confirm_s) {
           answer.refusal = f;
       }
       if (c.action == "inject" && daemon && present) answer.confirmed = true;
-    } else if (channel == prefix + "sim_event") {
+    } else if (channel == msgs::sim_event_channel(c.trainee_id)) {
       const auto m = decode<rise_msgs::SimEvent>(rbuf);
       if (!m || m->utime < sent_us) return;
       if ((m->kind == "fault_injected" && c.action == "inject") || (m->kind == "fault_cleared" && c.action == "clear"))
         answer.confirmed = answer.confirmed || c.fault_id.empty() || m->b == c.fault_id;
       if (m->kind == "fault_refused" && m->b == c.fault_id) answer.refusal = m->detail;
-      if (m->kind == "command_rejected" && m->b == prefix + "fault_command") answer.refusal = m->detail;
+      if (m->kind == "command_rejected" && m->b == msgs::fault_command_channel(c.trainee_id)) answer.refusal = m->detail;
     }
   }};
-  lcm::Subscription* s1 = lcm.subscribe(prefix + "panel_state", &RawHandler::on, &h);
-  lcm::Subscription* s2 = lcm.subscribe(prefix + "sim_event", &RawHandler::on, &h);
-  lcm.publish(prefix + "fault_command", &c);
+  lcm::Subscription* s1 = lcm.subscribe(msgs::panel_state_channel(c.trainee_id), &RawHandler::on, &h);
+  lcm::Subscription* s2 = lcm.subscribe(msgs::sim_event_channel(c.trainee_id), &RawHandler::on, &h);
+  lcm.publish(msgs::fault_command_channel(c.trainee_id), &c);
   if (confirm_s > 0) handle_until(lcm, confirm_s, [&] { return answer.confirmed || !answer.refusal.empty(); });
   lcm.unsubscribe(s1);
   lcm.unsubscribe(s2);
@@ -357,7 +357,6 @@ void add_scenario_command(CLI::App& app) {
     const auto key = instructor_key();
     auto lcm = open_lcm();
     ScenarioRunner runner(scenario, seed);
-    const std::string prefix = "rise/" + o->trainee + "/";
     const auto start = Clock::now();
     const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     int sent = 0;
@@ -365,7 +364,7 @@ void add_scenario_command(CLI::App& app) {
       for (const auto& a : actions) {
         auto c = to_command(a, o->trainee, common_options().issuer);
         msgs::sign(c, key);
-        lcm->publish(prefix + "fault_command", &c);
+        lcm->publish(msgs::fault_command_channel(o->trainee), &c);
         ++sent;
         spdlog::info("{:.3f} s: {} {} {} {} value {:.3f} for {} s", now_s(), c.action, c.fault_id, c.kind, c.target,
                      c.value, c.duration_s);
@@ -373,9 +372,9 @@ void add_scenario_command(CLI::App& app) {
     };
     Observation seen;
     RawHandler h{[&](const std::string& channel, const lcm::ReceiveBuffer* rbuf) {
-      if (channel == prefix + "sim_event") {
+      if (channel == msgs::sim_event_channel(o->trainee)) {
         if (const auto e = decode<rise_msgs::SimEvent>(rbuf)) send(runner.on_event(now_s(), e->kind, e->a, e->b));
-      } else if (channel == prefix + "robot_state") {
+      } else if (channel == msgs::robot_state_channel(o->trainee)) {
         if (const auto r = decode<rise_msgs::RobotState>(rbuf)) {
           seen["speed_mps"] = std::hypot(r->linear_velocity_mps[0], r->linear_velocity_mps[1]);
           seen["x_m"] = r->position_m[0];
@@ -384,14 +383,16 @@ void add_scenario_command(CLI::App& app) {
           seen["sim_time_s"] = r->sim_time_s;
           send(runner.on_observation(now_s(), seen));
         }
-      } else if (channel == prefix + "panel_state") {
+      } else if (channel == msgs::panel_state_channel(o->trainee)) {
         if (const auto p = decode<rise_msgs::PanelState>(rbuf)) {
           seen["failsafe"] = p->failsafe ? 1.0 : 0.0;
           send(runner.on_observation(now_s(), seen));
         }
       }
     }};
-    lcm->subscribe(prefix + "(sim_event|robot_state|panel_state)", &RawHandler::on, &h);
+    for (const std::string& channel : {msgs::sim_event_channel(o->trainee), msgs::robot_state_channel(o->trainee),
+                                       msgs::panel_state_channel(o->trainee)})
+      lcm->subscribe(channel, &RawHandler::on, &h);
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);
     spdlog::info("scenario '{}' ({}, seed {}): {} faults against {}", scenario.name, file, seed,
@@ -423,7 +424,6 @@ void add_task_command(CLI::App& app) {
     setup_logging();
     const auto key = instructor_key();
     auto lcm = open_lcm();
-    const std::string prefix = "rise/" + o->trainee + "/";
     rise_msgs::TrainingControl c{};
     c.issuer = common_options().issuer;
     c.trainee_id = o->trainee;
@@ -434,11 +434,11 @@ void add_task_command(CLI::App& app) {
     RawHandler h{[&](const std::string&, const lcm::ReceiveBuffer* rbuf) {
       const auto e = decode<rise_msgs::SimEvent>(rbuf);
       if (!e || e->utime < c.utime) return;
-      if (e->kind == "command_rejected" && e->b == prefix + "training_control") answer = "refused: " + e->detail;
+      if (e->kind == "command_rejected" && e->b == msgs::training_control_channel(o->trainee)) answer = "refused: " + e->detail;
       if (e->kind.rfind("training_", 0) == 0) answer = e->kind;
     }};
-    lcm->subscribe(prefix + "sim_event", &RawHandler::on, &h);
-    lcm->publish(prefix + "training_control", &c);
+    lcm->subscribe(msgs::sim_event_channel(o->trainee), &RawHandler::on, &h);
+    lcm->publish(msgs::training_control_channel(o->trainee), &c);
     if (o->confirm_s > 0) handle_until(*lcm, o->confirm_s, [&] { return !answer.empty(); });
     std::printf("task %s on %s: %s\n", o->command.c_str(), o->trainee.c_str(),
                 answer.empty() ? (o->confirm_s > 0 ? "no answer" : "sent") : answer.c_str());

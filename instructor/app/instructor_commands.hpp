@@ -10,11 +10,13 @@
 
 #include <string>
 
+#include "msgs/channels.hpp"
+
 namespace rise::instructor {
 
 /// Options every subcommand shares, given before or after the subcommand.
 struct CommonOptions {
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   std::string key_file;        ///< --instructor-key, else env RISE_INSTRUCTOR_KEY
   std::string issuer = "instructor";
   std::string log_level = "info";

@@ -29,30 +29,26 @@
 #include <thread>
 #include <vector>
 
+#include "cli/command_line.hpp"
+#include "msgs/channels.hpp"
+#include "msgs/clock.hpp"
+#include "msgs/command_auth.hpp"
+#include "msgs/publisher_session.hpp"
+#include "panels/data_path.hpp"
+#include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimControl.hpp"
-#include "rise_msgs/FaultCommand.hpp"
-#include "rise_msgs/TrainingControl.hpp"
-#include "cli/command_line.hpp"
-#include "msgs/command_auth.hpp"
-#include "panels/data_path.hpp"
-#include "msgs/publisher_session.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
+#include "rise_msgs/TrainingControl.hpp"
 #include "sim/laser_scanner.hpp"
 #include "sim/simulation.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
-
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 // A robot or world file as given, else installed or in the source tree.
 std::string source_file(const std::string& relative) { return rise::panels::find_data_file(relative); }
@@ -154,7 +150,7 @@ RobotArg parse_robot_arg(const std::string& text) {
 
 rise_msgs::RobotState to_message(const rise::sim::RobotSnapshot& s, const std::string& robot_id) {
   rise_msgs::RobotState m;
-  m.utime = wall_us();
+  m.utime = rise::msgs::wall_us();
   m.sim_time_s = s.time_s;
   m.robot_id = robot_id;
   for (int i = 0; i < 3; ++i) {
@@ -201,7 +197,7 @@ void add_objects(rise_msgs::RobotState& m, const rise::sim::Simulation& sim, con
 
 rise_msgs::SoundCue to_message(const rise::sim::SoundCue& c) {
   rise_msgs::SoundCue m;
-  m.utime = wall_us();
+  m.utime = rise::msgs::wall_us();
   m.sim_time_s = c.time_s;
   m.robot_id = c.robot;
   m.name = c.name;
@@ -215,7 +211,7 @@ rise_msgs::SoundCue to_message(const rise::sim::SoundCue& c) {
 
 rise_msgs::SimEvent to_message(const rise::sim::SimEvent& e, const std::string& robot_id) {
   rise_msgs::SimEvent m;
-  m.utime = wall_us();
+  m.utime = rise::msgs::wall_us();
   m.sim_time_s = e.time_s;
   m.robot_id = robot_id;
   m.kind = rise::sim::to_string(e.kind);
@@ -251,446 +247,565 @@ struct Station {
   InstructorListener instructor;
   std::string last_reason = "-";
 };
-}  // namespace
 
-int main(int argc, char** argv) {
-  CLI::App app{"rise-sim: ODE robot simulator driven by PanelState over LCM"};
+// The command line.
+struct Options {
   std::vector<std::string> robot_args{"sim/robots/skid4.yaml"};
   std::string world_file;
   std::string id = "t1";
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   bool fast = false;
   double duration_s = 0.0;
   double state_hz = 50.0;
   int panel_timeout_ms = 100;
+  std::string instructor_key_file;
+  double command_window_s = 5.0;
   std::string log_level = "info";
+  bool allow_duplicate_id = false;
   std::string scan_dir;
   double scan_every_s = 0.0;
   std::string scan_format = "binary";
-  app.add_option("--robot", robot_args,
+};
+
+void add_options(CLI::App& app, Options& o) {
+  app.add_option("--robot", o.robot_args,
                  "robot file (YAML), FILE[@x,y,yaw_deg] for one robot on rise/<--id>/..., or repeated "
                  "ID=FILE[@x,y,yaw_deg] for several robots, each on rise/<ID>/... (start pose default: the world's "
                  "robot_start, then robot_starts)")
       ->capture_default_str();
-  app.add_option("--world", world_file, "world file (YAML); default: the built-in yard");
-  app.add_option("--id", id, "trainee/station id used in channel names (the plain --robot FILE form)")
+  app.add_option("--world", o.world_file, "world file (YAML); default: the built-in yard");
+  app.add_option("--id", o.id, "trainee/station id used in channel names (the plain --robot FILE form)")
       ->capture_default_str();
-  app.add_option("--lcm", lcm_url, "LCM URL")->capture_default_str();
-  app.add_flag("--fast", fast, "run as fast as possible instead of real-time paced");
-  app.add_option("--duration", duration_s, "stop after S simulated seconds (0: run until SIGINT/SIGTERM)");
-  app.add_option("--state-hz", state_hz, "RobotState rate")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
-  app.add_option("--panel-timeout-ms", panel_timeout_ms, "stop the robot when no PanelState arrives for this long")
+  app.add_option("--lcm", o.lcm_url, "LCM URL")->capture_default_str();
+  app.add_flag("--fast", o.fast, "run as fast as possible instead of real-time paced");
+  app.add_option("--duration", o.duration_s, "stop after S simulated seconds (0: run until SIGINT/SIGTERM)");
+  app.add_option("--state-hz", o.state_hz, "RobotState rate")->capture_default_str()->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--panel-timeout-ms", o.panel_timeout_ms, "stop the robot when no PanelState arrives for this long")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
-  std::string instructor_key_file;
-  app.add_option("--instructor-key", instructor_key_file,
+  app.add_option("--instructor-key", o.instructor_key_file,
                  "instructor key file (hex, mode 0600; default env RISE_INSTRUCTOR_KEY): verifies signed "
                  "FaultCommand / TrainingControl; without it every such command is rejected")
       ->type_name("FILE");
-  double command_window_s = 5.0;
-  app.add_option("--command-window", command_window_s, "largest accepted |command time - now| (s)")
+  app.add_option("--command-window", o.command_window_s, "largest accepted |command time - now| (s)")
       ->capture_default_str();
-  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")->capture_default_str();
-  bool allow_duplicate_id = false;
-  app.add_flag("--allow-duplicate-id", allow_duplicate_id,
+  app.add_option("--log-level", o.log_level, "trace, debug, info, warn, error")->capture_default_str();
+  app.add_flag("--allow-duplicate-id", o.allow_duplicate_id,
                "start even when another process already publishes a robot's rise/<id>/robot_state (by default "
                "that is refused: two simulators on one station mix their messages)");
-  app.add_option("--scan-dir", scan_dir, "write the first robot's laser scan (scan_NNNN.pcd + .pose) here at start");
-  app.add_option("--scan-every", scan_every_s, "and every S seconds of sim time (0: only at start)")
+  app.add_option("--scan-dir", o.scan_dir, "write the first robot's laser scan (scan_NNNN.pcd + .pose) here at start");
+  app.add_option("--scan-every", o.scan_every_s, "and every S seconds of sim time (0: only at start)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--scan-format", scan_format, "PCD DATA: ascii or binary")
+  app.add_option("--scan-format", o.scan_format, "PCD DATA: ascii or binary")
       ->capture_default_str()
       ->check(CLI::IsMember({"ascii", "binary"}));
+}
+
+// One station per --robot, with its robot file loaded. Throws naming the
+// flag and what is wrong.
+std::vector<std::unique_ptr<Station>> load_stations(const Options& o) {
+  std::vector<std::unique_ptr<Station>> stations;
+  std::vector<RobotArg> args;
+  for (const auto& text : o.robot_args) args.push_back(parse_robot_arg(text));
+  const bool plain = args.size() == 1 && args[0].id.empty();
+  for (auto& a : args) {
+    if (!plain && a.id.empty())
+      throw std::invalid_argument("--robot " + a.file + ": with several robots each is ID=FILE[@x,y,yaw_deg]");
+    auto st = std::make_unique<Station>();
+    st->id = plain ? o.id : a.id;
+    st->spec.description = rise::sim::load_robot_description(source_file(a.file));
+    // The one-robot form keeps the robot file's name as the robot's id in messages and events.
+    st->spec.id = plain ? st->spec.description.name : a.id;
+    st->spec.start = a.start;
+    for (const auto& other : stations)
+      if (other->id == st->id) throw std::invalid_argument("--robot " + a.id + "=...: id given twice");
+    stations.push_back(std::move(st));
+  }
+  return stations;
+}
+
+// The verifier of signed instructor commands, when a key is configured.
+// False (after logging why) when the key cannot be read.
+bool load_verifier(const Options& o, std::optional<rise::msgs::CommandVerifier>& verifier) {
+  const std::string key_path = rise::msgs::instructor_key_path(o.instructor_key_file);
+  if (key_path.empty()) {
+    spdlog::info("no instructor key: fault and training commands are rejected");
+    return true;
+  }
+  try {
+    verifier.emplace(rise::msgs::load_instructor_key(key_path), static_cast<int64_t>(o.command_window_s * 1e6));
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return false;
+  }
+  spdlog::info("instructor commands verified with {}", key_path);
+  return true;
+}
+
+std::vector<std::string> state_channels(const std::vector<std::unique_ptr<Station>>& stations) {
+  std::vector<std::string> channels;
+  for (const auto& st : stations) channels.push_back(rise::msgs::robot_state_channel(st->id));
+  return channels;
+}
+
+// The running simulator: the world, each station's LCM side, and the
+// commands it applies between steps.
+class SimNode {
+ public:
+  SimNode(const Options& o, lcm::LCM& lcm, const rise_msgs::Publisher& self,
+          std::vector<std::unique_ptr<Station>> stations, rise::sim::WorldDescription world,
+          std::optional<rise::msgs::CommandVerifier> verifier)
+      : o_(o), lcm_(lcm), self_(self), stations_(std::move(stations)), world_(std::move(world)),
+        verifier_(std::move(verifier)),
+        steps_per_state_(std::max(1, static_cast<int>(std::lround(1.0 / (o.state_hz * rise::sim::Simulation::kStepS))))),
+        state_period_(std::chrono::microseconds(static_cast<int64_t>(std::lround(1e6 / o.state_hz)))),
+        timeout_(std::chrono::milliseconds(o.panel_timeout_ms)),
+        format_(o.scan_format == "ascii" ? rise::sim::PcdFormat::Ascii : rise::sim::PcdFormat::Binary) {}
+
+  void subscribe();
+  bool open_scanner();
+  bool start();
+  void log_ready() const;
+  void run();
+  void report() const;
+
+ private:
+  std::vector<rise::sim::RobotSpec> specs() const;
+  void publish_states(bool feedback);
+  void publish_feedback(const Station& st, const rise::sim::RobotSnapshot& snap, int64_t utime);
+  void scan();
+  void advance();
+  void publish_events_and_cues();
+  void handle_commands();
+  void answer(std::size_t robot, const rise_msgs::SimControl& c, const std::string& kind, const std::string& what);
+  void apply(std::size_t robot, const rise_msgs::SimControl& c);
+  void tell(std::size_t robot, const std::string& kind, const std::string& a, const std::string& b,
+            const std::string& detail);
+  template <typename Command>
+  bool admit(std::size_t robot, const Command& c, const std::string& channel);
+  void apply_fault(std::size_t robot, const rise_msgs::FaultCommand& c);
+  void apply_training(std::size_t robot, const rise_msgs::TrainingControl& c);
+
+  const Options& o_;
+  lcm::LCM& lcm_;
+  const rise_msgs::Publisher self_;
+  std::vector<std::unique_ptr<Station>> stations_;
+  const rise::sim::WorldDescription world_;
+  std::optional<rise::msgs::CommandVerifier> verifier_;
+  // Reset rebuilds the whole world and robots: a Simulation is not assignable.
+  std::optional<rise::sim::Simulation> sim_;
+  std::vector<std::pair<std::size_t, rise_msgs::SimControl>> pending_control_;
+  std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>> pending_faults_;
+  std::vector<std::pair<std::size_t, rise_msgs::TrainingControl>> pending_training_;
+
+  std::optional<rise::sim::LaserScanner> scanner_;
+  int scans_ = 0;
+  double next_scan_s_ = 0.0;
+  const int steps_per_state_;
+  static constexpr int kStepsPerFeedback = 100;  // 10 Hz
+  const std::chrono::microseconds state_period_;
+  const std::chrono::milliseconds timeout_;
+  const rise::sim::PcdFormat format_;
+  std::chrono::steady_clock::time_point start_;
+  int64_t step_ = 0;  // since start or the last reset
+  // Real-time pacing restarts from here after a pause, step or reset.
+  std::chrono::steady_clock::time_point paced_from_;
+  int64_t paced_steps_ = 0;
+  bool paused_ = false;
+  std::chrono::steady_clock::time_point next_paused_state_;
+  int64_t rejected_ = 0;
+};
+
+void SimNode::subscribe() {
+  for (std::size_t i = 0; i < stations_.size(); ++i) {
+    Station& st = *stations_[i];
+    st.panel_channel = rise::msgs::panel_state_channel(st.id);
+    st.state_channel = rise::msgs::robot_state_channel(st.id);
+    st.feedback_channel = rise::msgs::panel_feedback_channel(st.id);
+    st.event_channel = rise::msgs::sim_event_channel(st.id);
+    st.control_channel = rise::msgs::sim_control_channel(st.id);
+    st.sound_channel = rise::msgs::sound_channel(st.id);
+    // Only the newest panel state matters to the physics; a short queue keeps
+    // a stalled sim from acting on old sticks.
+    lcm_.subscribe(st.panel_channel, &PanelListener::on, &st.panel)->setQueueCapacity(8);
+    st.control.pending = &pending_control_;
+    st.control.robot = i;
+    lcm_.subscribe(st.control_channel, &ControlListener::on, &st.control)->setQueueCapacity(64);
+    st.fault_channel = rise::msgs::fault_command_channel(st.id);
+    st.training_channel = rise::msgs::training_control_channel(st.id);
+    st.instructor.faults = &pending_faults_;
+    st.instructor.training = &pending_training_;
+    st.instructor.robot = i;
+    lcm_.subscribe(st.fault_channel, &InstructorListener::on_fault, &st.instructor)->setQueueCapacity(64);
+    lcm_.subscribe(st.training_channel, &InstructorListener::on_training, &st.instructor)->setQueueCapacity(64);
+  }
+}
+
+// --scan-dir: the first robot's laser. False (after logging why) when it
+// cannot scan.
+bool SimNode::open_scanner() {
+  if (o_.scan_dir.empty()) return true;
+  const rise::sim::RobotDescription& first_robot = stations_.front()->spec.description;
+  if (!first_robot.sensors.laser) {
+    spdlog::error("--scan-dir: {} has no sensors.laser", first_robot.file);
+    return false;
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(o_.scan_dir, ec);
+  if (ec) {
+    spdlog::error("--scan-dir {}: {}", o_.scan_dir, ec.message());
+    return false;
+  }
+  scanner_.emplace(*first_robot.sensors.laser, first_robot.sensors.seed);
+  return true;
+}
+
+std::vector<rise::sim::RobotSpec> SimNode::specs() const {
+  std::vector<rise::sim::RobotSpec> out;
+  for (const auto& st : stations_) out.push_back(st->spec);
+  return out;
+}
+
+// Builds the world. False (after logging why) when it cannot.
+bool SimNode::start() {
+  try {
+    sim_.emplace(specs(), world_);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return false;
+  }
+  return true;
+}
+
+void SimNode::log_ready() const {
+  spdlog::info("rise-sim ready: world '{}', {} robot(s), {} on {}", world_.name, stations_.size(),
+               o_.fast ? "as fast as possible" : "real time", o_.lcm_url);
+  for (std::size_t i = 0; i < stations_.size(); ++i) {
+    const Station& st = *stations_[i];
+    const auto T = sim_->T_world_base(i);
+    spdlog::info("robot '{}' ({}) at ({:.2f}, {:.2f}): {} → {}, {}, {}; control on {}", st.spec.id,
+                 st.spec.description.file, T.translation().x(), T.translation().y(), st.panel_channel,
+                 st.state_channel, st.event_channel, st.sound_channel, st.control_channel);
+  }
+}
+
+// Every robot's RobotState and continuous sound cues; feedback too when asked.
+void SimNode::publish_states(bool feedback) {
+  for (std::size_t i = 0; i < stations_.size(); ++i) {
+    Station& st = *stations_[i];
+    const auto snap = sim_->snapshot(i);
+    auto msg = to_message(snap, st.spec.id);
+    msg.publisher = self_;
+    add_objects(msg, *sim_, world_);
+    lcm_.publish(st.state_channel, &msg);
+    for (const auto& c : snap.sounds) {
+      const auto cue = to_message(c);
+      lcm_.publish(st.sound_channel, &cue);
+    }
+    if (snap.stop_reason != st.last_reason) {
+      if (snap.motors_enabled) spdlog::info("{}: motors enabled", st.spec.id);
+      else spdlog::info("{}: motors stopped: {}", st.spec.id, snap.stop_reason);
+      st.last_reason = snap.stop_reason;
+    }
+    if (feedback) publish_feedback(st, snap, msg.utime);
+  }
+}
+
+void SimNode::publish_feedback(const Station& st, const rise::sim::RobotSnapshot& snap, int64_t utime) {
+  rise_msgs::PanelFeedback fb;
+  fb.utime = utime;
+  fb.panel_id = "";
+  fb.num_leds = 0;  // the bridge owns power/fault/e-stop LEDs
+  fb.display_names = {"speed"};
+  fb.display_values = {static_cast<float>(snap.speed_mps())};
+  fb.num_displays = 1;
+  fb.buzzer = 0;
+  fb.rumble = 0.0f;
+  lcm_.publish(st.feedback_channel, &fb);
+}
+
+// Stop-and-go scanning: the whole scan at one instant of sim time.
+void SimNode::scan() {
+  char name[32];
+  std::snprintf(name, sizeof name, "scan_%04d", scans_++);
+  const auto stem = (std::filesystem::path(o_.scan_dir) / name).string();
+  const auto scan = scanner_->scan(*sim_, 0);
+  try {
+    rise::sim::write_scan(stem, scan, format_);
+    spdlog::info("scan {:.3f} s: {}.pcd, {} points", scan.time_s, stem, scan.points_sensor.size());
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+  }
+  next_scan_s_ = o_.scan_every_s > 0 ? next_scan_s_ + o_.scan_every_s : std::numeric_limits<double>::infinity();
+}
+
+// One 1 ms step with everything that hangs on it: scans, events, sounds, states.
+void SimNode::advance() {
+  if (scanner_ && sim_->time_s() >= next_scan_s_ - 1e-9) scan();
+  const auto now = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < stations_.size(); ++i) {
+    const PanelListener& panel = stations_[i]->panel;
+    rise::sim::ControlInput input = panel.input;
+    input.fresh = panel.any && now - panel.received <= timeout_;
+    sim_->set_input(i, input);
+  }
+  sim_->step();
+  ++step_;
+  publish_events_and_cues();
+  if (step_ % steps_per_state_ == 0) publish_states(step_ % kStepsPerFeedback == 0);
+}
+
+void SimNode::publish_events_and_cues() {
+  for (const auto& e : sim_->take_events()) {
+    log_event(e);
+    // To the robots it names; world events (doors, objects) to all.
+    bool named = false;
+    for (const auto& st : stations_) named = named || names_robot(e, st->spec.id);
+    for (const auto& st : stations_) {
+      if (named && stations_.size() > 1 && !names_robot(e, st->spec.id)) continue;
+      const auto msg = to_message(e, st->spec.id);
+      lcm_.publish(st->event_channel, &msg);
+    }
+  }
+  for (const auto& c : sim_->take_sound_cues()) {
+    const auto msg = to_message(c);
+    lcm_.publish(stations_[sim_->robot_index(c.robot)]->sound_channel, &msg);
+  }
+}
+
+void SimNode::answer(std::size_t robot, const rise_msgs::SimControl& c, const std::string& kind,
+                     const std::string& what) {
+  const Station& st = *stations_[robot];
+  rise_msgs::SimEvent msg;
+  msg.utime = rise::msgs::wall_us();
+  msg.sim_time_s = sim_->time_s();
+  msg.robot_id = st.spec.id;
+  msg.kind = kind;
+  msg.a = c.issuer;
+  msg.detail = "seq " + std::to_string(c.seq) + (what.empty() ? "" : ": " + what);
+  spdlog::info("sim_control {:.3f} s: {} from '{}' on {} {}", msg.sim_time_s, kind, c.issuer, st.control_channel,
+               msg.detail);
+  lcm_.publish(st.event_channel, &msg);
+}
+
+void SimNode::apply(std::size_t robot, const rise_msgs::SimControl& c) {
+  if (c.command == "pause") {
+    paused_ = true;
+    next_paused_state_ = std::chrono::steady_clock::now();
+    answer(robot, c, "sim_paused", "");
+  } else if (c.command == "resume") {
+    paused_ = false;
+    answer(robot, c, "sim_resumed", "");
+  } else if (c.command == "step" && c.steps >= 1 && c.steps <= kMaxControlSteps) {
+    paused_ = true;
+    for (int32_t i = 0; i < c.steps && !g_stop; ++i) advance();
+    answer(robot, c, "sim_stepped", std::to_string(c.steps) + " steps of 1 ms");
+    publish_states(false);
+    next_paused_state_ = std::chrono::steady_clock::now() + state_period_;
+  } else if (c.command == "reset") {
+    sim_.emplace(specs(), world_);
+    step_ = 0;
+    next_scan_s_ = 0.0;
+    for (auto& st : stations_) st->last_reason = "-";
+    answer(robot, c, "sim_reset", "world and robots rebuilt, robots at their start poses");
+    publish_states(false);
+    next_paused_state_ = std::chrono::steady_clock::now() + state_period_;
+  } else {
+    answer(robot, c, "sim_control_refused",
+           "command '" + c.command + "' with steps " + std::to_string(c.steps) + ": expected pause, resume, step " +
+               "(steps 1.." + std::to_string(kMaxControlSteps) + ") or reset");
+    return;
+  }
+  paced_from_ = std::chrono::steady_clock::now();
+  paced_steps_ = 0;
+}
+
+// A SimEvent on the robot's sim_event channel, logged.
+void SimNode::tell(std::size_t robot, const std::string& kind, const std::string& a, const std::string& b,
+                   const std::string& detail) {
+  const Station& st = *stations_[robot];
+  rise_msgs::SimEvent msg;
+  msg.utime = rise::msgs::wall_us();
+  msg.sim_time_s = sim_->time_s();
+  msg.robot_id = st.spec.id;
+  msg.kind = kind;
+  msg.a = a;
+  msg.b = b;
+  msg.detail = detail;
+  lcm_.publish(st.event_channel, &msg);
+}
+
+// Verifies one signed command: true to apply it; else it is reported as a
+// command_rejected SimEvent (a = issuer, b = channel, detail = why, and
+// the count so far) and logged.
+template <typename Command>
+bool SimNode::admit(std::size_t robot, const Command& c, const std::string& channel) {
+  std::string why;
+  if (!verifier_) why = "no instructor key on this station";
+  else if (const auto v = verifier_->check(c, rise::msgs::wall_us()); v != rise::msgs::Verdict::Accepted) why = rise::msgs::to_string(v);
+  else if (c.trainee_id != stations_[robot]->id) why = "meant for trainee '" + c.trainee_id + "'";
+  if (why.empty()) return true;
+  ++rejected_;
+  spdlog::warn("rejected command on {} from '{}': {} ({} rejected so far)", channel, c.issuer, why, rejected_);
+  tell(robot, "command_rejected", c.issuer, channel, why + " (" + std::to_string(rejected_) + " rejected)");
+  return false;
+}
+
+void SimNode::apply_fault(std::size_t robot, const rise_msgs::FaultCommand& c) {
+  const Station& st = *stations_[robot];
+  if (!admit(robot, c, st.fault_channel)) return;
+  if (c.action == "clear") {
+    const std::size_t n = sim_->clear_fault(robot, c.fault_id);
+    spdlog::info("fault clear '{}' from '{}': {} cleared", c.fault_id, c.issuer, n);
+    return;  // a fault of the daemon's has the same id space: no refusal for an id not here
+  }
+  const auto kind = rise::sim::parse_sim_fault_kind(c.kind);
+  // The daemon's kinds (input, wire, transport) come on the same channel: rise-hild applies them.
+  static const std::set<std::string> daemon_kinds = {
+      "stuck_at", "offset", "drift", "noise", "out_of_range", "intermittent", "disconnect", "can_drop",
+      "can_delay", "can_corrupt", "can_bus_off", "modbus_exception", "modbus_timeout", "lcm_loss", "lcm_latency"};
+  if (!kind && daemon_kinds.count(c.kind) && c.action == "inject") {
+    spdlog::debug("fault '{}' ({}) is rise-hild's", c.fault_id, c.kind);
+    return;
+  }
+  std::string error;
+  if (c.action != "inject") error = "action '" + c.action + "': expected inject or clear";
+  else if (!kind) error = "'" + c.kind + "' is not a sim fault";
+  else {
+    rise::sim::PhysicsFault f;
+    f.id = c.fault_id;
+    f.kind = *kind;
+    f.target = c.target;
+    f.value = c.value;
+    f.seed = static_cast<uint64_t>(c.seed);
+    f.duration_s = c.duration_s;
+    error = sim_->set_fault(robot, f);
+  }
+  if (!error.empty()) {
+    spdlog::warn("fault '{}' from '{}' refused: {}", c.fault_id, c.issuer, error);
+    tell(robot, "fault_refused", c.issuer, c.fault_id, error);
+  }
+}
+
+void SimNode::apply_training(std::size_t robot, const rise_msgs::TrainingControl& c) {
+  const Station& st = *stations_[robot];
+  if (!admit(robot, c, st.training_channel)) return;
+  rise_msgs::SimControl sc{};
+  sc.issuer = c.issuer;
+  sc.steps = 0;
+  if (c.command == "start") sc.command = "resume";
+  else if (c.command == "stop") sc.command = "pause";
+  else if (c.command == "restart") sc.command = "reset";
+  else {
+    tell(robot, "command_rejected", c.issuer, st.training_channel, "command '" + c.command + "': expected start, stop or restart");
+    return;
+  }
+  apply(robot, sc);
+  if (c.command == "restart") paused_ = false;
+  tell(robot, c.command == "start" ? "training_started" : c.command == "stop" ? "training_stopped" : "training_restarted",
+       c.issuer, c.task, "task " + (c.task.empty() ? std::string("-") : c.task));
+}
+
+// The commands that came in since the last step, in arrival order per kind.
+void SimNode::handle_commands() {
+  for (const auto& [robot, c] : pending_control_) apply(robot, c);
+  pending_control_.clear();
+  for (const auto& [robot, c] : pending_faults_) apply_fault(robot, c);
+  pending_faults_.clear();
+  for (const auto& [robot, c] : pending_training_) apply_training(robot, c);
+  pending_training_.clear();
+}
+
+// Until SIGINT/SIGTERM or --duration of sim time.
+void SimNode::run() {
+  start_ = std::chrono::steady_clock::now();
+  paced_from_ = start_;
+  next_paused_state_ = start_;
+  while (!g_stop && (o_.duration_s <= 0 || sim_->time_s() < o_.duration_s)) {
+    // Take every waiting LCM message without blocking the physics.
+    pollfd pfd{lcm_.getFileno(), POLLIN, 0};
+    while (::poll(&pfd, 1, 0) > 0) lcm_.handle();
+    handle_commands();
+
+    if (paused_) {
+      // No stepping; RobotState still goes out, with the same sim time.
+      if (std::chrono::steady_clock::now() >= next_paused_state_) {
+        publish_states(false);
+        next_paused_state_ += state_period_;
+      }
+      ::poll(&pfd, 1, 1);
+      continue;
+    }
+    advance();
+    ++paced_steps_;
+    if (!o_.fast) std::this_thread::sleep_until(paced_from_ + std::chrono::microseconds(paced_steps_ * 1000));
+  }
+}
+
+void SimNode::report() const {
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  int64_t panel_states = 0;
+  for (const auto& st : stations_) panel_states += st->panel.count;
+  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} robot(s), {} panel states",
+               sim_->time_s(), wall_s, wall_s > 0 ? sim_->time_s() / wall_s : 0.0, stations_.size(), panel_states);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rise-sim: ODE robot simulator driven by PanelState over LCM"};
+  Options o;
+  add_options(app, o);
   if (const auto code = rise::cli::parse_command_line(app, "rise-sim", argc, argv)) return *code;
-  spdlog::set_level(spdlog::level::from_str(log_level));
+  spdlog::set_level(spdlog::level::from_str(o.log_level));
 
   std::vector<std::unique_ptr<Station>> stations;
   rise::sim::WorldDescription world = rise::sim::default_world();
   try {
-    std::vector<RobotArg> args;
-    for (const auto& text : robot_args) args.push_back(parse_robot_arg(text));
-    const bool plain = args.size() == 1 && args[0].id.empty();
-    for (auto& a : args) {
-      if (!plain && a.id.empty())
-        throw std::invalid_argument("--robot " + a.file + ": with several robots each is ID=FILE[@x,y,yaw_deg]");
-      auto st = std::make_unique<Station>();
-      st->id = plain ? id : a.id;
-      st->spec.description = rise::sim::load_robot_description(source_file(a.file));
-      // The one-robot form keeps the robot file's name as the robot's id in messages and events.
-      st->spec.id = plain ? st->spec.description.name : a.id;
-      st->spec.start = a.start;
-      for (const auto& other : stations)
-        if (other->id == st->id) throw std::invalid_argument("--robot " + a.id + "=...: id given twice");
-      stations.push_back(std::move(st));
-    }
-    if (!world_file.empty()) world = rise::sim::load_world_description(source_file(world_file));
+    stations = load_stations(o);
+    if (!o.world_file.empty()) world = rise::sim::load_world_description(source_file(o.world_file));
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
-  const auto specs = [&] {
-    std::vector<rise::sim::RobotSpec> out;
-    for (const auto& st : stations) out.push_back(st->spec);
-    return out;
-  };
-
   std::optional<rise::msgs::CommandVerifier> verifier;
-  if (const std::string key_path = rise::msgs::instructor_key_path(instructor_key_file); !key_path.empty()) {
-    try {
-      verifier.emplace(rise::msgs::load_instructor_key(key_path),
-                       static_cast<int64_t>(command_window_s * 1e6));
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    spdlog::info("instructor commands verified with {}", key_path);
-  } else {
-    spdlog::info("no instructor key: fault and training commands are rejected");
-  }
-  lcm::LCM lcm(lcm_url);
+  if (!load_verifier(o, verifier)) return 2;
+  lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
-    spdlog::error("cannot open LCM at {}", lcm_url);
+    spdlog::error("cannot open LCM at {}", o.lcm_url);
     return 2;
   }
   // One publisher per station: listen before the first message.
   const rise_msgs::Publisher self = rise::msgs::init_publisher("rise-sim");
-  std::vector<std::string> state_channels;
-  for (const auto& st : stations) state_channels.push_back("rise/" + st->id + "/robot_state");
-  if (!allow_duplicate_id)
-    if (const auto other =
-            rise::msgs::probe_channels<rise_msgs::RobotState>(lcm, state_channels, rise::msgs::kProbeMs)) {
+  const std::vector<std::string> channels = state_channels(stations);
+  if (!o.allow_duplicate_id)
+    if (const auto other = rise::msgs::probe_channels<rise_msgs::RobotState>(lcm, channels, rise::msgs::kProbeMs)) {
       spdlog::error("{} is already published by {}: refusing to start a second simulator for it (give another "
                     "--id, or --allow-duplicate-id)",
-                    other->channel, rise::msgs::describe(other->publisher, wall_us()));
+                    other->channel, rise::msgs::describe(other->publisher, rise::msgs::wall_us()));
       return 2;
     }
   // Another process publishing a robot's state: reported once by each side;
   // of two that started together, the later one gives way.
   int exit_code = 0;
   rise::msgs::PublisherListener<rise_msgs::RobotState> others(
-      self.session_id, [&](const rise::msgs::PublisherWatch::Other& o) {
-        spdlog::warn("another publisher on {}: {}", o.channel, rise::msgs::describe(o.publisher, wall_us()));
-        if (allow_duplicate_id || !rise::msgs::gives_way(self, o.publisher, wall_us())) return;
+      self.session_id, [&](const rise::msgs::PublisherWatch::Other& other) {
+        spdlog::warn("another publisher on {}: {}", other.channel, rise::msgs::describe(other.publisher, rise::msgs::wall_us()));
+        if (o.allow_duplicate_id || !rise::msgs::gives_way(self, other.publisher, rise::msgs::wall_us())) return;
         spdlog::error("{} started first: this rise-sim stops (give another --id, or --allow-duplicate-id)",
-                      o.publisher.program);
+                      other.publisher.program);
         exit_code = 2;
         g_stop = 1;
       });
-  for (const std::string& channel : state_channels) others.listen(lcm, channel);
+  for (const std::string& channel : channels) others.listen(lcm, channel);
 
-  std::vector<std::pair<std::size_t, rise_msgs::SimControl>> pending_control;
-  std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>> pending_faults;
-  std::vector<std::pair<std::size_t, rise_msgs::TrainingControl>> pending_training;
-  for (std::size_t i = 0; i < stations.size(); ++i) {
-    Station& st = *stations[i];
-    const std::string prefix = "rise/" + st.id + "/";
-    st.panel_channel = prefix + "panel_state";
-    st.state_channel = prefix + "robot_state";
-    st.feedback_channel = prefix + "panel_feedback";
-    st.event_channel = prefix + "sim_event";
-    st.control_channel = prefix + "sim_control";
-    st.sound_channel = prefix + "sound";
-    // Only the newest panel state matters to the physics; a short queue keeps
-    // a stalled sim from acting on old sticks.
-    lcm.subscribe(st.panel_channel, &PanelListener::on, &st.panel)->setQueueCapacity(8);
-    st.control.pending = &pending_control;
-    st.control.robot = i;
-    lcm.subscribe(st.control_channel, &ControlListener::on, &st.control)->setQueueCapacity(64);
-    st.fault_channel = prefix + "fault_command";
-    st.training_channel = prefix + "training_control";
-    st.instructor.faults = &pending_faults;
-    st.instructor.training = &pending_training;
-    st.instructor.robot = i;
-    lcm.subscribe(st.fault_channel, &InstructorListener::on_fault, &st.instructor)->setQueueCapacity(64);
-    lcm.subscribe(st.training_channel, &InstructorListener::on_training, &st.instructor)->setQueueCapacity(64);
-  }
-  const rise::sim::RobotDescription& first_robot = stations.front()->spec.description;
-
-  std::optional<rise::sim::LaserScanner> scanner;
-  if (!scan_dir.empty()) {
-    if (!first_robot.sensors.laser) {
-      spdlog::error("--scan-dir: {} has no sensors.laser", first_robot.file);
-      return 2;
-    }
-    std::error_code ec;
-    std::filesystem::create_directories(scan_dir, ec);
-    if (ec) {
-      spdlog::error("--scan-dir {}: {}", scan_dir, ec.message());
-      return 2;
-    }
-    scanner.emplace(*first_robot.sensors.laser, first_robot.sensors.seed);
-  }
-  int scans = 0;
-  double next_scan_s = 0.0;
-  const auto format = scan_format == "ascii" ? rise::sim::PcdFormat::Ascii : rise::sim::PcdFormat::Binary;
-
-  // Reset rebuilds the whole world and robots: a Simulation is not assignable.
-  std::optional<rise::sim::Simulation> sim;
-  try {
-    sim.emplace(specs(), world);
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  }
+  SimNode node(o, lcm, self, std::move(stations), std::move(world), std::move(verifier));
+  node.subscribe();
+  if (!node.open_scanner() || !node.start()) return 2;
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
-  spdlog::info("rise-sim ready: world '{}', {} robot(s), {} on {}", world.name, stations.size(),
-               fast ? "as fast as possible" : "real time", lcm_url);
-  for (std::size_t i = 0; i < stations.size(); ++i) {
-    const Station& st = *stations[i];
-    const auto T = sim->T_world_base(i);
-    spdlog::info("robot '{}' ({}) at ({:.2f}, {:.2f}): {} → {}, {}, {}; control on {}", st.spec.id,
-                 st.spec.description.file, T.translation().x(), T.translation().y(), st.panel_channel,
-                 st.state_channel, st.event_channel, st.sound_channel, st.control_channel);
-  }
-
-  const int steps_per_state = std::max(1, static_cast<int>(std::lround(1.0 / (state_hz * rise::sim::Simulation::kStepS))));
-  const int steps_per_feedback = 100;  // 10 Hz
-  const auto start = std::chrono::steady_clock::now();
-  const auto state_period = std::chrono::microseconds(static_cast<int64_t>(std::lround(1e6 / state_hz)));
-  const auto timeout = std::chrono::milliseconds(panel_timeout_ms);
-  int64_t step = 0;  // since start or the last reset
-  // Real-time pacing restarts from here after a pause, step or reset.
-  auto paced_from = start;
-  int64_t paced_steps = 0;
-  bool paused = false;
-  auto next_paused_state = start;
-
-  // Every robot's RobotState and continuous sound cues; feedback too when asked.
-  const auto publish_states = [&](bool feedback) {
-    for (std::size_t i = 0; i < stations.size(); ++i) {
-      Station& st = *stations[i];
-      const auto snap = sim->snapshot(i);
-      auto msg = to_message(snap, st.spec.id);
-      msg.publisher = self;
-      add_objects(msg, *sim, world);
-      lcm.publish(st.state_channel, &msg);
-      for (const auto& c : snap.sounds) {
-        const auto cue = to_message(c);
-        lcm.publish(st.sound_channel, &cue);
-      }
-      if (snap.stop_reason != st.last_reason) {
-        if (snap.motors_enabled) spdlog::info("{}: motors enabled", st.spec.id);
-        else spdlog::info("{}: motors stopped: {}", st.spec.id, snap.stop_reason);
-        st.last_reason = snap.stop_reason;
-      }
-      if (feedback) {
-        rise_msgs::PanelFeedback fb;
-        fb.utime = msg.utime;
-        fb.panel_id = "";
-        fb.num_leds = 0;  // the bridge owns power/fault/e-stop LEDs
-        fb.display_names = {"speed"};
-        fb.display_values = {static_cast<float>(snap.speed_mps())};
-        fb.num_displays = 1;
-        fb.buzzer = 0;
-        fb.rumble = 0.0f;
-        lcm.publish(st.feedback_channel, &fb);
-      }
-    }
-  };
-
-  // One 1 ms step with everything that hangs on it: scans, events, sounds, states.
-  const auto advance = [&] {
-    // Stop-and-go scanning: the whole scan at one instant of sim time.
-    if (scanner && sim->time_s() >= next_scan_s - 1e-9) {
-      char name[32];
-      std::snprintf(name, sizeof name, "scan_%04d", scans++);
-      const auto stem = (std::filesystem::path(scan_dir) / name).string();
-      const auto scan = scanner->scan(*sim, 0);
-      try {
-        rise::sim::write_scan(stem, scan, format);
-        spdlog::info("scan {:.3f} s: {}.pcd, {} points", scan.time_s, stem, scan.points_sensor.size());
-      } catch (const std::exception& e) {
-        spdlog::error("{}", e.what());
-      }
-      next_scan_s = scan_every_s > 0 ? next_scan_s + scan_every_s : std::numeric_limits<double>::infinity();
-    }
-
-    const auto now = std::chrono::steady_clock::now();
-    for (std::size_t i = 0; i < stations.size(); ++i) {
-      const PanelListener& panel = stations[i]->panel;
-      rise::sim::ControlInput input = panel.input;
-      input.fresh = panel.any && now - panel.received <= timeout;
-      sim->set_input(i, input);
-    }
-    sim->step();
-    ++step;
-    for (const auto& e : sim->take_events()) {
-      log_event(e);
-      // To the robots it names; world events (doors, objects) to all.
-      bool named = false;
-      for (const auto& st : stations) named = named || names_robot(e, st->spec.id);
-      for (const auto& st : stations) {
-        if (named && stations.size() > 1 && !names_robot(e, st->spec.id)) continue;
-        const auto msg = to_message(e, st->spec.id);
-        lcm.publish(st->event_channel, &msg);
-      }
-    }
-    for (const auto& c : sim->take_sound_cues()) {
-      const auto msg = to_message(c);
-      lcm.publish(stations[sim->robot_index(c.robot)]->sound_channel, &msg);
-    }
-    if (step % steps_per_state == 0) publish_states(step % steps_per_feedback == 0);
-  };
-
-  const auto answer = [&](std::size_t robot, const rise_msgs::SimControl& c, const std::string& kind,
-                          const std::string& what) {
-    const Station& st = *stations[robot];
-    rise_msgs::SimEvent msg;
-    msg.utime = wall_us();
-    msg.sim_time_s = sim->time_s();
-    msg.robot_id = st.spec.id;
-    msg.kind = kind;
-    msg.a = c.issuer;
-    msg.detail = "seq " + std::to_string(c.seq) + (what.empty() ? "" : ": " + what);
-    spdlog::info("sim_control {:.3f} s: {} from '{}' on {} {}", msg.sim_time_s, kind, c.issuer, st.control_channel,
-                 msg.detail);
-    lcm.publish(st.event_channel, &msg);
-  };
-
-  const auto apply = [&](std::size_t robot, const rise_msgs::SimControl& c) {
-    if (c.command == "pause") {
-      paused = true;
-      next_paused_state = std::chrono::steady_clock::now();
-      answer(robot, c, "sim_paused", "");
-    } else if (c.command == "resume") {
-      paused = false;
-      answer(robot, c, "sim_resumed", "");
-    } else if (c.command == "step" && c.steps >= 1 && c.steps <= kMaxControlSteps) {
-      paused = true;
-      for (int32_t i = 0; i < c.steps && !g_stop; ++i) advance();
-      answer(robot, c, "sim_stepped", std::to_string(c.steps) + " steps of 1 ms");
-      publish_states(false);
-      next_paused_state = std::chrono::steady_clock::now() + state_period;
-    } else if (c.command == "reset") {
-      sim.emplace(specs(), world);
-      step = 0;
-      next_scan_s = 0.0;
-      for (auto& st : stations) st->last_reason = "-";
-      answer(robot, c, "sim_reset", "world and robots rebuilt, robots at their start poses");
-      publish_states(false);
-      next_paused_state = std::chrono::steady_clock::now() + state_period;
-    } else {
-      answer(robot, c, "sim_control_refused",
-             "command '" + c.command + "' with steps " + std::to_string(c.steps) + ": expected pause, resume, step " +
-                 "(steps 1.." + std::to_string(kMaxControlSteps) + ") or reset");
-      return;
-    }
-    paced_from = std::chrono::steady_clock::now();
-    paced_steps = 0;
-  };
-
-  // A SimEvent on the robot's sim_event channel, logged.
-  const auto tell = [&](std::size_t robot, const std::string& kind, const std::string& a, const std::string& b,
-                        const std::string& detail) {
-    const Station& st = *stations[robot];
-    rise_msgs::SimEvent msg;
-    msg.utime = wall_us();
-    msg.sim_time_s = sim->time_s();
-    msg.robot_id = st.spec.id;
-    msg.kind = kind;
-    msg.a = a;
-    msg.b = b;
-    msg.detail = detail;
-    lcm.publish(st.event_channel, &msg);
-  };
-  int64_t rejected = 0;
-  // Verifies one signed command: true to apply it; else it is reported as a
-  // command_rejected SimEvent (a = issuer, b = channel, detail = why, and
-  // the count so far) and logged.
-  const auto admit = [&](std::size_t robot, const auto& c, const std::string& channel) {
-    std::string why;
-    if (!verifier) why = "no instructor key on this station";
-    else if (const auto v = verifier->check(c, wall_us()); v != rise::msgs::Verdict::Accepted) why = rise::msgs::to_string(v);
-    else if (c.trainee_id != stations[robot]->id) why = "meant for trainee '" + c.trainee_id + "'";
-    if (why.empty()) return true;
-    ++rejected;
-    spdlog::warn("rejected command on {} from '{}': {} ({} rejected so far)", channel, c.issuer, why, rejected);
-    tell(robot, "command_rejected", c.issuer, channel, why + " (" + std::to_string(rejected) + " rejected)");
-    return false;
-  };
-  const auto apply_fault = [&](std::size_t robot, const rise_msgs::FaultCommand& c) {
-    const Station& st = *stations[robot];
-    if (!admit(robot, c, st.fault_channel)) return;
-    if (c.action == "clear") {
-      const std::size_t n = sim->clear_fault(robot, c.fault_id);
-      spdlog::info("fault clear '{}' from '{}': {} cleared", c.fault_id, c.issuer, n);
-      return;  // a fault of the daemon's has the same id space: no refusal for an id not here
-    }
-    const auto kind = rise::sim::parse_sim_fault_kind(c.kind);
-    // The daemon's kinds (input, wire, transport) come on the same channel: rise-hild applies them.
-    static const std::set<std::string> daemon_kinds = {
-        "stuck_at", "offset", "drift", "noise", "out_of_range", "intermittent", "disconnect", "can_drop",
-        "can_delay", "can_corrupt", "can_bus_off", "modbus_exception", "modbus_timeout", "lcm_loss", "lcm_latency"};
-    if (!kind && daemon_kinds.count(c.kind) && c.action == "inject") {
-      spdlog::debug("fault '{}' ({}) is rise-hild's", c.fault_id, c.kind);
-      return;
-    }
-    std::string error;
-    if (c.action != "inject") error = "action '" + c.action + "': expected inject or clear";
-    else if (!kind) error = "'" + c.kind + "' is not a sim fault";
-    else {
-      rise::sim::PhysicsFault f;
-      f.id = c.fault_id;
-      f.kind = *kind;
-      f.target = c.target;
-      f.value = c.value;
-      f.seed = static_cast<uint64_t>(c.seed);
-      f.duration_s = c.duration_s;
-      error = sim->set_fault(robot, f);
-    }
-    if (!error.empty()) {
-      spdlog::warn("fault '{}' from '{}' refused: {}", c.fault_id, c.issuer, error);
-      tell(robot, "fault_refused", c.issuer, c.fault_id, error);
-    }
-  };
-  const auto apply_training = [&](std::size_t robot, const rise_msgs::TrainingControl& c) {
-    const Station& st = *stations[robot];
-    if (!admit(robot, c, st.training_channel)) return;
-    rise_msgs::SimControl sc{};
-    sc.issuer = c.issuer;
-    sc.steps = 0;
-    if (c.command == "start") sc.command = "resume";
-    else if (c.command == "stop") sc.command = "pause";
-    else if (c.command == "restart") sc.command = "reset";
-    else {
-      tell(robot, "command_rejected", c.issuer, st.training_channel, "command '" + c.command + "': expected start, stop or restart");
-      return;
-    }
-    apply(robot, sc);
-    if (c.command == "restart") paused = false;
-    tell(robot, c.command == "start" ? "training_started" : c.command == "stop" ? "training_stopped" : "training_restarted",
-         c.issuer, c.task, "task " + (c.task.empty() ? std::string("-") : c.task));
-  };
-
-  while (!g_stop && (duration_s <= 0 || sim->time_s() < duration_s)) {
-    // Take every waiting LCM message without blocking the physics.
-    pollfd pfd{lcm.getFileno(), POLLIN, 0};
-    while (::poll(&pfd, 1, 0) > 0) lcm.handle();
-    for (const auto& [robot, c] : pending_control) apply(robot, c);
-    pending_control.clear();
-    for (const auto& [robot, c] : pending_faults) apply_fault(robot, c);
-    pending_faults.clear();
-    for (const auto& [robot, c] : pending_training) apply_training(robot, c);
-    pending_training.clear();
-
-    if (paused) {
-      // No stepping; RobotState still goes out, with the same sim time.
-      if (std::chrono::steady_clock::now() >= next_paused_state) {
-        publish_states(false);
-        next_paused_state += state_period;
-      }
-      ::poll(&pfd, 1, 1);
-      continue;
-    }
-    advance();
-    ++paced_steps;
-    if (!fast) std::this_thread::sleep_until(paced_from + std::chrono::microseconds(paced_steps * 1000));
-  }
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  int64_t panel_states = 0;
-  for (const auto& st : stations) panel_states += st->panel.count;
-  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} robot(s), {} panel states",
-               sim->time_s(), wall_s, wall_s > 0 ? sim->time_s() / wall_s : 0.0, stations.size(), panel_states);
+  node.log_ready();
+  node.run();
+  node.report();
   return exit_code;
 }

@@ -28,10 +28,12 @@
 #include <regex>
 #include <thread>
 
-#include "process/child_process.hpp"
 #include "cli/command_line.hpp"
-#include "panels/data_path.hpp"
+#include "msgs/channels.hpp"
+#include "msgs/clock.hpp"
 #include "msgs/publisher_session.hpp"
+#include "panels/data_path.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
@@ -49,11 +51,6 @@ namespace fs = std::filesystem;
 
 volatile std::sig_atomic_t g_stop = 0;
 void on_signal(int) { g_stop = 1; }
-
-int64_t wall_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
-      .count();
-}
 
 double yaw_of(const double q[4]) {
   return std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
@@ -110,9 +107,9 @@ class TaskRun {
     if (console_) {
       console_->advance(m.sim_time_s - t0_s_);
       if (!console_->silent()) {
-        auto ps = console_->panel_state(id_, ++panel_seq_, wall_us());
+        auto ps = console_->panel_state(id_, ++panel_seq_, rise::msgs::wall_us());
         ps.publisher = rise::msgs::this_publisher();
-        lcm_.publish("rise/" + id_ + "/panel_state", &ps);
+        lcm_.publish(rise::msgs::panel_state_channel(id_), &ps);
       }
     }
     publish_fired();
@@ -130,7 +127,7 @@ class TaskRun {
     next_status_ = now + std::chrono::milliseconds(500);
     const auto& r = executor_.result();
     rise_msgs::TaskStatus s;
-    s.utime = wall_us();
+    s.utime = rise::msgs::wall_us();
     s.trainee_id = id_;
     s.publisher = rise::msgs::this_publisher();
     s.training = progress_.training;
@@ -146,7 +143,7 @@ class TaskRun {
     s.success = r.success;
     s.end_reason = r.end_reason;
     s.training_score = progress_.training_score + (r.finished ? r.score : 0);
-    lcm_.publish("rise/" + id_ + "/task_status", &s);
+    lcm_.publish(rise::msgs::task_status_channel(id_), &s);
   }
 
   bool started() const { return started_; }
@@ -161,7 +158,7 @@ class TaskRun {
   void publish_fired() {
     for (const auto& f : executor_.take_fired()) {
       rise_msgs::TaskEvent e;
-      e.utime = wall_us();
+      e.utime = rise::msgs::wall_us();
       e.trainee_id = id_;
       e.training = progress_.training;
       e.task = executor_.task().name;
@@ -172,7 +169,7 @@ class TaskRun {
       e.points = f.points;
       e.score = f.score;
       e.detail = f.detail;
-      lcm_.publish("rise/" + id_ + "/task_event", &e);
+      lcm_.publish(rise::msgs::task_event_channel(id_), &e);
       spdlog::info("{}: {:.2f} s {} {:+d} → {} ({})", id_, f.time_s, f.name, f.points, f.score, f.detail);
     }
     if (executor_.finished() && !announced_end_) {
@@ -208,8 +205,8 @@ struct Router {
 
 void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
   // Events come in bursts (a track on step noses); states at 50 Hz.
-  lcm.subscribe("rise/" + id + "/robot_state", &Router::on_state, &router)->setQueueCapacity(500);
-  lcm.subscribe("rise/" + id + "/sim_event", &Router::on_event, &router)->setQueueCapacity(2000);
+  lcm.subscribe(rise::msgs::robot_state_channel(id), &Router::on_state, &router)->setQueueCapacity(500);
+  lcm.subscribe(rise::msgs::sim_event_channel(id), &Router::on_event, &router)->setQueueCapacity(2000);
 }
 
 // One trainer per station: another process on the channels this one
@@ -217,7 +214,7 @@ void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
 // at start-up and reported while it runs.
 struct PublisherGuard {
   static void report(const rise::msgs::PublisherWatch::Other& o) {
-    spdlog::warn("another publisher on {}: {}", o.channel, rise::msgs::describe(o.publisher, wall_us()));
+    spdlog::warn("another publisher on {}: {}", o.channel, rise::msgs::describe(o.publisher, rise::msgs::wall_us()));
   }
   rise::msgs::PublisherListener<rise_msgs::TaskStatus> status{rise::msgs::this_publisher().session_id, report};
   rise::msgs::PublisherListener<rise_msgs::PanelState> panel{rise::msgs::this_publisher().session_id, report};
@@ -226,7 +223,7 @@ struct PublisherGuard {
 // False (logged) when another process already publishes there.
 bool claim_station(lcm::LCM& lcm, const std::string& id, bool scripted_console, bool allow_duplicate_id,
                    PublisherGuard& guard) {
-  const std::string status_channel = "rise/" + id + "/task_status", panel_channel = "rise/" + id + "/panel_state";
+  const std::string status_channel = rise::msgs::task_status_channel(id), panel_channel = rise::msgs::panel_state_channel(id);
   if (!allow_duplicate_id) {
     std::optional<rise::msgs::ChannelPublisher> other;
     if (scripted_console)
@@ -236,7 +233,7 @@ bool claim_station(lcm::LCM& lcm, const std::string& id, bool scripted_console, 
     if (other) {
       spdlog::error("{} is already published by {}: refusing to start a second trainer for station '{}' (give "
                     "another --id, or --allow-duplicate-id)",
-                    other->channel, rise::msgs::describe(other->publisher, wall_us()), id);
+                    other->channel, rise::msgs::describe(other->publisher, rise::msgs::wall_us()), id);
       return false;
     }
   }
@@ -274,7 +271,7 @@ void print_result(const std::string& id, const tr::TaskResult& r) {
 // ---- run-task ------------------------------------------------------------
 
 struct RunTaskOptions {
-  std::string task_file, id = "t1", lcm_url = "udpm://239.255.76.67:7667?ttl=0", out_dir = ".";
+  std::string task_file, id = "t1", lcm_url = rise::msgs::kDefaultLcmUrl, out_dir = ".";
   bool scripted_console = false, allow_duplicate_id = false;
   double sim_timeout_s = 5.0;
 };
@@ -324,61 +321,259 @@ int run_task(const RunTaskOptions& o) {
 // ---- train ----------------------------------------------------------------
 
 struct TrainOptions {
-  std::string training_file, id = "t1", lcm_url = "udpm://239.255.76.67:7667?ttl=0", out_dir;
+  std::string training_file, id = "t1", lcm_url = rise::msgs::kDefaultLcmUrl, out_dir;
   bool resume = false, scripted_console = false, fast = false, allow_duplicate_id = false;
   double sim_timeout_s = 5.0;
   double ready_timeout_s = 20.0;
 };
 
+// The training file with every task checked against its world, and the
+// output folder made. Throws naming the file and what is wrong.
+tr::TrainingGraph load_checked_training(const TrainOptions& o) {
+  tr::TrainingGraph graph = tr::load_training_graph(o.training_file);
+  for (const auto& n : graph.nodes) {
+    const auto world = rise::sim::load_world_description(n.task->world_file);
+    tr::check_against_world(*n.task, world);
+  }
+  fs::create_directories(o.out_dir);
+  return graph;
+}
+
+// One attempt at a node of the graph, and its files' stem in --out.
+struct Attempt {
+  std::string node;
+  int attempt = 1;
+  std::string stem;
+};
+
+// A training on LCM: the graph, its journal in --out, and one rise-sim per
+// task attempt.
+class Trainer {
+ public:
+  Trainer(const TrainOptions& o, const tr::TrainingGraph& graph)
+      : o_(o),
+        graph_(graph),
+        journal_((fs::path(o.out_dir) / "journal.jsonl").string()),
+        walker_(graph),
+        report_{graph.name, graph.title, graph.file, o.id, {}, false, "", 0, {}} {}
+
+  void resume();
+  bool ended() const { return walker_.ended(); }
+  std::optional<int> run_next_task(lcm::LCM& lcm, Router& router);
+  int finish(lcm::LCM& lcm);
+
+ private:
+  enum class AttemptEnd { Finished, SimulatorLost, Interrupted, NotReady };
+  std::vector<std::string> simulator_argv(const tr::TaskDescription& task) const;
+  AttemptEnd wait_for_task(lcm::LCM& lcm, TaskRun& run, rise::process::ChildProcess& sim, const Attempt& a) const;
+  int abort_attempt(TaskRun& run, rise::process::ChildProcess& sim, const Attempt& a, bool sim_died);
+  std::optional<int> record_attempt(TaskRun& run, const rise::sim::WorldDescription& world, const Attempt& a);
+  void write_training_report();
+
+  const TrainOptions& o_;
+  const tr::TrainingGraph& graph_;
+  const std::string journal_;
+  tr::TrainingWalker walker_;
+  tr::TrainingReport report_;
+  bool already_finished_ = false;
+  const std::string bin_ = rise::process::executable_dir();
+};
+
+// Replays the journal of an earlier run (--resume), or starts a new one.
+// Throws naming the journal and what does not fit.
+void Trainer::resume() {
+  const auto entries = tr::read_journal(journal_);
+  if (!entries.empty() && !o_.resume)
+    throw std::runtime_error(journal_ + " exists: resume it with --resume, or use another --out");
+  for (const auto& e : entries) {
+    if (e.type == "training_started" && e.training != graph_.name)
+      throw std::runtime_error(journal_ + ": journal of training '" + e.training + "', not '" + graph_.name + "'");
+    if (e.type == "training_started" && e.trainee_id != o_.id)
+      throw std::runtime_error(journal_ + ": journal of trainee '" + e.trainee_id + "': resume it with --id " +
+                               e.trainee_id);
+    if (e.type == "training_finished") {
+      spdlog::info("{}: the training is already finished", journal_);
+      already_finished_ = true;
+    }
+    if (e.type != "task_finished" || !e.result) continue;
+    const auto cur = walker_.current();
+    if (!cur || cur->first != e.node || cur->second != e.attempt)
+      throw std::runtime_error(journal_ + ": task_finished " + e.node + " attempt " + std::to_string(e.attempt) +
+                               " does not follow the graph (expected " +
+                               (cur ? cur->first + " attempt " + std::to_string(cur->second) : "the end") + ")");
+    walker_.record(*e.result);
+    report_.task_report_files.push_back(stem_of(static_cast<int>(walker_.visits().size()), e.node, e.attempt) + ".html");
+    spdlog::info("{}: resumed {} attempt {}: score {}", o_.id, e.node, e.attempt, e.result->score);
+  }
+  if (entries.empty()) tr::append_journal(journal_, {"training_started", graph_.name, o_.id, "", 0, std::nullopt, graph_.file});
+}
+
+void Trainer::write_training_report() {
+  report_.visits = walker_.visits();
+  report_.total_score = walker_.total_score();
+  report_.finished = walker_.ended();
+  report_.end_reason = walker_.end_reason();
+  tr::write_file_atomically((fs::path(o_.out_dir) / "training.json").string(), tr::training_report_json(report_));
+  tr::write_file_atomically((fs::path(o_.out_dir) / "training.html").string(), tr::training_report_html(report_));
+}
+
+// rise-sim's command line for a task: its robot at its start pose, its world.
+std::vector<std::string> Trainer::simulator_argv(const tr::TaskDescription& task) const {
+  std::string robot = task.robot_file;
+  if (task.start) {
+    char pose[96];
+    std::snprintf(pose, sizeof pose, "@%.4f,%.4f,%.4f", task.start->xy_m[0], task.start->xy_m[1],
+                  task.start->yaw_rad * 180.0 / M_PI);
+    robot += pose;
+  }
+  std::vector<std::string> argv{bin_ + "/rise-sim", "--id", o_.id, "--lcm", o_.lcm_url, "--robot", robot,
+                                "--world", task.world_file};
+  if (o_.fast) argv.push_back("--fast");
+  return argv;
+}
+
+// The graph's current node, one attempt: its own rise-sim and executor.
+// An exit code when the training stops here; nullopt to go on.
+std::optional<int> Trainer::run_next_task(lcm::LCM& lcm, Router& router) {
+  const auto [node_name, attempt] = *walker_.current();
+  const auto& task = *graph_.node(node_name)->task;
+  const Attempt a{node_name, attempt, stem_of(static_cast<int>(walker_.visits().size()) + 1, node_name, attempt)};
+  rise::sim::WorldDescription world;
+  std::optional<TaskRun> run;
+  try {
+    world = rise::sim::load_world_description(task.world_file);
+    Progress p{graph_.name, node_name, attempt, static_cast<int>(walker_.visits().size()), walker_.total_score()};
+    run.emplace(lcm, o_.id, task, world, console_for(task, o_.scripted_console), p, true);
+    tr::append_journal(journal_, {"task_started", graph_.name, o_.id, node_name, attempt, std::nullopt, task.file});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  // The previous simulator's last messages must not reach this task.
+  router.run = nullptr;
+  while (lcm.handleTimeout(0) > 0) {
+  }
+  router.run = &*run;
+  std::optional<rise::process::ChildProcess> sim;
+  try {
+    sim.emplace(simulator_argv(task), (fs::path(o_.out_dir) / (a.stem + ".sim.log")).string());
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  spdlog::info("{}: {} attempt {}: task {} on rise-sim pid {}", o_.id, node_name, attempt, task.name, sim->pid());
+  const AttemptEnd end = wait_for_task(lcm, *run, *sim, a);
+  if (end == AttemptEnd::NotReady) return 1;
+  if (end != AttemptEnd::Finished) return abort_attempt(*run, *sim, a, end == AttemptEnd::SimulatorLost);
+  sim->stop(2000);
+  return record_attempt(*run, world, a);
+}
+
+// Runs the task until it finishes, the simulator dies or goes silent, or a
+// signal stops the training.
+Trainer::AttemptEnd Trainer::wait_for_task(lcm::LCM& lcm, TaskRun& run, rise::process::ChildProcess& sim,
+                                           const Attempt& a) const {
+  const auto launched = std::chrono::steady_clock::now();
+  while (!g_stop && !run.finished()) {
+    lcm.handleTimeout(50);
+    run.publish_status();
+    if (!sim.running()) return AttemptEnd::SimulatorLost;
+    const double since_launch = std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count();
+    if (!run.started() && since_launch > o_.ready_timeout_s) {
+      spdlog::error("{}: rise-sim sent no RobotState within {:.0f} s (see {}.sim.log)", o_.id, o_.ready_timeout_s, a.stem);
+      sim.stop(2000);
+      return AttemptEnd::NotReady;
+    }
+    if (run.started() && run.seconds_since_state() > o_.sim_timeout_s) return AttemptEnd::SimulatorLost;
+  }
+  return g_stop ? AttemptEnd::Interrupted : AttemptEnd::Finished;
+}
+
+// The attempt did not finish: nothing of it goes into the results, so
+// --resume runs it again. Returns the exit code.
+int Trainer::abort_attempt(TaskRun& run, rise::process::ChildProcess& sim, const Attempt& a, bool sim_died) {
+  sim.stop(1000);
+  run.abort(sim_died ? "simulator lost" : "interrupted");
+  run.publish_status(true);
+  try {
+    tr::append_journal(journal_, {"task_aborted", graph_.name, o_.id, a.node, a.attempt, std::nullopt,
+                                  sim_died ? "simulator lost" : "interrupted"});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+  }
+  spdlog::error("{}: {} attempt {}: {}; the finished tasks are in {}: rerun with --resume", o_.id, a.node, a.attempt,
+                sim_died ? "the simulator died" : "interrupted", journal_);
+  try {
+    write_training_report();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+  }
+  return sim_died ? 3 : 130;
+}
+
+// A finished attempt: its report, the journal, the walk on. An exit code
+// when that fails.
+std::optional<int> Trainer::record_attempt(TaskRun& run, const rise::sim::WorldDescription& world, const Attempt& a) {
+  auto result = run.result();
+  result.node = a.node;
+  result.attempt = a.attempt;
+  try {
+    write_task_report(o_.out_dir, a.stem, result, world);
+    tr::append_journal(journal_, {"task_finished", graph_.name, o_.id, a.node, a.attempt, result, ""});
+    walker_.record(result);
+    report_.task_report_files.push_back(a.stem + ".html");
+    write_training_report();
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  print_result(o_.id, result);
+  std::printf("%s:   → %s\n", o_.id.c_str(), walker_.visits().back().transition.c_str());
+  return std::nullopt;
+}
+
+// The graph has ended: the training report, the journal's end, a last
+// TaskStatus. Returns the exit code.
+int Trainer::finish(lcm::LCM& lcm) {
+  try {
+    write_training_report();
+    if (!already_finished_)
+      tr::append_journal(journal_, {"training_finished", graph_.name, o_.id, "", 0, std::nullopt, walker_.end_reason()});
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+  rise_msgs::TaskStatus s{};
+  s.utime = rise::msgs::wall_us();
+  s.trainee_id = o_.id;
+  s.publisher = rise::msgs::this_publisher();
+  s.training = graph_.name;
+  s.tasks_done = static_cast<int32_t>(walker_.visits().size());
+  s.state = "training_finished";
+  s.end_reason = walker_.end_reason();
+  s.training_score = walker_.total_score();
+  lcm.publish(rise::msgs::task_status_channel(o_.id), &s);
+  std::printf("%s: training %s finished (%s): %zu tasks, total score %d\nreport: %s/training.html, training.json\n",
+              o_.id.c_str(), graph_.name.c_str(), walker_.end_reason().c_str(), walker_.visits().size(),
+              walker_.total_score(), o_.out_dir.c_str());
+  return 0;
+}
+
 int train(const TrainOptions& o) {
   tr::TrainingGraph graph;
   try {
-    graph = tr::load_training_graph(o.training_file);
-    for (const auto& n : graph.nodes) {
-      const auto world = rise::sim::load_world_description(n.task->world_file);
-      tr::check_against_world(*n.task, world);
-    }
-    fs::create_directories(o.out_dir);
+    graph = load_checked_training(o);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
-  const std::string journal = (fs::path(o.out_dir) / "journal.jsonl").string();
-  tr::TrainingWalker walker(graph);
-  tr::TrainingReport report{graph.name, graph.title, graph.file, o.id, {}, false, "", 0, {}};
-  bool already_finished = false;
+  Trainer trainer(o, graph);
   try {
-    const auto entries = tr::read_journal(journal);
-    if (!entries.empty() && !o.resume) {
-      spdlog::error("{} exists: resume it with --resume, or use another --out", journal);
-      return 2;
-    }
-    for (const auto& e : entries) {
-      if (e.type == "training_started" && e.training != graph.name)
-        throw std::runtime_error(journal + ": journal of training '" + e.training + "', not '" + graph.name + "'");
-      if (e.type == "training_started" && e.trainee_id != o.id)
-        throw std::runtime_error(journal + ": journal of trainee '" + e.trainee_id + "': resume it with --id " +
-                                 e.trainee_id);
-      if (e.type == "training_finished") {
-        spdlog::info("{}: the training is already finished", journal);
-        already_finished = true;
-      }
-      if (e.type != "task_finished" || !e.result) continue;
-      const auto cur = walker.current();
-      if (!cur || cur->first != e.node || cur->second != e.attempt)
-        throw std::runtime_error(journal + ": task_finished " + e.node + " attempt " + std::to_string(e.attempt) +
-                                 " does not follow the graph (expected " +
-                                 (cur ? cur->first + " attempt " + std::to_string(cur->second) : "the end") + ")");
-      walker.record(*e.result);
-      report.task_report_files.push_back(stem_of(static_cast<int>(walker.visits().size()), e.node, e.attempt) + ".html");
-      spdlog::info("{}: resumed {} attempt {}: score {}", o.id, e.node, e.attempt, e.result->score);
-    }
-    if (entries.empty()) tr::append_journal(journal, {"training_started", graph.name, o.id, "", 0, std::nullopt, graph.file});
+    trainer.resume();
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
-
   lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
     spdlog::error("cannot open LCM at {}", o.lcm_url);
@@ -388,138 +583,11 @@ int train(const TrainOptions& o) {
   if (!claim_station(lcm, o.id, o.scripted_console, o.allow_duplicate_id, guard)) return 2;
   Router router;
   subscribe(lcm, o.id, router);
-  const std::string bin = rise::process::executable_dir();
-  const auto write_training_report = [&] {
-    report.visits = walker.visits();
-    report.total_score = walker.total_score();
-    report.finished = walker.ended();
-    report.end_reason = walker.end_reason();
-    tr::write_file_atomically((fs::path(o.out_dir) / "training.json").string(), tr::training_report_json(report));
-    tr::write_file_atomically((fs::path(o.out_dir) / "training.html").string(), tr::training_report_html(report));
-  };
-
-  while (!g_stop && !walker.ended()) {
-    const auto [node_name, attempt] = *walker.current();
-    const auto* node = graph.node(node_name);
-    const auto& task = *node->task;
-    const int index = static_cast<int>(walker.visits().size()) + 1;
-    const std::string stem = stem_of(index, node_name, attempt);
-    rise::sim::WorldDescription world;
-    std::optional<TaskRun> run;
-    try {
-      world = rise::sim::load_world_description(task.world_file);
-      Progress p{graph.name, node_name, attempt, static_cast<int>(walker.visits().size()), walker.total_score()};
-      run.emplace(lcm, o.id, task, world, console_for(task, o.scripted_console), p, true);
-      tr::append_journal(journal, {"task_started", graph.name, o.id, node_name, attempt, std::nullopt, task.file});
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    // The previous simulator's last messages must not reach this task.
-    router.run = nullptr;
-    while (lcm.handleTimeout(0) > 0) {
-    }
-    router.run = &*run;
-    std::string robot = task.robot_file;
-    if (task.start) {
-      char pose[96];
-      std::snprintf(pose, sizeof pose, "@%.4f,%.4f,%.4f", task.start->xy_m[0], task.start->xy_m[1],
-                    task.start->yaw_rad * 180.0 / M_PI);
-      robot += pose;
-    }
-    std::vector<std::string> argv{bin + "/rise-sim", "--id", o.id, "--lcm", o.lcm_url, "--robot", robot,
-                                  "--world", task.world_file};
-    if (o.fast) argv.push_back("--fast");
-    std::optional<rise::process::ChildProcess> sim;
-    try {
-      sim.emplace(argv, (fs::path(o.out_dir) / (stem + ".sim.log")).string());
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    spdlog::info("{}: {} attempt {}: task {} on rise-sim pid {}", o.id, node_name, attempt, task.name, sim->pid());
-    const auto launched = std::chrono::steady_clock::now();
-    bool sim_died = false;
-    while (!g_stop && !run->finished()) {
-      lcm.handleTimeout(50);
-      run->publish_status();
-      if (!sim->running()) {
-        sim_died = true;
-        break;
-      }
-      const double since_launch = std::chrono::duration<double>(std::chrono::steady_clock::now() - launched).count();
-      if (!run->started() && since_launch > o.ready_timeout_s) {
-        spdlog::error("{}: rise-sim sent no RobotState within {:.0f} s (see {}.sim.log)", o.id, o.ready_timeout_s, stem);
-        sim->stop(2000);
-        return 1;
-      }
-      if (run->started() && run->seconds_since_state() > o.sim_timeout_s) {
-        sim_died = true;
-        break;
-      }
-    }
-    if (sim_died || g_stop) {
-      // The attempt did not finish: nothing of it goes into the results, so
-      // --resume runs it again.
-      sim->stop(1000);
-      run->abort(sim_died ? "simulator lost" : "interrupted");
-      run->publish_status(true);
-      try {
-        tr::append_journal(journal, {"task_aborted", graph.name, o.id, node_name, attempt, std::nullopt,
-                                     sim_died ? "simulator lost" : "interrupted"});
-      } catch (const std::exception& e) {
-        spdlog::error("{}", e.what());
-      }
-      spdlog::error("{}: {} attempt {}: {}; the finished tasks are in {}: rerun with --resume", o.id, node_name,
-                    attempt, sim_died ? "the simulator died" : "interrupted", journal);
-      try {
-        write_training_report();
-      } catch (const std::exception& e) {
-        spdlog::error("{}", e.what());
-      }
-      return sim_died ? 3 : 130;
-    }
-    sim->stop(2000);
-    auto result = run->result();
-    result.node = node_name;
-    result.attempt = attempt;
-    try {
-      write_task_report(o.out_dir, stem, result, world);
-      tr::append_journal(journal, {"task_finished", graph.name, o.id, node_name, attempt, result, ""});
-      walker.record(result);
-      report.task_report_files.push_back(stem + ".html");
-      write_training_report();
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-      return 2;
-    }
-    print_result(o.id, result);
-    std::printf("%s:   → %s\n", o.id.c_str(), walker.visits().back().transition.c_str());
-  }
+  while (!g_stop && !trainer.ended())
+    if (const auto code = trainer.run_next_task(lcm, router)) return *code;
   router.run = nullptr;
   if (g_stop) return 130;
-  try {
-    write_training_report();
-    if (!already_finished)
-      tr::append_journal(journal, {"training_finished", graph.name, o.id, "", 0, std::nullopt, walker.end_reason()});
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 2;
-  }
-  rise_msgs::TaskStatus s{};
-  s.utime = wall_us();
-  s.trainee_id = o.id;
-  s.publisher = rise::msgs::this_publisher();
-  s.training = graph.name;
-  s.tasks_done = static_cast<int32_t>(walker.visits().size());
-  s.state = "training_finished";
-  s.end_reason = walker.end_reason();
-  s.training_score = walker.total_score();
-  lcm.publish("rise/" + o.id + "/task_status", &s);
-  std::printf("%s: training %s finished (%s): %zu tasks, total score %d\nreport: %s/training.html, training.json\n",
-              o.id.c_str(), graph.name.c_str(), walker.end_reason().c_str(), walker.visits().size(),
-              walker.total_score(), o.out_dir.c_str());
-  return 0;
+  return trainer.finish(lcm);
 }
 
 // ---- status ---------------------------------------------------------------
@@ -614,7 +682,7 @@ int main(int argc, char** argv) {
               "start even when another process already publishes rise/<id>/task_status (or, with a scripted "
               "console, panel_state)");
 
-  std::string status_lcm = "udpm://239.255.76.67:7667?ttl=0";
+  std::string status_lcm = rise::msgs::kDefaultLcmUrl;
   double status_every_s = 1.0;
   int status_count = 0, status_min = 0;
   CLI::App* s = app.add_subcommand("status", "the instructor's view: every trainee's task status on rise/*/task_status");

@@ -19,7 +19,7 @@ std::string seconds(double s) {
   return buf;
 }
 
-// The arm's gripper parts as rise::sim names them (sim/simulation.cpp).
+// The arm's gripper parts as rise::sim names them (sim/simulation_robots.cpp).
 bool is_gripper_part(const std::string& part) { return part == "gripper_jaw" || part == "gripper_finger"; }
 
 }  // namespace

@@ -27,6 +27,160 @@ bool known_field(const std::string& f) {
 
 std::string at(const TrainingGraph& g, int line) { return g.file + ":" + std::to_string(line) + ": "; }
 
+
+// The graph as vertices (START, the nodes in file order, END) and the
+// transitions between known vertices as edges, both ways.
+struct Digraph {
+  std::vector<std::string> names;
+  std::vector<std::vector<int>> out, in;
+
+  explicit Digraph(const TrainingGraph& g) {
+    names.push_back(kStartNode);
+    for (const auto& n : g.nodes) names.push_back(n.name);
+    names.push_back(kEndNode);
+    out.resize(names.size());
+    in.resize(names.size());
+  }
+  static constexpr int kStart = 0;
+  int end() const { return static_cast<int>(names.size()) - 1; }
+  int index(const std::string& n) const {
+    for (std::size_t i = 0; i < names.size(); ++i)
+      if (names[i] == n) return static_cast<int>(i);
+    return -1;
+  }
+};
+
+// Where vertex v is declared: its node's line (START and END: line 1).
+int line_of(const TrainingGraph& g, const Digraph& d, int v) {
+  return v >= 1 && v < d.end() ? g.nodes[static_cast<std::size_t>(v - 1)].line : 1;
+}
+
+// A condition on events.<name> names an event of the task it leaves.
+void check_condition_event(const TrainingGraph& g, const Transition& t, int from, std::vector<std::string>& errors) {
+  const auto& task = g.nodes[static_cast<std::size_t>(from - 1)].task;
+  const auto ev = t.condition->field.substr(7);
+  bool has = false;
+  if (task)
+    for (const auto& e : task->events) has = has || e.name == ev;
+  if (task && !has)
+    errors.push_back(at(g, t.line) + "condition '" + t.condition->text + "': task " + task->name + " (" + task->file +
+                     ") has no event '" + ev + "'");
+}
+
+// Each transition's ends and condition; the edges of the good ones go into d.
+void add_transitions(const TrainingGraph& g, Digraph& d, std::vector<std::string>& errors) {
+  const int start = Digraph::kStart, end = d.end();
+  bool from_start = false;
+  for (const auto& t : g.transitions) {
+    const int a = d.index(t.from), b = d.index(t.to);
+    if (a < 0 || a == end)
+      errors.push_back(at(g, t.line) + "transition from '" + t.from + "': " +
+                       (a == end ? "END has no transitions" : "unknown node"));
+    if (b < 0 || b == start)
+      errors.push_back(at(g, t.line) + "transition to '" + t.to + "': " +
+                       (b == start ? "nothing goes back to START" : "unknown node"));
+    if (a == start && t.condition)
+      errors.push_back(at(g, t.line) + "transition from START: no condition allowed (there is no result yet)");
+    if (a >= 0 && b >= 0 && a != end && b != start) {
+      d.out[static_cast<std::size_t>(a)].push_back(b);
+      d.in[static_cast<std::size_t>(b)].push_back(a);
+      from_start = from_start || a == start;
+    }
+    if (t.condition && a > 0 && a < end && t.condition->field.rfind("events.", 0) == 0)
+      check_condition_event(g, t, a, errors);
+  }
+  if (!from_start) errors.push_back(at(g, 1) + "no transition from START");
+}
+
+// The vertices reachable from `from` along adj.
+std::vector<bool> reach(int from, const std::vector<std::vector<int>>& adj) {
+  std::vector<bool> seen(adj.size(), false);
+  std::vector<int> stack{from};
+  seen[static_cast<std::size_t>(from)] = true;
+  while (!stack.empty()) {
+    const int v = stack.back();
+    stack.pop_back();
+    for (int w : adj[static_cast<std::size_t>(v)])
+      if (!seen[static_cast<std::size_t>(w)]) {
+        seen[static_cast<std::size_t>(w)] = true;
+        stack.push_back(w);
+      }
+  }
+  return seen;
+}
+
+// Strongly connected components (Tarjan): each vertex's component, numbered
+// from 0 in the order they complete.
+struct Components {
+  std::vector<int> of;
+  int count = 0;
+};
+Components strong_components(const std::vector<std::vector<int>>& out) {
+  const std::size_t n = out.size();
+  Components c;
+  c.of.assign(n, -1);
+  std::vector<int> low(n, 0), num(n, -1), stack;
+  std::vector<bool> on(n, false);
+  int counter = 0;
+  std::function<void(int)> strong = [&](int v) {
+    const auto vi = static_cast<std::size_t>(v);
+    num[vi] = low[vi] = counter++;
+    stack.push_back(v);
+    on[vi] = true;
+    for (int w : out[vi]) {
+      const auto wi = static_cast<std::size_t>(w);
+      if (num[wi] < 0) {
+        strong(w);
+        low[vi] = std::min(low[vi], low[wi]);
+      } else if (on[wi]) {
+        low[vi] = std::min(low[vi], num[wi]);
+      }
+    }
+    if (low[vi] == num[vi]) {
+      while (true) {
+        const int w = stack.back();
+        stack.pop_back();
+        on[static_cast<std::size_t>(w)] = false;
+        c.of[static_cast<std::size_t>(w)] = c.count;
+        if (w == v) break;
+      }
+      ++c.count;
+    }
+  };
+  for (int v = 0; v < static_cast<int>(n); ++v)
+    if (num[static_cast<std::size_t>(v)] < 0) strong(v);
+  return c;
+}
+
+// A reachable cycle none of whose members has a transition leaving it is
+// a loop with no exit; returns the members of such loops.
+std::set<int> check_closed_loops(const TrainingGraph& g, const Digraph& d, const std::vector<bool>& reachable,
+                                 std::vector<std::string>& errors) {
+  const Components comp = strong_components(d.out);
+  std::set<int> closed_loop_members;
+  for (int c = 0; c < comp.count; ++c) {
+    std::vector<int> members;
+    bool cycle = false, exit = false;
+    for (int v = 0; v <= d.end(); ++v)
+      if (comp.of[static_cast<std::size_t>(v)] == c) members.push_back(v);
+    for (int v : members)
+      for (int w : d.out[static_cast<std::size_t>(v)]) {
+        if (comp.of[static_cast<std::size_t>(w)] == c) cycle = true;
+        else exit = true;
+      }
+    if (!cycle || exit || !reachable[static_cast<std::size_t>(members.front())]) continue;
+    std::string loop;
+    for (int v : members) {
+      loop += (loop.empty() ? "" : " → ") + d.names[static_cast<std::size_t>(v)];
+      closed_loop_members.insert(v);
+    }
+    errors.push_back(at(g, line_of(g, d, members.front())) + "loop " + loop + " → " +
+                     d.names[static_cast<std::size_t>(members.front())] +
+                     " has no exit: no transition leaves it (its attempts run out with nowhere to go)");
+  }
+  return closed_loop_members;
+}
+
 }  // namespace
 
 const char* to_string(CompareOp op) {
@@ -155,123 +309,17 @@ TrainingGraph parse_training_graph(const std::string& text, const std::string& f
 
 std::vector<std::string> validate_training_graph(const TrainingGraph& g) {
   std::vector<std::string> errors;
-  // Vertices: START, the nodes, END.
-  std::vector<std::string> names{kStartNode};
-  for (const auto& n : g.nodes) names.push_back(n.name);
-  names.push_back(kEndNode);
-  const auto index = [&](const std::string& n) -> int {
-    for (std::size_t i = 0; i < names.size(); ++i)
-      if (names[i] == n) return static_cast<int>(i);
-    return -1;
-  };
-  const int start = 0;
-  const int end = static_cast<int>(names.size()) - 1;
-  const auto line_of = [&](int v) { return v >= 1 && v < end ? g.nodes[static_cast<std::size_t>(v - 1)].line : 1; };
-  std::vector<std::vector<int>> out(names.size()), in(names.size());
-  bool from_start = false;
-  for (const auto& t : g.transitions) {
-    const int a = index(t.from), b = index(t.to);
-    if (a < 0 || a == end)
-      errors.push_back(at(g, t.line) + "transition from '" + t.from + "': " +
-                       (a == end ? "END has no transitions" : "unknown node"));
-    if (b < 0 || b == start)
-      errors.push_back(at(g, t.line) + "transition to '" + t.to + "': " +
-                       (b == start ? "nothing goes back to START" : "unknown node"));
-    if (a == start && t.condition)
-      errors.push_back(at(g, t.line) + "transition from START: no condition allowed (there is no result yet)");
-    if (a >= 0 && b >= 0 && a != end && b != start) {
-      out[static_cast<std::size_t>(a)].push_back(b);
-      in[static_cast<std::size_t>(b)].push_back(a);
-      from_start = from_start || a == start;
-    }
-    if (t.condition && a > 0 && a < end && t.condition->field.rfind("events.", 0) == 0) {
-      const auto& task = g.nodes[static_cast<std::size_t>(a - 1)].task;
-      const auto ev = t.condition->field.substr(7);
-      bool has = false;
-      if (task)
-        for (const auto& e : task->events) has = has || e.name == ev;
-      if (task && !has)
-        errors.push_back(at(g, t.line) + "condition '" + t.condition->text + "': task " + task->name + " (" +
-                         task->file + ") has no event '" + ev + "'");
-    }
-  }
-  if (!from_start) errors.push_back(at(g, 1) + "no transition from START");
-  const auto reach = [&](int from, const std::vector<std::vector<int>>& adj) {
-    std::vector<bool> seen(names.size(), false);
-    std::vector<int> stack{from};
-    seen[static_cast<std::size_t>(from)] = true;
-    while (!stack.empty()) {
-      const int v = stack.back();
-      stack.pop_back();
-      for (int w : adj[static_cast<std::size_t>(v)])
-        if (!seen[static_cast<std::size_t>(w)]) {
-          seen[static_cast<std::size_t>(w)] = true;
-          stack.push_back(w);
-        }
-    }
-    return seen;
-  };
-  const auto reachable = reach(start, out);
-  const auto reaches_end = reach(end, in);
-  // Strongly connected components (Tarjan): a cycle none of whose members
-  // has a transition leaving it is a loop with no exit.
-  std::vector<int> comp(names.size(), -1), low(names.size(), 0), num(names.size(), -1), stack;
-  std::vector<bool> on(names.size(), false);
-  int counter = 0, comps = 0;
-  std::function<void(int)> strong = [&](int v) {
-    const auto vi = static_cast<std::size_t>(v);
-    num[vi] = low[vi] = counter++;
-    stack.push_back(v);
-    on[vi] = true;
-    for (int w : out[vi]) {
-      const auto wi = static_cast<std::size_t>(w);
-      if (num[wi] < 0) {
-        strong(w);
-        low[vi] = std::min(low[vi], low[wi]);
-      } else if (on[wi]) {
-        low[vi] = std::min(low[vi], num[wi]);
-      }
-    }
-    if (low[vi] == num[vi]) {
-      while (true) {
-        const int w = stack.back();
-        stack.pop_back();
-        on[static_cast<std::size_t>(w)] = false;
-        comp[static_cast<std::size_t>(w)] = comps;
-        if (w == v) break;
-      }
-      ++comps;
-    }
-  };
-  for (int v = 0; v <= end; ++v)
-    if (num[static_cast<std::size_t>(v)] < 0) strong(v);
-  std::set<int> closed_loop_members;
-  for (int c = 0; c < comps; ++c) {
-    std::vector<int> members;
-    bool cycle = false, exit = false;
-    for (int v = 0; v <= end; ++v)
-      if (comp[static_cast<std::size_t>(v)] == c) members.push_back(v);
-    for (int v : members)
-      for (int w : out[static_cast<std::size_t>(v)]) {
-        if (comp[static_cast<std::size_t>(w)] == c) cycle = true;
-        else exit = true;
-      }
-    if (!cycle || exit || !reachable[static_cast<std::size_t>(members.front())]) continue;
-    std::string loop;
-    for (int v : members) {
-      loop += (loop.empty() ? "" : " → ") + names[static_cast<std::size_t>(v)];
-      closed_loop_members.insert(v);
-    }
-    errors.push_back(at(g, line_of(members.front())) + "loop " + loop + " → " +
-                     names[static_cast<std::size_t>(members.front())] +
-                     " has no exit: no transition leaves it (its attempts run out with nowhere to go)");
-  }
-  for (int v = 1; v < end; ++v) {
+  Digraph d(g);
+  add_transitions(g, d, errors);
+  const auto reachable = reach(Digraph::kStart, d.out);
+  const auto reaches_end = reach(d.end(), d.in);
+  const std::set<int> closed_loop_members = check_closed_loops(g, d, reachable, errors);
+  for (int v = 1; v < d.end(); ++v) {
     const auto vi = static_cast<std::size_t>(v);
     if (!reachable[vi])
-      errors.push_back(at(g, line_of(v)) + "node '" + names[vi] + "' is unreachable from START");
+      errors.push_back(at(g, line_of(g, d, v)) + "node '" + d.names[vi] + "' is unreachable from START");
     else if (!reaches_end[vi] && !closed_loop_members.count(v))
-      errors.push_back(at(g, line_of(v)) + "node '" + names[vi] + "' has no path to END");
+      errors.push_back(at(g, line_of(g, d, v)) + "node '" + d.names[vi] + "' has no path to END");
   }
   return errors;
 }

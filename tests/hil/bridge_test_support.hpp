@@ -18,6 +18,7 @@
 #include "hil/bridge.hpp"
 #include "hil/io/modbus_server.hpp"
 #include "panels/console_emulator.hpp"
+#include "msgs/clock.hpp"
 
 namespace rise::hil::test {
 
@@ -63,16 +64,16 @@ class EmulatorThread {
     while (running_) {
       // Like rise-panel emulate: a lost transport is reopened (every 100 ms).
       if (!bus_->is_open()) {
-        if (monotonic_us() >= next_reopen_us) {
+        if (rise::msgs::monotonic_us() >= next_reopen_us) {
           bus_->reopen();
-          next_reopen_us = monotonic_us() + 100'000;
+          next_reopen_us = rise::msgs::monotonic_us() + 100'000;
         }
         std::this_thread::sleep_for(std::chrono::milliseconds(1));  // the firmware's idle loop, not a sync
         continue;
       }
       {
         std::lock_guard lock(mutex_);
-        emulator_.tick(*bus_, monotonic_us());
+        emulator_.tick(*bus_, rise::msgs::monotonic_us());
       }
       while (bus_->receive(f, 1) == io::IoStatus::Ok) {
         std::lock_guard lock(mutex_);
@@ -116,7 +117,7 @@ class ModbusEmulatorThread {
     while (running_) {
       {
         std::lock_guard lock(mutex_);
-        emulator_.tick_modbus(server_, monotonic_us());
+        emulator_.tick_modbus(server_, rise::msgs::monotonic_us());
         emulator_.poll_modbus_feedback(server_);
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(1));  // the firmware's idle loop, not a sync

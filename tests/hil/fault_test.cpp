@@ -302,7 +302,7 @@ TEST_CASE("the fault injector sends each kind to its layer and refuses what is n
   rise::hil::Bridge bridge(console(), std::move(buses), [](const PanelSnapshot&) {});
   rise::hil::TransportFaults transport;
   rise::hil::FaultInjector injector(bridge, {wire}, &transport);
-  const int64_t now = rise::hil::monotonic_us();
+  const int64_t now = rise::msgs::monotonic_us();
   CHECK(injector.inject({"s", "stuck_at", "drive_y", 0.5, 0, 1.0, 1}, now).empty());
   CHECK(injector.inject({"d", "can_drop", "console", 0.5, 0, 0, 1}, now).empty());
   CHECK(injector.inject({"l", "lcm_loss", "panel_state", 1.0, 0, 0, 1}, now).empty());

@@ -15,6 +15,7 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
 #include "tests/hil/bridge_test_support.hpp"
+#include "msgs/clock.hpp"
 
 using namespace rise::hil;
 
@@ -53,7 +54,7 @@ struct ReplayRun {
       }
       published.add(snap);
     });
-    started_us = monotonic_us();
+    started_us = rise::msgs::monotonic_us();
     bridge->start();
   }
   /// Index of the first published message that is not failsafe (one must have come).

@@ -13,8 +13,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "process/child_process.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/command_auth.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 #include "web_peer.hpp"
 
@@ -150,7 +151,7 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   task.score = 7;
   int ticks = 0;
   const bool finished = peer.wait_until([&] { return !node.running(); }, 120000, [&] {
-    if (ticks++ % 50 == 0) peer.lcm().publish("rise/" + st.id + "/task_status", &task);
+    if (ticks++ % 50 == 0) peer.lcm().publish(rise::msgs::task_status_channel(st.id), &task);
   });
   if (!finished) node.stop();
   const auto result = read_result((st.dir / "console_check.log").string());

@@ -16,27 +16,28 @@
 #include <optional>
 #include <sstream>
 
-#include "process/child_process.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/command_auth.hpp"
-#include "sim/training/report.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/TrainingControl.hpp"
+#include "sim/training/report.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 // The instructor's side of the network for one trainee.
 class Station {
  public:
   explicit Station(std::string id) : id_(std::move(id)), lcm_(kLcm) {
-    lcm_.subscribe("rise/" + id_ + "/panel_state", &Station::on_panel, this)->setQueueCapacity(1000);
-    lcm_.subscribe("rise/" + id_ + "/robot_state", &Station::on_robot, this)->setQueueCapacity(1000);
-    lcm_.subscribe("rise/" + id_ + "/sim_event", &Station::on_event, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::panel_state_channel(id_), &Station::on_panel, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::robot_state_channel(id_), &Station::on_robot, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::sim_event_channel(id_), &Station::on_event, this)->setQueueCapacity(1000);
   }
   bool good() { return lcm_.good(); }
   bool wait_until(const std::function<bool()>& done, int timeout_ms) {
@@ -47,8 +48,8 @@ class Station {
     }
     return true;
   }
-  void send(const rise_msgs::FaultCommand& c) { lcm_.publish("rise/" + id_ + "/fault_command", &c); }
-  void send(const rise_msgs::TrainingControl& c) { lcm_.publish("rise/" + id_ + "/training_control", &c); }
+  void send(const rise_msgs::FaultCommand& c) { lcm_.publish(rise::msgs::fault_command_channel(id_), &c); }
+  void send(const rise_msgs::TrainingControl& c) { lcm_.publish(rise::msgs::training_control_channel(id_), &c); }
 
   // A PanelState with an active_faults entry starting with `prefix`, newer than now.
   bool panel_shows(const std::string& prefix, int timeout_ms = 10000) {

@@ -15,21 +15,22 @@
 #include <string>
 #include <vector>
 
+#include "msgs/channels.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 
 namespace rise::instructor_test {
 
-inline const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+inline const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 /// What arrives on one trainee's channels, in order.
 class TraineePeer {
  public:
   explicit TraineePeer(std::string id) : id_(std::move(id)), lcm_(kLcm) {
-    lcm_.subscribe("rise/" + id_ + "/robot_state", &TraineePeer::on_robot, this)->setQueueCapacity(1000);
-    lcm_.subscribe("rise/" + id_ + "/panel_state", &TraineePeer::on_panel, this)->setQueueCapacity(1000);
-    lcm_.subscribe("rise/" + id_ + "/fault_command", &TraineePeer::on_fault, this)->setQueueCapacity(100);
+    lcm_.subscribe(rise::msgs::robot_state_channel(id_), &TraineePeer::on_robot, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::panel_state_channel(id_), &TraineePeer::on_panel, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::fault_command_channel(id_), &TraineePeer::on_fault, this)->setQueueCapacity(100);
   }
   bool good() { return lcm_.good(); }
   lcm::LCM& lcm() { return lcm_; }

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "instructor/web_server.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
 #include "rise_msgs/TaskStatus.hpp"
@@ -146,7 +147,7 @@ TEST_CASE("the web server streams the latest LCM messages of every trainee over 
       for (std::size_t end; (end = buffer.find("\n\n")) != std::string::npos; buffer.erase(0, end + 2)) {
         pushes++;
         const auto u = parse_json(buffer.substr(6, end - 6));
-        const auto& c = u["channels"]["rise/" + f.id + "/robot_state"];
+        const auto& c = u["channels"][rise::msgs::robot_state_channel(f.id)];
         if (!c.isNull() && first_robot.empty()) {
           first_robot = c["value"]["robot_id"].asString() + " " + std::to_string(c["value"]["position"][0].asDouble());
           seen = true;
@@ -161,7 +162,7 @@ TEST_CASE("the web server streams the latest LCM messages of every trainee over 
   r.orientation_wxyz[0] = 1.0;
   // Publish until the stream has carried it (the subscriber may join late).
   const bool ok = peer.wait_until([&] { return seen.load(); }, 10000,
-                                  [&] { peer.lcm().publish("rise/" + f.id + "/robot_state", &r); });
+                                  [&] { peer.lcm().publish(rise::msgs::robot_state_channel(f.id), &r); });
   reader.join();
   REQUIRE(ok);
   CHECK(first_robot == f.id + " 1.250000");
@@ -182,7 +183,7 @@ TEST_CASE("the web server streams the latest LCM messages of every trainee over 
           return t["task_status"]["score"].asInt() == 7;
       return false;
     };
-    CHECK(peer.wait_until(task_listed, 5000, [&] { peer.lcm().publish("rise/" + f.id + "/task_status", &s); }));
+    CHECK(peer.wait_until(task_listed, 5000, [&] { peer.lcm().publish(rise::msgs::task_status_channel(f.id), &s); }));
   }
   server.stop();
 }
@@ -212,14 +213,14 @@ TEST_CASE("the web server keeps answering while many pages hold their streams op
   r.robot_id = f.id;
   r.orientation_wxyz[0] = 1.0;
   const bool all_open = peer.wait_until([&] { return opened.load() == 20; }, 10000,
-                                        [&] { peer.lcm().publish("rise/" + f.id + "/robot_state", &r); });
+                                        [&] { peer.lcm().publish(rise::msgs::robot_state_channel(f.id), &r); });
   // With every stream open, an ordinary request is still answered.
   httplib::Client http("127.0.0.1", server.port());
   const auto answer = http.Get("/api/world", f.auth());
   done = true;
   // Each stream ends at its next push.
   CHECK(peer.wait_until([&] { return closed.load() == 20; }, 10000,
-                        [&] { peer.lcm().publish("rise/" + f.id + "/robot_state", &r); }));
+                        [&] { peer.lcm().publish(rise::msgs::robot_state_channel(f.id), &r); }));
   for (auto& t : readers) t.join();
   CHECK(all_open);
   REQUIRE(answer);
@@ -317,7 +318,7 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
       const auto r = http.Get("/api/trainees", f.auth());
       return r && r->body.find("\"pid\":4242") != std::string::npos;
     };
-    REQUIRE(peer.wait_until(heard, 5000, [&] { peer.lcm().publish("rise/" + f.id + "/panel_state", &daemon); }));
+    REQUIRE(peer.wait_until(heard, 5000, [&] { peer.lcm().publish(rise::msgs::panel_state_channel(f.id), &daemon); }));
     const auto r = http.Post("/api/virtual/" + f.id, f.auth(), body, "application/json");
     const std::string answer = r->body;
     INFO(answer);
@@ -365,7 +366,7 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
       unsigned_command.trainee_id = f.id;
       unsigned_command.action = "clear";
       unsigned_command.issuer = "trainee";
-      peer.lcm().publish("rise/" + f.id + "/fault_command", &unsigned_command);
+      peer.lcm().publish(rise::msgs::fault_command_channel(f.id), &unsigned_command);
       REQUIRE(peer.wait_until([&] { return has("rejected: unsigned"); }, 5000, post));
       CHECK(has("rejected: unsigned"));
     }

@@ -12,13 +12,14 @@
 #include <filesystem>
 #include <set>
 
+#include "msgs/channels.hpp"
+#include "panels/panel_definition.hpp"
 #include "process/chain_monitor.hpp"
 #include "process/child_process.hpp"
-#include "tests/integration/integration_support.hpp"
-#include "panels/panel_definition.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "sim/simulation.hpp"
+#include "tests/integration/integration_support.hpp"
 
 using rise::process::ChainView;
 using rise::process::ChildProcess;
@@ -26,7 +27,7 @@ using rise::test::kBin;
 using rise::test::kSource;
 
 namespace {
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 uint16_t free_port() {
   // The emulator could bind port 0 itself, but the daemon must know the port
@@ -99,11 +100,11 @@ TEST_CASE("the robot stops within two publish periods plus its own stop time aft
   int64_t panel_events = 0, robot_events = 0;
   bool decoded = true;
   while (const lcm::LogEvent* e = log.readNextEvent()) {
-    if (e->channel == "rise/" + id + "/panel_state") {
+    if (e->channel == rise::msgs::panel_state_channel(id)) {
       rise_msgs::PanelState m;
       decoded = decoded && m.decode(e->data, 0, static_cast<int>(e->datalen)) > 0 && m.trainee_id == id;
       ++panel_events;
-    } else if (e->channel == "rise/" + id + "/robot_state") {
+    } else if (e->channel == rise::msgs::robot_state_channel(id)) {
       rise_msgs::RobotState m;
       decoded = decoded && m.decode(e->data, 0, static_cast<int>(e->datalen)) > 0;
       ++robot_events;

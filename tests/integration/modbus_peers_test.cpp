@@ -24,6 +24,7 @@
 #include <thread>
 
 #include "firmware_protocol/console_modbus.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/PanelFeedback.hpp"
@@ -40,7 +41,7 @@ namespace {
 using rise::test::read_file;
 using rise::test::wait_until;
 
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 uint16_t free_port() {
   static uint16_t next = static_cast<uint16_t>(36000 + (::getpid() % 20000));
@@ -222,7 +223,7 @@ TEST_CASE("rise-hild polls a pymodbus console, fails safe when it is killed and 
   lcm::LCM lcm(kLcm);
   REQUIRE(lcm.good());
   PanelStates states;
-  lcm.subscribe("rise/" + id + "/panel_state", &PanelStates::on, &states);
+  lcm.subscribe(rise::msgs::panel_state_channel(id), &PanelStates::on, &states);
   std::atomic<bool> listening{true};
   std::thread listener([&] {
     while (listening) lcm.handleTimeout(20);
@@ -301,7 +302,7 @@ TEST_CASE("rise-hild reads a pymodbus PLC through the points of its definition, 
   lcm::LCM lcm(kLcm);
   REQUIRE(lcm.good());
   PanelStates states;
-  lcm.subscribe("rise/" + id + "/panel_state", &PanelStates::on, &states);
+  lcm.subscribe(rise::msgs::panel_state_channel(id), &PanelStates::on, &states);
   const LcmListener listener(lcm);
 
   auto plc = std::make_unique<ChildProcess>(plc_argv, dir + "/plc.log");
@@ -351,7 +352,7 @@ TEST_CASE("rise-hild reads a pymodbus PLC through the points of its definition, 
   CHECK(wait_until([&] {
     if (sent++ % 20 == 0) {
       feedback.utime = rise::msgs::wall_us();
-      lcm.publish("rise/" + id + "/panel_feedback", &feedback);
+      lcm.publish(rise::msgs::panel_feedback_channel(id), &feedback);
     }
     const std::string log = read_file(dir + "/plc.log");
     return log.find("hr 10 = 125") != std::string::npos && log.find("hr 12 = 1") != std::string::npos;
@@ -423,7 +424,7 @@ TEST_CASE("rise-hild plays a recorded Modbus trace by replay:// as the console, 
   lcm::LCM lcm(kLcm);
   REQUIRE(lcm.good());
   PanelStates states;
-  lcm.subscribe("rise/" + id + "/panel_state", &PanelStates::on, &states);
+  lcm.subscribe(rise::msgs::panel_state_channel(id), &PanelStates::on, &states);
   const LcmListener listener(lcm);
 
   // The 2.01 s session at speed 2.

@@ -17,12 +17,13 @@
 #include <sstream>
 #include <thread>
 
-#include "process/child_process.hpp"
-#include "tests/integration/integration_support.hpp"
 #include "hil/io/can_log.hpp"
 #include "hil/io/hid_recording.hpp"
 #include "hil/io/recording_bus.hpp"
+#include "msgs/channels.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
+#include "tests/integration/integration_support.hpp"
 
 using rise::process::ChildProcess;
 using rise::test::kBin;
@@ -30,7 +31,7 @@ using rise::test::kSource;
 using rise::test::python_can_available;
 
 namespace {
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 std::string port_text(int offset) { return std::to_string(32000 + (::getpid() * 7 + offset) % 20000); }
 
@@ -209,7 +210,7 @@ TEST_CASE("a live CAN session recorded with --record verifies against its own Pa
     std::vector<rise_msgs::PanelState> messages;
     void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelState* m) { messages.push_back(*m); }
   } got;
-  lcm::Subscription* sub = lcm.subscribe("rise/" + id + "/panel_state", &Received::on, &got);
+  lcm::Subscription* sub = lcm.subscribe(rise::msgs::panel_state_channel(id), &Received::on, &got);
   sub->setQueueCapacity(static_cast<int>(states.size()) + 10);
   ChildProcess player({"/usr/bin/lcm-logplayer", "--lcm-url=" + kLcm, "--speed=4", rec + "/panel_state.lcmlog"},
                       dir.path + "/lcm-logplayer.log");

@@ -19,8 +19,9 @@
 #include <sstream>
 #include <thread>
 
-#include "process/child_process.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/publisher_session.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "tests/integration/integration_support.hpp"
 #include "tests/process_support.hpp"
@@ -33,7 +34,7 @@ using rise::test::wait_for_text;
 namespace fs = std::filesystem;
 
 namespace {
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 std::size_t count_of(const std::string& text, const std::string& what) {
   std::size_t n = 0;
@@ -282,7 +283,7 @@ TEST_CASE("a looped console script starts again after its final @silent, with ev
     }
   } watch;
   lcm::LCM lcm(kLcm);
-  lcm.subscribe("rise/" + id + "/panel_state", &Watch::on, &watch)->setQueueCapacity(1000);
+  lcm.subscribe(rise::msgs::panel_state_channel(id), &Watch::on, &watch)->setQueueCapacity(1000);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
   while (watch.recoveries < 2 && std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(50);
   INFO(read_file(dir.file("panel.log")) << read_file(dir.file("hild.log")));

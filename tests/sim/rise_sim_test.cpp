@@ -13,6 +13,7 @@
 #include <functional>
 #include <map>
 
+#include "msgs/channels.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -21,7 +22,7 @@
 #include "rise_msgs/SoundCue.hpp"
 
 namespace {
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 /// The test's side of the LCM network for several robots: what rise-sim
 /// publishes on each robot's channels, in arrival order.
@@ -29,9 +30,9 @@ class WorldPeer {
  public:
   explicit WorldPeer(const std::vector<std::string>& ids) : lcm_(kLcm) {
     for (const auto& id : ids) {
-      lcm_.subscribe("rise/" + id + "/robot_state", &WorldPeer::on_state, this)->setQueueCapacity(1000);
-      lcm_.subscribe("rise/" + id + "/sim_event", &WorldPeer::on_event, this)->setQueueCapacity(1000);
-      lcm_.subscribe("rise/" + id + "/sound", &WorldPeer::on_sound, this)->setQueueCapacity(10000);
+      lcm_.subscribe(rise::msgs::robot_state_channel(id), &WorldPeer::on_state, this)->setQueueCapacity(1000);
+      lcm_.subscribe(rise::msgs::sim_event_channel(id), &WorldPeer::on_event, this)->setQueueCapacity(1000);
+      lcm_.subscribe(rise::msgs::sound_channel(id), &WorldPeer::on_sound, this)->setQueueCapacity(10000);
     }
   }
   bool good() { return lcm_.good(); }
@@ -56,7 +57,7 @@ class WorldPeer {
     c.command = command;
     c.steps = steps;
     answers_.clear();
-    lcm_.publish("rise/" + id + "/sim_control", &c);
+    lcm_.publish(rise::msgs::sim_control_channel(id), &c);
     const std::string want = "seq " + std::to_string(seq);
     if (!wait_until([&] { return answers_.count(id) && answers_[id].rfind(want, 0) == 0; }, 20000)) return false;
     states_.clear();
@@ -80,7 +81,7 @@ class WorldPeer {
     p.num_switches = 2;
     p.num_sources = 0;
     p.num_faults = 0;
-    lcm_.publish("rise/" + id + "/panel_state", &p);
+    lcm_.publish(rise::msgs::panel_state_channel(id), &p);
   }
 
   std::map<std::string, rise_msgs::RobotState> states_;  // newest per channel id

@@ -12,6 +12,7 @@
 #include <functional>
 #include <optional>
 
+#include "msgs/channels.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -19,14 +20,14 @@
 #include "rise_msgs/SimEvent.hpp"
 
 namespace {
-const std::string kLcm = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
 /// The test's side of the LCM network: what rise-sim publishes, in arrival order.
 class SimPeer {
  public:
   explicit SimPeer(const std::string& id) : lcm_(kLcm), id_(id) {
-    lcm_.subscribe("rise/" + id + "/robot_state", &SimPeer::on_state, this)->setQueueCapacity(1000);
-    lcm_.subscribe("rise/" + id + "/sim_event", &SimPeer::on_event, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::robot_state_channel(id), &SimPeer::on_state, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::sim_event_channel(id), &SimPeer::on_event, this)->setQueueCapacity(1000);
   }
   bool good() { return lcm_.good(); }
 
@@ -58,7 +59,7 @@ class SimPeer {
     c.seq = seq;
     c.command = command;
     c.steps = steps;
-    lcm_.publish("rise/" + id_ + "/sim_control", &c);
+    lcm_.publish(rise::msgs::sim_control_channel(id_), &c);
   }
 
   /// Dead-man held, mode = drive, speed = fast, full forward.
@@ -78,7 +79,7 @@ class SimPeer {
     p.num_switches = 2;
     p.num_sources = 0;
     p.num_faults = 0;
-    lcm_.publish("rise/" + id_ + "/panel_state", &p);
+    lcm_.publish(rise::msgs::panel_state_channel(id_), &p);
   }
 
   std::vector<rise_msgs::RobotState> states_;

@@ -12,6 +12,7 @@
 #include <functional>
 #include <set>
 
+#include "msgs/channels.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
@@ -43,8 +44,8 @@ struct Heard {
 };
 
 void listen(lcm::LCM& lcm, const std::string& id, Heard& h) {
-  lcm.subscribe("rise/" + id + "/task_event", &Heard::on_event, &h)->setQueueCapacity(1000);
-  lcm.subscribe("rise/" + id + "/task_status", &Heard::on_status, &h)->setQueueCapacity(1000);
+  lcm.subscribe(rise::msgs::task_event_channel(id), &Heard::on_event, &h)->setQueueCapacity(1000);
+  lcm.subscribe(rise::msgs::task_status_channel(id), &Heard::on_status, &h)->setQueueCapacity(1000);
 }
 
 // Handles LCM until `done` holds or every child in `watch` has exited (then
