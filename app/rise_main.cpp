@@ -24,6 +24,7 @@
 #include "cli/command_line.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/failsafe.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
@@ -270,7 +271,8 @@ int run_demo(const DemoOptions& o) {
       std::printf("%-21s not measured (%s)\n", what, s.triggered ? "robot never stopped" : "no event seen");
   };
   report("dead-man release", v.deadman_stop, 0.0, "");
-  const bool silent = v.loss_reason.find("stale") != std::string::npos;
+  // A console gone silent is noticed after its timeout; a closed transport at once.
+  const bool silent = v.loss_causes.has(rise::msgs::FailsafeCause::SourceStale);
   report("source loss", v.loss_stop, silent ? source_timeout_s : 0.0, silent ? "source timeout + " : "");
   if (!v.loss_reason.empty()) std::printf("source loss seen as   %s\n", v.loss_reason.c_str());
   if (!o.record_dir.empty())

@@ -27,11 +27,6 @@ fp::FrameType frame_type_for(const SignalRef& signal) {
 }
 
 
-void append_reason(std::string& reasons, const std::string& reason) {
-  if (!reasons.empty()) reasons += "; ";
-  reasons += reason;
-}
-
 void set_safe(const panels::ControlDefinition& c, ControlValue& v) {
   v.axis = c.safe_axis;
   v.pressed = c.safe_button;
@@ -345,106 +340,203 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   (void)now_us;
 }
 
-bool PanelMapper::source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const {
+std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const SourceState& s, int64_t now_us) const {
+  using msgs::FailsafeCause;
   const auto& def = definition_.sources[static_cast<std::size_t>(&s - sources_.data())];
-  const std::string& name = def.name;
-  if (!s.status.connected) {
-    *reason = name + ": disconnected";
-    return false;
-  }
-  if (s.status.bus_state == io::CanBusState::BusOff) {
-    *reason = name + ": CAN bus-off";
-    return false;
-  }
+  const auto trouble = [&def](FailsafeCause cause, const std::string& what) {
+    return SourceTrouble{cause, def.name + ": " + what};
+  };
+  const auto stale = [&](const std::string& what, int64_t age_us) {
+    return trouble(FailsafeCause::SourceStale, "stale (no " + what + " for " + std::to_string(age_us / 1000) + " ms)");
+  };
+  if (!s.status.connected) return trouble(FailsafeCause::SourceDown, "disconnected");
+  if (s.status.bus_state == io::CanBusState::BusOff) return trouble(FailsafeCause::SourceError, "CAN bus-off");
   const int64_t timeout_us = 1000 * static_cast<int64_t>(def.timeout_ms);
   if (def.is_hid()) {
     // A HID device has no heartbeat: the first report after opening proves
     // it talks; timeout_ms 0 trusts it until it is unplugged.
     if (!s.hid) {
-      *reason = s.hid_error.empty() ? name + ": no report descriptor yet" : s.hid_error;
-      return false;
+      if (!s.hid_error.empty()) return SourceTrouble{FailsafeCause::SourceError, s.hid_error};
+      return trouble(FailsafeCause::SourceStale, "no report descriptor yet");
     }
-    if (s.hid_last_us == 0) {
-      *reason = name + ": no report yet";
-      return false;
-    }
+    if (s.hid_last_us == 0) return trouble(FailsafeCause::SourceStale, "no report yet");
     const int64_t age_us = now_us - s.hid_last_us;
-    if (timeout_us > 0 && age_us > timeout_us) {
-      *reason = name + ": stale (no report for " + std::to_string(age_us / 1000) + " ms)";
-      return false;
-    }
-    return true;
+    if (timeout_us > 0 && age_us > timeout_us) return stale("report", age_us);
+    return std::nullopt;
   }
   if (def.is_generic_modbus()) {
     // A third-party device has no alive counter or CRC of ours: it is
     // trusted while its polls are answered.
-    if (s.poll_last_us == 0) {
-      *reason = name + ": no poll answered yet";
-      return false;
-    }
+    if (s.poll_last_us == 0) return trouble(FailsafeCause::SourceStale, "no poll answered yet");
     const int64_t age_us = now_us - s.poll_last_us;
-    if (age_us > timeout_us) {
-      *reason = name + ": stale (no poll answered for " + std::to_string(age_us / 1000) + " ms)";
-      return false;
-    }
-    return true;
+    if (age_us > timeout_us) return stale("poll answered", age_us);
+    return std::nullopt;
   }
   if (def.is_dbc()) {
     // A DBC device has no heartbeat or status of ours: every bound message
     // must keep arriving, and its frames must fit the DBC.
     for (const auto& b : s.dbc) {
-      if (b.last_us == 0) {
-        *reason = name + ": no " + b.message->name + " frame yet";
-        return false;
-      }
+      if (b.last_us == 0) return trouble(FailsafeCause::SourceStale, "no " + b.message->name + " frame yet");
       const int64_t age_us = now_us - b.last_us;
-      if (age_us > timeout_us) {
-        *reason = name + ": stale (no " + b.message->name + " frame for " + std::to_string(age_us / 1000) + " ms)";
-        return false;
-      }
+      if (age_us > timeout_us) return stale(b.message->name + " frame", age_us);
     }
-    if (s.status.check_failed) {
-      *reason = name + ": frames do not fit the DBC";
-      return false;
-    }
-    return true;
+    if (s.status.check_failed) return trouble(FailsafeCause::SourceError, "frames do not fit the DBC");
+    return std::nullopt;
   }
   for (std::size_t t = 0; t < fp::kFrameTypeCount; ++t) {
     if (!s.needs_type[t]) continue;
-    const auto type = static_cast<fp::FrameType>(t);
-    if (s.last_valid_us[t] == 0) {
-      *reason = name + ": no " + fp::to_string(type) + " frame yet";
-      return false;
-    }
+    const std::string type = fp::to_string(static_cast<fp::FrameType>(t));
+    if (s.last_valid_us[t] == 0) return trouble(FailsafeCause::SourceStale, "no " + type + " frame yet");
     const int64_t age_us = now_us - s.last_valid_us[t];
-    if (age_us > timeout_us) {
-      *reason = name + ": stale (no valid " + fp::to_string(type) + " frame for " +
-                std::to_string(age_us / 1000) + " ms)";
-      return false;
+    if (age_us > timeout_us) return stale("valid " + type + " frame", age_us);
+  }
+  if (!s.status.heartbeat_seen) return trouble(FailsafeCause::SourceStale, "no heartbeat yet");
+  if (now_us - s.last_valid_us[type_index(fp::FrameType::Heartbeat)] > heartbeat_timeout_us(def))
+    return trouble(FailsafeCause::SourceStale, "heartbeat stale");
+  if (s.protocol_version != fp::kProtocolVersion)
+    return trouble(FailsafeCause::SourceError, "console speaks protocol version " + std::to_string(s.protocol_version) +
+                                                   ", expected " + std::to_string(fp::kProtocolVersion));
+  if (s.status.console_status != fp::PanelStatus::Operational)
+    return trouble(FailsafeCause::SourceError, "console status " + std::string(fp::to_string(s.status.console_status)));
+  if (s.status.check_failed) return trouble(FailsafeCause::ProtectionFailed, "protection check failed");
+  return std::nullopt;
+}
+
+// The causes and the reasons of one evaluation, in the order they were found.
+struct PanelMapper::Failsafe {
+  msgs::FailsafeCauses causes;
+  std::string reasons;  // "; "-joined
+
+  void add(msgs::FailsafeCause cause, const std::string& reason) {
+    causes.add(cause);
+    if (!reasons.empty()) reasons += "; ";
+    reasons += reason;
+  }
+};
+
+std::vector<bool> PanelMapper::evaluate_sources(int64_t now_us, PanelSnapshot& snap, Failsafe& why) const {
+  std::vector<bool> healthy(sources_.size());
+  for (std::size_t i = 0; i < sources_.size(); ++i) {
+    const SourceState& s = sources_[i];
+    const std::optional<SourceTrouble> trouble = source_trouble(s, now_us);
+    healthy[i] = !trouble;
+    if (trouble) why.add(trouble->cause, trouble->reason);
+    SourceStatus status = s.status;
+    status.stale = trouble && (!s.status.connected || s.last_any_valid_us == 0 ||
+                               trouble->cause == msgs::FailsafeCause::SourceStale);
+    status.last_frame_age_us = s.last_any_valid_us == 0 ? -1 : now_us - s.last_any_valid_us;
+    snap.sources.push_back(std::move(status));
+  }
+  return healthy;
+}
+
+void PanelMapper::map_axis(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const {
+  const auto& c = definition_.controls[i];
+  float unit = 0.0f;
+  if (const int b = binding_of_control_[i]; b >= 0) {
+    // A DBC signal's physical range [min, max] maps linearly to -1..1.
+    const double value = s.dbc[static_cast<std::size_t>(b)].value;
+    unit = static_cast<float>(2.0 * (value - c.range_min) / (c.range_max - c.range_min) - 1.0);
+  } else {
+    const int16_t raw = s.axes[c.signal.index];
+    if (raw == fp::kAxisInvalid) {
+      set_safe(c, v);
+      why.add(msgs::FailsafeCause::ControlInvalid, c.name + ": not available");
+      return;
+    }
+    unit = fp::axis_to_unit(raw);
+  }
+  if (!input_faults_.empty()) {
+    const FaultEffect effect = apply_axis_faults(input_faults_, i, now_us, unit);
+    if (effect == FaultEffect::Lost || effect == FaultEffect::OutOfRange) {
+      set_safe(c, v);
+      why.add(msgs::FailsafeCause::InputFault, c.name + (effect == FaultEffect::Lost ? ": disconnected (fault)"
+                                                                                     : ": out of range (fault)"));
+      return;
     }
   }
-  if (!s.status.heartbeat_seen) {
-    *reason = name + ": no heartbeat yet";
-    return false;
+  const AxisShaping shaping{c.deadband, c.expo, c.scale, c.invert};
+  const float x = shape_axis(unit, shaping);
+  ControlFilter& f = filters_[i];
+  // Restart from the safe value: after a dead-man press the axis ramps up, never jumps.
+  if (f.was_safe) f.lowpass.reset(c.safe_axis, now_us);
+  v.axis = f.lowpass.update(x, now_us);
+}
+
+void PanelMapper::map_button(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const {
+  const auto& c = definition_.controls[i];
+  const int b = binding_of_control_[i];
+  bool raw = b >= 0 ? s.dbc[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
+  if (!input_faults_.empty() && apply_button_faults(input_faults_, i, now_us, raw) == FaultEffect::Lost) {
+    set_safe(c, v);
+    why.add(msgs::FailsafeCause::InputFault, c.name + ": disconnected (fault)");
+    return;
   }
-  if (now_us - s.last_valid_us[type_index(fp::FrameType::Heartbeat)] > heartbeat_timeout_us(def)) {
-    *reason = name + ": heartbeat stale";
-    return false;
+  ControlFilter& f = filters_[i];
+  // After a loss the button restarts "not activated": a latched
+  // toggle never survives the source going away.
+  if (f.was_safe) f.button.reset(raw, c.behaviour == panels::ButtonBehaviour::Direct && raw, now_us);
+  v.pressed = f.button.update(raw, now_us);
+}
+
+void PanelMapper::map_bits_switch(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v,
+                                  Failsafe& why) const {
+  const auto& c = definition_.controls[i];
+  // Between the detents of a rotary switch no contact (or two) may
+  // be closed for a moment: keep the last valid position.
+  ControlFilter& f = filters_[i];
+  const auto p = switch_from_bits(s.buttons, c.bits,
+                                  c.encoding == panels::BitsEncoding::OneHot ? BitsEncoding::OneHot
+                                                                             : BitsEncoding::Binary,
+                                  c.positions.size());
+  if (p) f.last_position = p;
+  if (!f.last_position) {
+    set_safe(c, v);
+    why.add(msgs::FailsafeCause::ControlInvalid, c.name + ": position not available");
+    return;
   }
-  if (s.protocol_version != fp::kProtocolVersion) {
-    *reason = name + ": console speaks protocol version " + std::to_string(s.protocol_version) +
-              ", expected " + std::to_string(fp::kProtocolVersion);
-    return false;
+  uint8_t position = *f.last_position;
+  if (!input_faults_.empty()) {
+    const FaultEffect effect = apply_switch_faults(input_faults_, i, now_us, position);
+    if (effect == FaultEffect::Lost || effect == FaultEffect::OutOfRange || position >= c.positions.size()) {
+      set_safe(c, v);
+      why.add(msgs::FailsafeCause::InputFault, c.name + (effect == FaultEffect::Lost ? ": disconnected (fault)"
+                                                                                     : ": out of range (fault)"));
+      return;
+    }
   }
-  if (s.status.console_status != fp::PanelStatus::Operational) {
-    *reason = name + ": console status " + fp::to_string(s.status.console_status);
-    return false;
+  v.position = position;
+}
+
+void PanelMapper::map_switch(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const {
+  const auto& c = definition_.controls[i];
+  if (!c.bits.empty()) return map_bits_switch(i, s, now_us, v, why);
+  uint8_t position = s.switches[c.signal.index];
+  if (const int b = binding_of_control_[i]; b >= 0) {
+    // A DBC signal's value is the position index (its VAL_ table names them).
+    const double value = s.dbc[static_cast<std::size_t>(b)].value;
+    position = value >= 0.0 && value < 255.0 ? static_cast<uint8_t>(std::lround(value)) : fp::kSwitchInvalid;
+    if (c.modbus_point && position >= c.positions.size()) {
+      // A register's number: no "not available" value.
+      set_safe(c, v);
+      why.add(msgs::FailsafeCause::ControlInvalid,
+              c.name + ": position " + std::to_string(std::lround(value)) + " unknown");
+      return;
+    }
   }
-  if (s.status.check_failed) {
-    *reason = name + ": protection check failed";
-    return false;
+  if (!input_faults_.empty() && apply_switch_faults(input_faults_, i, now_us, position) == FaultEffect::Lost) {
+    set_safe(c, v);
+    why.add(msgs::FailsafeCause::InputFault, c.name + ": disconnected (fault)");
+    return;
   }
-  return true;
+  if (position >= c.positions.size()) {
+    set_safe(c, v);
+    why.add(msgs::FailsafeCause::ControlInvalid,
+            c.name + ": position " +
+                (position == fp::kSwitchInvalid ? std::string("not available") : std::to_string(position) + " unknown"));
+    return;
+  }
+  v.position = position;
 }
 
 PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
@@ -453,21 +545,8 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
   snap.controls.resize(definition_.controls.size());
   snap.sources.reserve(sources_.size());
 
-  std::string reasons;
-  std::vector<bool> healthy(sources_.size());
-  for (std::size_t i = 0; i < sources_.size(); ++i) {
-    const SourceState& s = sources_[i];
-    std::string reason;
-    healthy[i] = source_healthy(s, now_us, &reason);
-    if (!healthy[i]) append_reason(reasons, reason);
-    SourceStatus status = s.status;
-    status.stale = !healthy[i] && (!s.status.connected || s.last_any_valid_us == 0 ||
-                                   reason.find("stale") != std::string::npos ||
-                                   reason.find("yet") != std::string::npos);
-    status.last_frame_age_us = s.last_any_valid_us == 0 ? -1 : now_us - s.last_any_valid_us;
-    snap.sources.push_back(std::move(status));
-  }
-
+  Failsafe why;
+  const std::vector<bool> healthy = evaluate_sources(now_us, snap, why);
   bool estop = false;
   std::optional<std::size_t> deadman_index;
   for (std::size_t i = 0; i < definition_.controls.size(); ++i) {
@@ -478,109 +557,9 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
     } else {
       const SourceState& s = sources_[c.source];
       switch (c.kind) {
-        case ControlKind::Axis: {
-          float unit = 0.0f;
-          if (const int b = binding_of_control_[i]; b >= 0) {
-            // A DBC signal's physical range [min, max] maps linearly to -1..1.
-            const double value = s.dbc[static_cast<std::size_t>(b)].value;
-            unit = static_cast<float>(2.0 * (value - c.range_min) / (c.range_max - c.range_min) - 1.0);
-          } else {
-            const int16_t raw = s.axes[c.signal.index];
-            if (raw == fp::kAxisInvalid) {
-              set_safe(c, v);
-              append_reason(reasons, c.name + ": not available");
-              break;
-            }
-            unit = fp::axis_to_unit(raw);
-          }
-          if (!input_faults_.empty()) {
-            const FaultEffect effect = apply_axis_faults(input_faults_, i, now_us, unit);
-            if (effect == FaultEffect::Lost || effect == FaultEffect::OutOfRange) {
-              set_safe(c, v);
-              append_reason(reasons, c.name + (effect == FaultEffect::Lost ? ": disconnected (fault)"
-                                                                           : ": out of range (fault)"));
-              break;
-            }
-          }
-          const AxisShaping shaping{c.deadband, c.expo, c.scale, c.invert};
-          const float x = shape_axis(unit, shaping);
-          ControlFilter& f = filters_[i];
-          // Restart from the safe value: after a dead-man press the axis ramps up, never jumps.
-          if (f.was_safe) f.lowpass.reset(c.safe_axis, now_us);
-          v.axis = f.lowpass.update(x, now_us);
-          break;
-        }
-        case ControlKind::Button: {
-          const int b = binding_of_control_[i];
-          bool raw = b >= 0 ? s.dbc[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
-          if (!input_faults_.empty() && apply_button_faults(input_faults_, i, now_us, raw) == FaultEffect::Lost) {
-            set_safe(c, v);
-            append_reason(reasons, c.name + ": disconnected (fault)");
-            break;
-          }
-          ControlFilter& f = filters_[i];
-          // After a loss the button restarts "not activated": a latched
-          // toggle never survives the source going away.
-          if (f.was_safe) f.button.reset(raw, c.behaviour == panels::ButtonBehaviour::Direct && raw, now_us);
-          v.pressed = f.button.update(raw, now_us);
-          break;
-        }
-        case ControlKind::Switch: {
-          if (!c.bits.empty()) {
-            // Between the detents of a rotary switch no contact (or two) may
-            // be closed for a moment: keep the last valid position.
-            ControlFilter& f = filters_[i];
-            const auto p = switch_from_bits(s.buttons, c.bits,
-                                            c.encoding == panels::BitsEncoding::OneHot ? BitsEncoding::OneHot
-                                                                                       : BitsEncoding::Binary,
-                                            c.positions.size());
-            if (p) f.last_position = p;
-            if (!f.last_position) {
-              set_safe(c, v);
-              append_reason(reasons, c.name + ": position not available");
-              break;
-            }
-            uint8_t position = *f.last_position;
-            if (!input_faults_.empty()) {
-              const FaultEffect effect = apply_switch_faults(input_faults_, i, now_us, position);
-              if (effect == FaultEffect::Lost || effect == FaultEffect::OutOfRange || position >= c.positions.size()) {
-                set_safe(c, v);
-                append_reason(reasons, c.name + (effect == FaultEffect::Lost ? ": disconnected (fault)"
-                                                                             : ": out of range (fault)"));
-                break;
-              }
-            }
-            v.position = position;
-            break;
-          }
-          uint8_t position = s.switches[c.signal.index];
-          if (const int b = binding_of_control_[i]; b >= 0) {
-            // A DBC signal's value is the position index (its VAL_ table names them).
-            const double value = s.dbc[static_cast<std::size_t>(b)].value;
-            position = value >= 0.0 && value < 255.0 ? static_cast<uint8_t>(std::lround(value)) : fp::kSwitchInvalid;
-            if (c.modbus_point && position >= c.positions.size()) {
-              // A register's number: no "not available" value.
-              set_safe(c, v);
-              append_reason(reasons, c.name + ": position " + std::to_string(std::lround(value)) + " unknown");
-              break;
-            }
-          }
-          if (!input_faults_.empty() &&
-              apply_switch_faults(input_faults_, i, now_us, position) == FaultEffect::Lost) {
-            set_safe(c, v);
-            append_reason(reasons, c.name + ": disconnected (fault)");
-            break;
-          }
-          if (position >= c.positions.size()) {
-            set_safe(c, v);
-            append_reason(reasons, c.name + ": position " +
-                                       (position == fp::kSwitchInvalid ? std::string("not available")
-                                                                       : std::to_string(position) + " unknown"));
-            break;
-          }
-          v.position = position;
-          break;
-        }
+        case ControlKind::Axis: map_axis(i, s, now_us, v, why); break;
+        case ControlKind::Button: map_button(i, s, now_us, v, why); break;
+        case ControlKind::Switch: map_switch(i, s, now_us, v, why); break;
       }
     }
     // A forced-safe e-stop reads "pressed" but nobody pressed it: the
@@ -588,13 +567,14 @@ PanelSnapshot PanelMapper::evaluate(int64_t now_us) const {
     if (c.role == ControlRole::Estop && v.pressed && !v.forced_safe) estop = true;
     if (c.role == ControlRole::Deadman) deadman_index = i;
   }
-  if (estop) append_reason(reasons, "e-stop pressed");
+  if (estop) why.add(msgs::FailsafeCause::Estop, "e-stop pressed");
 
   for (const InputFault& f : input_faults_)
     if (f.active(now_us))
       snap.active_faults.push_back(f.id + ": " + to_string(f.kind) + " " + definition_.controls[f.control].name);
-  snap.failsafe = !reasons.empty();
-  snap.failsafe_reason = std::move(reasons);
+  snap.failsafe = why.causes.any();
+  snap.failsafe_causes = why.causes;
+  snap.failsafe_reason = std::move(why.reasons);
   snap.deadman = deadman_index && snap.controls[*deadman_index].pressed;
 
   // Motion needs the dead-man held and no e-stop; a panel in failsafe for any

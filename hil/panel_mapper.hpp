@@ -16,6 +16,7 @@
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/control_transforms.hpp"
 #include "hil/input_fault.hpp"
+#include "msgs/failsafe.hpp"
 #include "hil/io/can_error.hpp"
 #include "firmware_protocol/console_modbus.hpp"
 #include "hil/modbus_poll.hpp"
@@ -57,6 +58,7 @@ struct ControlValue {
 struct PanelSnapshot {
   int64_t time_us = 0;              ///< the monotonic time it was evaluated at
   bool failsafe = true;
+  msgs::FailsafeCauses failsafe_causes;  ///< why, typed: decide on these, never on the text
   std::string failsafe_reason;      ///< "; "-joined reasons, empty when not failsafe
   bool deadman = false;
   std::vector<ControlValue> controls;  ///< same order as PanelDefinition::controls
@@ -199,7 +201,20 @@ class PanelMapper {
   void count_valid(SourceState& s);
   // A bound signal's value at now_us; true when it changed (or came first since a loss).
   static bool take(DbcBinding& b, double value, int64_t now_us);
-  bool source_healthy(const SourceState& s, int64_t now_us, std::string* reason) const;
+  // Why a source's controls cannot be trusted now; nullopt while they can.
+  struct SourceTrouble {
+    msgs::FailsafeCause cause;
+    std::string reason;  // "<source>: <what>"
+  };
+  std::optional<SourceTrouble> source_trouble(const SourceState& s, int64_t now_us) const;
+
+  // evaluate()'s steps. They advance the mutable filters_ (see below).
+  struct Failsafe;
+  std::vector<bool> evaluate_sources(int64_t now_us, PanelSnapshot& snap, Failsafe& why) const;
+  void map_axis(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const;
+  void map_button(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const;
+  void map_switch(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const;
+  void map_bits_switch(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const;
 
   panels::PanelDefinition definition_;
   std::vector<SourceState> sources_;

@@ -20,6 +20,7 @@ rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
   m.trainee_id = trainee_id;
   m.seq = seq;
   m.failsafe = snapshot.failsafe;
+  m.failsafe_causes = snapshot.failsafe_causes.bits;
   m.failsafe_reason = snapshot.failsafe_reason;
   m.deadman = snapshot.deadman;
   for (std::size_t i = 0; i < definition.controls.size(); ++i) {

@@ -16,6 +16,7 @@
 #include "hil/io/modbus_trace.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/source_input.hpp"
+#include "msgs/failsafe.hpp"
 
 namespace rise::hil {
 
@@ -364,6 +365,9 @@ std::optional<VerifyDifference> compare_panel_states(const rise_msgs::PanelState
   if (expected.failsafe != got.failsafe)
     differ("failsafe", yes_no(expected.failsafe) + " (\"" + expected.failsafe_reason + "\")",
            yes_no(got.failsafe) + " (\"" + got.failsafe_reason + "\")");
+  else if (expected.failsafe_causes != got.failsafe_causes)
+    differ("failsafe_causes", "\"" + msgs::to_string(msgs::FailsafeCauses{expected.failsafe_causes}) + "\"",
+           "\"" + msgs::to_string(msgs::FailsafeCauses{got.failsafe_causes}) + "\"");
   else if (!same_reason(expected.failsafe_reason, got.failsafe_reason, settings.time_tolerance_us / 1000 + 1))
     differ("failsafe_reason", "\"" + expected.failsafe_reason + "\"", "\"" + got.failsafe_reason + "\"");
   if (expected.deadman != got.deadman) differ("deadman", yes_no(expected.deadman), yes_no(got.deadman));

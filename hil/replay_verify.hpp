@@ -119,7 +119,7 @@ struct VerifyDifference {
   int64_t seq = 0;              ///< the golden message's seq
   int64_t utime = 0;            ///< the golden message's utime
   double time_s = 0.0;          ///< utime in seconds since the capture's start
-  std::string field;            ///< a control name, or failsafe, failsafe_reason, deadman
+  std::string field;            ///< a control name, or failsafe, failsafe_causes, failsafe_reason, deadman
   std::string expected;
   std::string got;
   std::vector<std::string> also;  ///< the other fields that differ in that message

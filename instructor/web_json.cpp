@@ -2,8 +2,9 @@
 
 #include <cmath>
 
-#include "panels/panel_definition.hpp"
+#include "msgs/failsafe.hpp"
 #include "msgs/publisher_session.hpp"
+#include "panels/panel_definition.hpp"
 #include "sim/robot_description.hpp"
 #include "sim/world_description.hpp"
 
@@ -168,6 +169,10 @@ Json::Value panel_json(const rise_msgs::PanelState& m) {
   v["seq"] = Json::Int64(m.seq);
   v["panel_id"] = m.panel_id;
   v["failsafe"] = m.failsafe;
+  Json::Value causes(Json::arrayValue);
+  for (const msgs::FailsafeCause cause : msgs::kFailsafeCauses)
+    if (msgs::has(m.failsafe_causes, cause)) causes.append(msgs::to_string(cause));
+  v["failsafe_causes"] = causes;
   v["failsafe_reason"] = m.failsafe_reason;
   v["deadman"] = m.deadman;
   Json::Value axes(Json::objectValue), buttons(Json::objectValue), switches(Json::objectValue);

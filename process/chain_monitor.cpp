@@ -105,6 +105,7 @@ void ChainMonitor::on_panel(const lcm::ReceiveBuffer*, const std::string&,
     // bridge noticed: measure from there.
     view_.loss_stop.trigger_utime = last_frame_utime;
     view_.loss_stop.speed_at_trigger_mps = view_.speed_mps;
+    view_.loss_causes = msgs::FailsafeCauses{m->failsafe_causes};
     view_.loss_reason = m->failsafe_reason;
   }
   was_connected_ok_ = !source_lost;

@@ -15,6 +15,7 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "msgs/failsafe.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 
@@ -46,7 +47,8 @@ struct ChainView {
   double speed_mps = 0.0;
   StopMeasurement deadman_stop;
   StopMeasurement loss_stop;
-  std::string loss_reason;
+  msgs::FailsafeCauses loss_causes;  ///< the panel's failsafe causes when the loss was seen
+  std::string loss_reason;          ///< and their text
   /// Messages from processes that accept_only() did not name: counted,
   /// never measured; the newest such publisher.
   int64_t foreign_count = 0;

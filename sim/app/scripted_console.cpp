@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "msgs/failsafe.hpp"
+
 namespace rise::trainer {
 
 using panels::ControlKind;
@@ -83,6 +85,7 @@ rise_msgs::PanelState ScriptedConsole::panel_state(const std::string& trainee_id
   m.trainee_id = trainee_id;
   m.seq = seq;
   m.failsafe = in.failsafe;
+  m.failsafe_causes = in.failsafe ? static_cast<int32_t>(msgs::FailsafeCause::Estop) : 0;
   m.failsafe_reason = in.failsafe ? "e-stop pressed (scripted console)" : "";
   m.deadman = in.deadman;
   for (const auto& [name, v] : in.axes) m.axes.push_back(rise_msgs::PanelAxis{name, v});

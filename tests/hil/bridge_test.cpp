@@ -4,6 +4,7 @@
 #include <mutex>
 #include <thread>
 
+#include "msgs/failsafe.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -57,7 +58,7 @@ TEST_CASE("the bridge publishes the emulated console's state, sends feedback, an
   REQUIRE(lost.has_value());
   const int64_t timeout_us = 1000 * def.sources[0].timeout_ms;
   const int64_t period_us = def.publish_period_us();
-  CHECK(lost->failsafe_reason.find("stale") != std::string::npos);
+  CHECK(rise::msgs::has(lost->failsafe_causes, rise::msgs::FailsafeCause::SourceStale));
   CHECK(lost->controls[drive_y].axis == 0.0f);
   // Exact property: no snapshot older than the timeout was ever published as safe.
   {

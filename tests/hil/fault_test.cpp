@@ -16,6 +16,7 @@
 #include "hil/panel_mapper.hpp"
 #include "hil/source_input.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/failsafe.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -231,7 +232,7 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
     t = last_good + timeout_us;
     const PanelSnapshot late = cycle();
     CHECK(late.failsafe);
-    CHECK_THAT(late.failsafe_reason, Catch::Contains("stale"));
+    CHECK(rise::msgs::has(late.failsafe_causes, rise::msgs::FailsafeCause::SourceStale));
     bus.clear("", rise::msgs::monotonic_us());
     for (int i = 0; i < 10; ++i) cycle();
     CHECK_FALSE(mapper.evaluate(t).failsafe);

@@ -20,6 +20,7 @@
 
 #include "hil/bridge.hpp"
 #include "hil/io/modbus_server.hpp"
+#include "msgs/failsafe.hpp"
 #include "panels/console_emulator.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
@@ -201,7 +202,7 @@ TEST_CASE("a Modbus console whose registers freeze goes stale after timeout_ms, 
     emulator.apply(directive(rise::panels::TimelineEvent::Kind::Silent));
     const auto stale = published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 3000, from);
     REQUIRE(stale.has_value());
-    CHECK(stale->failsafe_reason.find("stale") != std::string::npos);
+    CHECK(rise::msgs::has(stale->failsafe_causes, rise::msgs::FailsafeCause::SourceStale));
     CHECK(stale->sources[0].connected);
     CHECK(stale->sources[0].last_frame_age_us <= 1000 * def.sources[0].timeout_ms + def.publish_period_us() + 15000);
     CHECK(bridge.snapshot().sources[0].errors[static_cast<std::size_t>(fp::DecodeError::RepeatedCounter)] > 0);
@@ -210,7 +211,7 @@ TEST_CASE("a Modbus console whose registers freeze goes stale after timeout_ms, 
     const std::size_t from = published.size();
     emulator.apply(directive(rise::panels::TimelineEvent::Kind::Corrupt, 3));
     const auto failed = published.wait_for(
-        [](const PanelSnapshot& s) { return s.failsafe_reason.find("protection check") != std::string::npos; }, 3000,
+        [](const PanelSnapshot& s) { return rise::msgs::has(s.failsafe_causes, rise::msgs::FailsafeCause::ProtectionFailed); }, 3000,
         from);
     REQUIRE(failed.has_value());
     CHECK(failed->sources[0].errors[static_cast<std::size_t>(fp::DecodeError::BadCrc)] >= 1);

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "hil/panel_mapper.hpp"
+#include "msgs/failsafe.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -86,7 +87,7 @@ TEST_CASE("the mapper takes whole input blocks and fails a Modbus source on a ba
     mapper.on_source_error(0, E::BadCrc, 21000);
     snap = mapper.evaluate(21000);
     CHECK(snap.failsafe);
-    CHECK(snap.failsafe_reason.find("protection check failed") != std::string::npos);
+    CHECK(rise::msgs::has(snap.failsafe_causes, rise::msgs::FailsafeCause::ProtectionFailed));
     CHECK(snap.sources[0].errors[static_cast<std::size_t>(fp::DecodeError::BadCrc)] == 1);
     for (uint16_t i = 0; i < def.sources[0].recovery_frames; ++i) mapper.on_inputs(0, operational(3 + i), 31000 + i);
     CHECK_FALSE(mapper.evaluate(40000).failsafe);
@@ -96,7 +97,7 @@ TEST_CASE("the mapper takes whole input blocks and fails a Modbus source on a ba
     CHECK_FALSE(mapper.evaluate(21000).failsafe);
     snap = mapper.evaluate(11000 + 100000 + 1);
     CHECK(snap.failsafe);
-    CHECK(snap.failsafe_reason.find("stale") != std::string::npos);
+    CHECK(rise::msgs::has(snap.failsafe_causes, rise::msgs::FailsafeCause::SourceStale));
     CHECK(snap.controls[drive_y].axis == 0.0f);
     CHECK(snap.sources[0].errors[static_cast<std::size_t>(fp::DecodeError::RepeatedCounter)] == 1);
   }

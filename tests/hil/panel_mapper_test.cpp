@@ -5,6 +5,7 @@
 #include "hil/feedback.hpp"
 #include "hil/panel_mapper.hpp"
 #include "hil/panel_state_message.hpp"
+#include "msgs/failsafe.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace fp = rise::firmware_protocol;
@@ -61,7 +62,7 @@ TEST_CASE("before the console's state is read every control is at its safe value
   mapper.on_connection(0, true, kT0);
   const auto s = mapper.evaluate(kT0);
   CHECK(s.failsafe);
-  CHECK(s.failsafe_reason.find("console: no") != std::string::npos);
+  CHECK(rise::msgs::has(s.failsafe_causes, rise::msgs::FailsafeCause::SourceStale));
   CHECK(pressed(mapper, s, "estop"));  // its safe value is "pressed"
   CHECK_FALSE(pressed(mapper, s, "deadman"));
   CHECK(position(mapper, s, "speed") == 0);
@@ -102,8 +103,8 @@ TEST_CASE("a source without a valid frame for its timeout goes failsafe at the n
   CHECK_FALSE(mapper.evaluate(kT0 + timeout_us).failsafe);
   const auto s = mapper.evaluate(kT0 + timeout_us + 1);
   CHECK(s.failsafe);
-  CHECK(s.failsafe_reason.find("stale") != std::string::npos);
-  CHECK(s.failsafe_reason.find("e-stop") == std::string::npos);  // its safe value, not a press
+  CHECK(rise::msgs::has(s.failsafe_causes, rise::msgs::FailsafeCause::SourceStale));
+  CHECK_FALSE(rise::msgs::has(s.failsafe_causes, rise::msgs::FailsafeCause::Estop));  // its safe value, not a press
   CHECK(s.sources[0].stale);
   CHECK(axis(mapper, s, "drive_y") == 0.0f);
   CHECK_FALSE(s.deadman);
@@ -128,7 +129,7 @@ TEST_CASE("a failed protection check is counted, forces failsafe and clears afte
     CHECK_FALSE(mapper.on_frame(0, w.can_id, w.data, kT0 + 1000));
     auto s = mapper.evaluate(kT0 + 1000);
     CHECK(s.failsafe);
-    CHECK(s.failsafe_reason.find("protection check failed") != std::string::npos);
+    CHECK(rise::msgs::has(s.failsafe_causes, rise::msgs::FailsafeCause::ProtectionFailed));
     CHECK(s.sources[0].errors[static_cast<std::size_t>(fp::DecodeError::BadCrc)] == 1);
     CHECK(s.sources[0].frames_bad() == 1);
     // recovery_frames = 3 in the shipped definition: two are not enough.

@@ -16,6 +16,7 @@
 #include "firmware_protocol/console_can.hpp"
 #include "hil/io/candump_log.hpp"
 #include "hil/replay_verify.hpp"
+#include "msgs/failsafe.hpp"
 #include "panels/panel_definition.hpp"
 
 using namespace rise::hil;
@@ -128,8 +129,8 @@ TEST_CASE("the recorded CAN, Modbus and split sessions replay to their golden Pa
   for (const auto& m : golden.messages) {
     driving = driving || (!m.failsafe && m.deadman && m.axes[1].value > 0.5f);
     released = released || (!m.failsafe && !m.deadman);
-    crc = crc || m.failsafe_reason.find("protection check failed") != std::string::npos;
-    stale = stale || m.failsafe_reason.find("stale") != std::string::npos;
+    crc = crc || rise::msgs::has(m.failsafe_causes, rise::msgs::FailsafeCause::ProtectionFailed);
+    stale = stale || rise::msgs::has(m.failsafe_causes, rise::msgs::FailsafeCause::SourceStale);
   }
   CHECK(driving);
   CHECK(released);

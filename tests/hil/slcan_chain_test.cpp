@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hil/bridge.hpp"
+#include "msgs/failsafe.hpp"
 #include "panels/console_emulator.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 #include "tests/hil_io/slcan_test_support.hpp"
@@ -116,8 +117,8 @@ TEST_CASE("the bridge drives the emulated console over slcan through a pty pair,
   const auto lost = published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 3000, before);
   REQUIRE(lost.has_value());
   CHECK(lost->controls[drive_y].axis == 0.0f);
-  CHECK((lost->failsafe_reason.find("disconnected") != std::string::npos ||
-         lost->failsafe_reason.find("stale") != std::string::npos));
+  CHECK((rise::msgs::has(lost->failsafe_causes, rise::msgs::FailsafeCause::SourceDown) ||
+         rise::msgs::has(lost->failsafe_causes, rise::msgs::FailsafeCause::SourceStale)));
   const int64_t timeout_us = 1000 * def.sources[0].timeout_ms;
   const int64_t period_us = def.publish_period_us();
   {

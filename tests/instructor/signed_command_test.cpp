@@ -18,6 +18,7 @@
 
 #include "msgs/channels.hpp"
 #include "msgs/command_auth.hpp"
+#include "msgs/failsafe.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -349,7 +350,7 @@ TEST_CASE("a signed CAN drop over LCM makes the live daemon fail safe on the sta
   station.send(signed_with(command(id, "inject", "cut", "can_drop", "console"), keys.key));
   station.panel_.reset();
   REQUIRE(station.wait_until([&] {
-    return station.panel_ && station.panel_->failsafe && station.panel_->failsafe_reason.find("stale") != std::string::npos;
+    return station.panel_ && station.panel_->failsafe && rise::msgs::has(station.panel_->failsafe_causes, rise::msgs::FailsafeCause::SourceStale);
   }, 10000));
   CHECK(station.panel_shows("cut: can_drop console"));
 
