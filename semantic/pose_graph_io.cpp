@@ -157,6 +157,8 @@ EdgeLine edge_line(const GraphLine& l, bool& planar) {
 // edges and FIX lines kept until every vertex is known (an edge may come
 // before its vertices, or a file give no vertices at all).
 struct GraphLines {
+  explicit GraphLines(const std::string& file) : path(file) {}
+
   const std::string& path;
   PoseGraphFile f;
   std::unordered_map<long long, std::size_t> node_of;  // vertex id -> node
@@ -259,7 +261,7 @@ struct GraphLines {
 
 PoseGraphFile read_pose_graph(const std::string& path) {
   const std::string text = formats::read_file(path);
-  GraphLines g{path, {}, {}, {}, {}, {}, {}};
+  GraphLines g(path);
   formats::Lines lines{text};
   std::string_view line;
   while (lines.next(line)) {
