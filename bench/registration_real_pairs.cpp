@@ -138,110 +138,128 @@ sem::RegistrationResult ours(const Pair& pair, const Eigen::Isometry3d& start, i
   return sem::register_clouds(pair.source, pair.target, start, s);
 }
 
-void run_pair(Pair& pair, bool quick, bool ours_only) {
-  std::vector<Row> rows;
-  std::vector<std::string> start_names{pair.start_name};
-  std::vector<Eigen::Isometry3d> starts{pair.T_start};
+// The starts of a pair: its own first, then the four perturbed ones.
+struct Starts {
+  std::vector<Eigen::Isometry3d> T;
+  std::vector<std::string> names;
+};
 
-  // Ours.
+// Ours from every start (the pair's own: the fastest of 5 runs, or 1 with
+// --quick; the perturbed: one run each), on 1 and 2 threads. Without a
+// reference, ours from the pair's own start stands in for it.
+std::vector<Row> ours_rows(Pair& pair, Starts& starts, bool quick) {
+  std::vector<Row> rows;
   const auto run_ours = [&](size_t start, int runs) {
     for (int threads : {1, 2}) {
       sem::RegistrationResult r;
-      const double ms = time_fastest<sem::RegistrationResult>(runs, [&] { return ours(pair, starts[start], threads); }, r);
+      const double ms = time_fastest<sem::RegistrationResult>(runs, [&] { return ours(pair, starts.T[start], threads); }, r);
       rows.push_back({"ours register_clouds", threads, start, ms, r.T_target_source, r.converged ? "yes" : "no: " + r.failure});
     }
   };
   run_ours(0, quick ? 1 : 5);
-  const bool reference_is_ours = !pair.T_reference;
-  if (reference_is_ours) {
+  if (!pair.T_reference) {
     pair.T_reference = rows.front().T;
     pair.reference_name = "ours from the " + pair.start_name + " (NO reference exists: errors say nothing about accuracy)";
   }
   for (size_t k = 0; k < 4; ++k) {
-    starts.push_back(starts_around(*pair.T_reference, pair.perturbation_m)[k]);
-    start_names.push_back(kPerturbedNames[k]);
-    run_ours(starts.size() - 1, 1);
+    starts.T.push_back(starts_around(*pair.T_reference, pair.perturbation_m)[k]);
+    starts.names.push_back(kPerturbedNames[k]);
+    run_ours(starts.T.size() - 1, 1);
   }
+  return rows;
+}
 
-  // The peers, on the raw clouds and (lidar pairs) on filtered ones.
-  if (!ours_only) {
-    struct Input {
-      std::string label;
-      pcl::PointCloud<pcl::PointXYZ>::Ptr source_pcl, target_pcl;
-      open3d::geometry::PointCloud source_o3d, target_o3d;
-    };
-    std::vector<Input> inputs;
-    const auto add_input = [&](const std::string& label, const sem::Cloud& source, const sem::Cloud& target) {
-      Input in{label, rise::bench::to_pcl(source), rise::bench::to_pcl(target), {}, {}};
-      in.source_o3d.points_.reserve(source.size());
-      for (const auto& p : source.points) in.source_o3d.points_.push_back(p.cast<double>());
-      for (const auto& p : target.points) in.target_o3d.points_.push_back(p.cast<double>());
-      in.target_o3d.EstimateNormals(open3d::geometry::KDTreeSearchParamKNN(30));
-      inputs.push_back(std::move(in));
-    };
-    add_input("", pair.source, pair.target);
-    if (pair.peer_voxel_m > 0.0) {
-      char label[32];
-      std::snprintf(label, sizeof label, ", voxel %.1f m", pair.peer_voxel_m);
-      add_input(label, sem::voxel_filter(pair.source, pair.peer_voxel_m), sem::voxel_filter(pair.target, pair.peer_voxel_m));
+// The clouds as PCL's and Open3D's ICP take them, with a label for the rows.
+struct PeerInput {
+  std::string label;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr source_pcl, target_pcl;
+  open3d::geometry::PointCloud source_o3d, target_o3d;
+};
+
+// The peers' inputs: the raw clouds and (lidar pairs) filtered ones.
+std::vector<PeerInput> peer_inputs(const Pair& pair) {
+  std::vector<PeerInput> inputs;
+  const auto add_input = [&](const std::string& label, const sem::Cloud& source, const sem::Cloud& target) {
+    PeerInput in{label, rise::bench::to_pcl(source), rise::bench::to_pcl(target), {}, {}};
+    in.source_o3d.points_.reserve(source.size());
+    for (const auto& p : source.points) in.source_o3d.points_.push_back(p.cast<double>());
+    for (const auto& p : target.points) in.target_o3d.points_.push_back(p.cast<double>());
+    in.target_o3d.EstimateNormals(open3d::geometry::KDTreeSearchParamKNN(30));
+    inputs.push_back(std::move(in));
+  };
+  add_input("", pair.source, pair.target);
+  if (pair.peer_voxel_m > 0.0) {
+    char label[32];
+    std::snprintf(label, sizeof label, ", voxel %.1f m", pair.peer_voxel_m);
+    add_input(label, sem::voxel_filter(pair.source, pair.peer_voxel_m), sem::voxel_filter(pair.target, pair.peer_voxel_m));
+  }
+  return inputs;
+}
+
+// PCL's ICP (one run) and Open3D's point-to-point and point-to-plane (1 and
+// 2 threads; the fastest of 3 from the pair's own start) from every start.
+void add_peer_rows(const Pair& pair, const Starts& starts, bool quick, std::vector<Row>& rows) {
+  const double r = pair.peer_distance_m;
+  for (const auto& in : peer_inputs(pair))
+    for (size_t start = 0; start < starts.T.size(); ++start) {
+      const Eigen::Matrix4d T0 = starts.T[start].matrix();
+      Eigen::Isometry3d T;
+      const double ms = time_fastest<Eigen::Isometry3d>(1, [&] {
+        // A new object each run: PCL builds its k-d tree inside align, once per target.
+        pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
+        icp.setInputSource(in.source_pcl);
+        icp.setInputTarget(in.target_pcl);
+        icp.setMaxCorrespondenceDistance(r);
+        icp.setMaximumIterations(50);
+        icp.setTransformationEpsilon(1e-8);
+        pcl::PointCloud<pcl::PointXYZ> out;
+        icp.align(out, T0.cast<float>());
+        return iso(icp.getFinalTransformation().cast<double>());
+      }, T);
+      rows.push_back({"PCL IterativeClosestPoint" + in.label, 1, start, ms, T, "-"});
+
+      const o3r::ICPConvergenceCriteria criteria(1e-6, 1e-6, 50);
+      const int runs = start == 0 && !quick ? 3 : 1;
+      for (int plane = 0; plane < 2; ++plane)
+        for (int threads : {1, 2}) {
+          omp_set_num_threads(threads);
+          const double o3d_ms = time_fastest<Eigen::Isometry3d>(runs, [&] {
+            const auto res = plane ? o3r::RegistrationICP(in.source_o3d, in.target_o3d, r, T0,
+                                                          o3r::TransformationEstimationPointToPlane(), criteria)
+                                   : o3r::RegistrationICP(in.source_o3d, in.target_o3d, r, T0,
+                                                          o3r::TransformationEstimationPointToPoint(), criteria);
+            return iso(res.transformation_);
+          }, T);
+          rows.push_back({(plane ? "Open3D point-to-plane" : "Open3D point-to-point") + in.label, threads, start, o3d_ms, T, "-"});
+        }
     }
-    const double r = pair.peer_distance_m;
-    for (const auto& in : inputs)
-      for (size_t start = 0; start < starts.size(); ++start) {
-        const Eigen::Matrix4d T0 = starts[start].matrix();
-        Eigen::Isometry3d T;
-        const double ms = time_fastest<Eigen::Isometry3d>(1, [&] {
-          // A new object each run: PCL builds its k-d tree inside align, once per target.
-          pcl::IterativeClosestPoint<pcl::PointXYZ, pcl::PointXYZ> icp;
-          icp.setInputSource(in.source_pcl);
-          icp.setInputTarget(in.target_pcl);
-          icp.setMaxCorrespondenceDistance(r);
-          icp.setMaximumIterations(50);
-          icp.setTransformationEpsilon(1e-8);
-          pcl::PointCloud<pcl::PointXYZ> out;
-          icp.align(out, T0.cast<float>());
-          return iso(icp.getFinalTransformation().cast<double>());
-        }, T);
-        rows.push_back({"PCL IterativeClosestPoint" + in.label, 1, start, ms, T, "-"});
+}
 
-        const o3r::ICPConvergenceCriteria criteria(1e-6, 1e-6, 50);
-        const int runs = start == 0 && !quick ? 3 : 1;
-        for (int plane = 0; plane < 2; ++plane)
-          for (int threads : {1, 2}) {
-            omp_set_num_threads(threads);
-            const double o3d_ms = time_fastest<Eigen::Isometry3d>(runs, [&] {
-              const auto res = plane ? o3r::RegistrationICP(in.source_o3d, in.target_o3d, r, T0,
-                                                            o3r::TransformationEstimationPointToPlane(), criteria)
-                                     : o3r::RegistrationICP(in.source_o3d, in.target_o3d, r, T0,
-                                                            o3r::TransformationEstimationPointToPoint(), criteria);
-              return iso(res.transformation_);
-            }, T);
-            rows.push_back({(plane ? "Open3D point-to-plane" : "Open3D point-to-point") + in.label, threads, start, o3d_ms, T, "-"});
-          }
-      }
-  }
-
-  // The table, start by start.
+// The table, start by start.
+void print_rows(const Pair& pair, const Starts& starts, const std::vector<Row>& rows) {
   const Eigen::Isometry3d& ref = *pair.T_reference;
   std::printf("\n%s: source %zu, target %zu points; errors vs %s", pair.name.c_str(), pair.source.size(), pair.target.size(),
               pair.reference_name.c_str());
   if (pair.R_second) std::printf("; \"%s\": rotation error vs %s", pair.second_name.c_str(), pair.second_name.c_str());
   std::printf("\n");
-  for (size_t k = 0; k < starts.size(); ++k)
-    std::printf("  start %-12s %7.3f deg %7.3f m from the reference\n", start_names[k].c_str(),
-                rotation_deg(starts[k], ref), translation_m(starts[k], ref));
+  for (size_t k = 0; k < starts.T.size(); ++k)
+    std::printf("  start %-12s %7.3f deg %7.3f m from the reference\n", starts.names[k].c_str(),
+                rotation_deg(starts.T[k], ref), translation_m(starts.T[k], ref));
   std::printf("%-38s %7s %-12s %9s %10s %10s", "method", "threads", "start", "ms", "rot err deg", "trans err m");
   if (pair.R_second) std::printf(" %9s", pair.second_name.c_str());
   std::printf("  converged (ours)\n");
   for (const auto& row : rows) {
-    std::printf("%-38s %7d %-12s %9.1f %10.4f %10.4f", row.method.c_str(), row.threads, start_names[row.start].c_str(), row.ms,
+    std::printf("%-38s %7d %-12s %9.1f %10.4f %10.4f", row.method.c_str(), row.threads, starts.names[row.start].c_str(), row.ms,
                 rotation_deg(row.T, ref), translation_m(row.T, ref));
     if (pair.R_second) std::printf(" %9.4f", rotation_deg(row.T.linear(), *pair.R_second));
     std::printf("  %s\n", row.verdict.c_str());
   }
+}
 
-  // Against the goals, from the pair's own start; errors within 0.01 deg and
-  // 1 mm count as equal (the references are registration results).
+// Against the goals, from the pair's own start; errors within 0.01 deg and
+// 1 mm count as equal (the references are registration results).
+void print_speedups(const Pair& pair, const std::vector<Row>& rows, bool reference_is_ours) {
+  const Eigen::Isometry3d& ref = *pair.T_reference;
   const auto find = [&](const std::string& method, int threads) -> const Row* {
     for (const auto& row : rows)
       if (row.method == method && row.threads == threads && row.start == 0) return &row;
@@ -260,12 +278,14 @@ void run_pair(Pair& pair, bool quick, bool ours_only) {
                 translation_m(theirs->T, ref), rotation_deg(mine->T, ref), translation_m(mine->T, ref),
                 reference_is_ours ? "not measurable, the reference is ours" : no_worse(*theirs) ? "yes" : "no");
   };
-  if (!ours_only) {
-    std::printf("%s, speed-up of ours (2 threads) from the start \"%s\":\n", pair.name.c_str(), pair.start_name.c_str());
-    against("over PCL ICP (1 thread)", find("PCL IterativeClosestPoint", 1), 10.0);
-    against("over Open3D point-to-point (2 threads)", find("Open3D point-to-point", 2), 2.0);
-  }
-  // Every start, every method: within 5 cm and 1 deg of the reference?
+  std::printf("%s, speed-up of ours (2 threads) from the start \"%s\":\n", pair.name.c_str(), pair.start_name.c_str());
+  against("over PCL ICP (1 thread)", find("PCL IterativeClosestPoint", 1), 10.0);
+  against("over Open3D point-to-point (2 threads)", find("Open3D point-to-point", 2), 2.0);
+}
+
+// Every start, every method: within 5 cm and 1 deg of the reference?
+void print_tally(const Pair& pair, const Starts& starts, const std::vector<Row>& rows) {
+  const Eigen::Isometry3d& ref = *pair.T_reference;
   std::vector<std::pair<std::string, int>> tally;  // method (threads) -> starts within
   bool all_ours = true;
   for (const auto& row : rows) {
@@ -277,9 +297,102 @@ void run_pair(Pair& pair, bool quick, bool ours_only) {
     if (row.method == "ours register_clouds" && !within) all_ours = false;
   }
   std::printf("%s: ours within 5 cm and 1 deg of the reference from every start: %s. Starts within, of %zu:", pair.name.c_str(),
-              all_ours ? "yes" : "NO", starts.size());
+              all_ours ? "yes" : "NO", starts.T.size());
   for (const auto& [method, n] : tally) std::printf(" %s %d;", method.c_str(), n);
   std::printf("\n");
+}
+
+void run_pair(Pair& pair, bool quick, bool ours_only) {
+  Starts starts{{pair.T_start}, {pair.start_name}};
+  const bool reference_is_ours = !pair.T_reference;
+  std::vector<Row> rows = ours_rows(pair, starts, quick);
+  // The peers, on the raw clouds and (lidar pairs) on filtered ones.
+  if (!ours_only) add_peer_rows(pair, starts, quick, rows);
+  print_rows(pair, starts, rows);
+  if (!ours_only) print_speedups(pair, rows, reference_is_ours);
+  print_tally(pair, starts, rows);
+}
+
+// Each pair reads its files when it is its turn (and only if they are all there).
+struct Maker {
+  std::string name;
+  std::vector<std::string> files;  // under pointclouds/
+  std::function<Pair(const std::vector<std::string>&)> make;
+};
+
+std::vector<Maker> pair_makers() {
+  return {
+    {"lidar-ply", {"koide3_small_gicp/source.ply", "koide3_small_gicp/target.ply", "koide3_small_gicp/T_target_source.txt"},
+     [](const std::vector<std::string>& f) {
+       Pair p;
+       p.name = "lidar-ply";
+       p.source = sem::read_cloud(f[0]);
+       p.target = sem::read_cloud(f[1]);
+       p.start_name = "identity";
+       p.T_reference = read_matrix(f[2]);
+       p.reference_name = "small_gicp's T_target_source.txt";
+       p.peer_voxel_m = 0.2;
+       return p;
+     }},
+    {"lidar-pcd", {"koide3_fast_gicp/251371071.pcd", "koide3_fast_gicp/251370668.pcd", "koide3_fast_gicp/relative.txt"},
+     [](const std::vector<std::string>& f) {
+       Pair p;
+       p.name = "lidar-pcd";
+       p.source = sem::read_cloud(f[0]);
+       p.target = sem::read_cloud(f[1]);
+       p.start_name = "identity";
+       p.T_reference = read_matrix(f[2]);
+       p.reference_name = "fast_gicp's relative.txt";
+       p.peer_voxel_m = 0.2;
+       return p;
+     }},
+    {"3dtk", {"3DTK-dat/scan001.3d", "3DTK-dat/scan000.3d", "3DTK-dat/scan001.frames", "3DTK-dat/scan000.frames"},
+     [](const std::vector<std::string>& f) {
+       const sem::Scan s1 = sem::read_scan(f[0]), s0 = sem::read_scan(f[1]);
+       if (!s0.T_world_scan || !s1.T_world_scan) throw std::runtime_error("3DTK-dat: scan000.pose or scan001.pose is absent");
+       Pair p;
+       p.name = "3dtk";
+       p.source = s1.cloud;
+       p.target = s0.cloud;
+       p.T_start = s0.T_world_scan->inverse() * *s1.T_world_scan;
+       p.start_name = "odometry";
+       p.T_reference = sem::read_3dtk_frames(f[3]).back().inverse() * sem::read_3dtk_frames(f[2]).back();
+       p.reference_name = "slam6d's .frames";
+       p.peer_voxel_m = 0.2;
+       return p;
+     }},
+    {"bunny", {"pcl/bun0.pcd", "pcl/bun4.pcd"},
+     [](const std::vector<std::string>& f) {
+       Pair p;
+       p.name = "bunny";
+       p.source = sem::read_cloud(f[0]);
+       p.target = sem::read_cloud(f[1]);
+       p.start_name = "identity";
+       Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
+       M.topRows<3>() << 0.8806, 0.0365, -0.4724, 0.03453, -0.02354, 0.9992, 0.03326, -0.001519, 0.4732, -0.01817, 0.8808,
+           0.04116;
+       p.T_reference = iso(M);
+       p.reference_name = "PCL's published ICP result";
+       // bun.conf: bun045's pose (bun000 at identity); its rotation, not
+       // its inverse's, is bun4 <- bun0 in PCL's files.
+       p.R_second = Eigen::Quaterniond(0.955586, 0.00548449, -0.294635, -0.0038555).normalized().toRotationMatrix();
+       p.second_name = "Stanford";
+       p.perturbation_m = 0.02;
+       p.peer_distance_m = 0.05;
+       return p;
+     }},
+    {"room", {"PointCloudLibrary_data/room_scan2.pcd", "PointCloudLibrary_data/room_scan1.pcd"},
+     [](const std::vector<std::string>& f) {
+       Pair p;
+       p.name = "room";
+       p.source = sem::read_cloud(f[0]);
+       p.target = sem::read_cloud(f[1]);
+       p.T_start = Eigen::Translation3d(1.79387, 0.720047, 0) * Eigen::AngleAxisd(0.6931, Eigen::Vector3d::UnitZ());
+       p.start_name = "NDT guess";  // the tutorial's
+       p.peer_voxel_m = 0.2;
+       return p;
+     }},
+  };
 }
 
 }  // namespace
@@ -302,84 +415,7 @@ int main(int argc, char** argv) {
   std::printf("register_clouds from its defaults vs PCL %s ICP vs Open3D ICP on the real pairs, %d hardware threads%s\n",
               PCL_VERSION_PRETTY, omp_get_num_procs(), quick ? " (--quick: one run per cell)" : "");
 
-  // Each pair reads its files when it is its turn (and only if they are all there).
-  struct Maker {
-    std::string name;
-    std::vector<std::string> files;  // under pointclouds/
-    std::function<Pair(const std::vector<std::string>&)> make;
-  };
-  const std::vector<Maker> makers = {
-      {"lidar-ply", {"koide3_small_gicp/source.ply", "koide3_small_gicp/target.ply", "koide3_small_gicp/T_target_source.txt"},
-       [](const std::vector<std::string>& f) {
-         Pair p;
-         p.name = "lidar-ply";
-         p.source = sem::read_cloud(f[0]);
-         p.target = sem::read_cloud(f[1]);
-         p.start_name = "identity";
-         p.T_reference = read_matrix(f[2]);
-         p.reference_name = "small_gicp's T_target_source.txt";
-         p.peer_voxel_m = 0.2;
-         return p;
-       }},
-      {"lidar-pcd", {"koide3_fast_gicp/251371071.pcd", "koide3_fast_gicp/251370668.pcd", "koide3_fast_gicp/relative.txt"},
-       [](const std::vector<std::string>& f) {
-         Pair p;
-         p.name = "lidar-pcd";
-         p.source = sem::read_cloud(f[0]);
-         p.target = sem::read_cloud(f[1]);
-         p.start_name = "identity";
-         p.T_reference = read_matrix(f[2]);
-         p.reference_name = "fast_gicp's relative.txt";
-         p.peer_voxel_m = 0.2;
-         return p;
-       }},
-      {"3dtk", {"3DTK-dat/scan001.3d", "3DTK-dat/scan000.3d", "3DTK-dat/scan001.frames", "3DTK-dat/scan000.frames"},
-       [](const std::vector<std::string>& f) {
-         const sem::Scan s1 = sem::read_scan(f[0]), s0 = sem::read_scan(f[1]);
-         if (!s0.T_world_scan || !s1.T_world_scan) throw std::runtime_error("3DTK-dat: scan000.pose or scan001.pose is absent");
-         Pair p;
-         p.name = "3dtk";
-         p.source = s1.cloud;
-         p.target = s0.cloud;
-         p.T_start = s0.T_world_scan->inverse() * *s1.T_world_scan;
-         p.start_name = "odometry";
-         p.T_reference = sem::read_3dtk_frames(f[3]).back().inverse() * sem::read_3dtk_frames(f[2]).back();
-         p.reference_name = "slam6d's .frames";
-         p.peer_voxel_m = 0.2;
-         return p;
-       }},
-      {"bunny", {"pcl/bun0.pcd", "pcl/bun4.pcd"},
-       [](const std::vector<std::string>& f) {
-         Pair p;
-         p.name = "bunny";
-         p.source = sem::read_cloud(f[0]);
-         p.target = sem::read_cloud(f[1]);
-         p.start_name = "identity";
-         Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
-         M.topRows<3>() << 0.8806, 0.0365, -0.4724, 0.03453, -0.02354, 0.9992, 0.03326, -0.001519, 0.4732, -0.01817, 0.8808,
-             0.04116;
-         p.T_reference = iso(M);
-         p.reference_name = "PCL's published ICP result";
-         // bun.conf: bun045's pose (bun000 at identity); its rotation, not
-         // its inverse's, is bun4 <- bun0 in PCL's files.
-         p.R_second = Eigen::Quaterniond(0.955586, 0.00548449, -0.294635, -0.0038555).normalized().toRotationMatrix();
-         p.second_name = "Stanford";
-         p.perturbation_m = 0.02;
-         p.peer_distance_m = 0.05;
-         return p;
-       }},
-      {"room", {"PointCloudLibrary_data/room_scan2.pcd", "PointCloudLibrary_data/room_scan1.pcd"},
-       [](const std::vector<std::string>& f) {
-         Pair p;
-         p.name = "room";
-         p.source = sem::read_cloud(f[0]);
-         p.target = sem::read_cloud(f[1]);
-         p.T_start = Eigen::Translation3d(1.79387, 0.720047, 0) * Eigen::AngleAxisd(0.6931, Eigen::Vector3d::UnitZ());
-         p.start_name = "NDT guess";  // the tutorial's
-         p.peer_voxel_m = 0.2;
-         return p;
-       }},
-  };
+  const std::vector<Maker> makers = pair_makers();
   int ran = 0;
   for (const auto& m : makers) {
     if (!only.empty() && m.name != only) continue;

@@ -6,12 +6,9 @@
 
 #include <algorithm>
 #include <bit>
-#include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -19,34 +16,6 @@
 #include "semantic/cloud_io.hpp"
 
 namespace rise::semantic::formats {
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::ostringstream s;
-  s << in.rdbuf();
-  if (in.bad()) throw std::runtime_error(path + ": cannot read: " + std::strerror(errno));
-  return std::move(s).str();
-}
-
-[[noreturn]] void fail_line(const std::string& path, size_t line, const std::string& message) {
-  throw std::runtime_error(path + ":" + std::to_string(line) + ": " + message);
-}
-[[noreturn]] void fail_byte(const std::string& path, size_t byte, const std::string& message) {
-  throw std::runtime_error(path + ": byte " + std::to_string(byte) + ": " + message);
-}
-
-std::vector<std::string_view> words(std::string_view line) {
-  std::vector<std::string_view> w;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    const size_t b = i;
-    while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
-    if (i > b) w.push_back(line.substr(b, i - b));
-  }
-  return w;
-}
 
 std::string lower_extension(const std::string& path) {
   std::string e = std::filesystem::path(path).extension().string();
@@ -328,15 +297,36 @@ struct Bytes {
   }
 };
 
-// PLY (Turk's format as in "The PLY Polygon File Format"): the vertex
-// element's x y z and nx ny nz; every other property and element is read
-// past.
-Cloud parse_ply(const std::string& path, std::string_view text) {
-  Lines lines{text};
+enum class PlyFormat { None, Ascii, Little, Big };
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::None;
+  std::vector<PlyElement> elements;
+};
+
+// A property line's words: "<type> <name>" or "list <type> <type> <name>".
+PlyProperty ply_property(const std::string& path, size_t n, const std::vector<std::string_view>& w) {
+  PlyProperty p;
+  if (w.size() == 5 && w[1] == "list") {
+    p.list = true;
+    if (!ply_type(w[2], p.count_type) || !ply_type(w[3], p.type)) fail_line(path, n, "property: unknown list type");
+    if (p.count_type == PlyType::F32 || p.count_type == PlyType::F64)
+      fail_line(path, n, "property: a list count must be an integer type");
+    p.name = std::string(w[4]);
+  } else if (w.size() == 3) {
+    if (!ply_type(w[1], p.type)) fail_line(path, n, "property: unknown type '" + std::string(w[1]) + "'");
+    p.name = std::string(w[2]);
+  } else {
+    fail_line(path, n, "property: expected '<type> <name>' or 'list <type> <type> <name>'");
+  }
+  return p;
+}
+
+// The header up to end_header; `lines` is left on the first data byte.
+PlyHeader parse_ply_header(const std::string& path, Lines& lines) {
   std::string_view line;
   if (!lines.next(line) || line != "ply") fail_line(path, 1, "not a PLY file (first line is not 'ply')");
-  enum class Format { None, Ascii, Little, Big } format = Format::None;
-  std::vector<PlyElement> elements;
+  PlyHeader h;
   bool ended = false;
   while (lines.next(line)) {
     const auto w = words(line);
@@ -345,30 +335,16 @@ Cloud parse_ply(const std::string& path, std::string_view text) {
     if (w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "format") {
       if (w.size() != 3 || w[2] != "1.0") fail_line(path, n, "format: expected '<kind> 1.0'");
-      if (w[1] == "ascii") format = Format::Ascii;
-      else if (w[1] == "binary_little_endian") format = Format::Little;
-      else if (w[1] == "binary_big_endian") format = Format::Big;
+      if (w[1] == "ascii") h.format = PlyFormat::Ascii;
+      else if (w[1] == "binary_little_endian") h.format = PlyFormat::Little;
+      else if (w[1] == "binary_big_endian") h.format = PlyFormat::Big;
       else fail_line(path, n, "format: unknown '" + std::string(w[1]) + "'");
     } else if (w[0] == "element") {
       if (w.size() != 3) fail_line(path, n, "element: expected a name and a count");
-      elements.push_back({std::string(w[1]), number<uint64_t>(w[2], path, n, "element"), {}});
+      h.elements.push_back({std::string(w[1]), number<uint64_t>(w[2], path, n, "element"), {}});
     } else if (w[0] == "property") {
-      if (elements.empty()) fail_line(path, n, "property: before any element");
-      PlyProperty p;
-      if (w.size() == 5 && w[1] == "list") {
-        p.list = true;
-        if (!ply_type(w[2], p.count_type) || !ply_type(w[3], p.type))
-          fail_line(path, n, "property: unknown list type");
-        if (p.count_type == PlyType::F32 || p.count_type == PlyType::F64)
-          fail_line(path, n, "property: a list count must be an integer type");
-        p.name = std::string(w[4]);
-      } else if (w.size() == 3) {
-        if (!ply_type(w[1], p.type)) fail_line(path, n, "property: unknown type '" + std::string(w[1]) + "'");
-        p.name = std::string(w[2]);
-      } else {
-        fail_line(path, n, "property: expected '<type> <name>' or 'list <type> <type> <name>'");
-      }
-      elements.back().properties.push_back(p);
+      if (h.elements.empty()) fail_line(path, n, "property: before any element");
+      h.elements.back().properties.push_back(ply_property(path, n, w));
     } else if (w[0] == "end_header") {
       ended = true;
       break;
@@ -377,32 +353,20 @@ Cloud parse_ply(const std::string& path, std::string_view text) {
     }
   }
   if (!ended) fail_line(path, lines.number, "end_header: missing");
-  if (format == Format::None) fail_line(path, lines.number, "format: missing");
+  if (h.format == PlyFormat::None) fail_line(path, lines.number, "format: missing");
+  return h;
+}
 
+// The vertex element, where its x y z (and nx ny nz) are among its
+// properties, and the cloud its instances make.
+struct PlyVertices {
   const PlyElement* vertex = nullptr;
-  for (const auto& e : elements)
-    if (e.name == "vertex") vertex = &e;
-  if (vertex == nullptr) fail_line(path, lines.number, "element vertex: missing");
   int ix[6] = {-1, -1, -1, -1, -1, -1};
-  static const char* wanted[6] = {"x", "y", "z", "nx", "ny", "nz"};
-  for (size_t i = 0; i < vertex->properties.size(); ++i)
-    for (int k = 0; k < 6; ++k)
-      if (vertex->properties[i].name == wanted[k] && !vertex->properties[i].list) ix[k] = static_cast<int>(i);
-  if (ix[0] < 0 || ix[1] < 0 || ix[2] < 0) fail_line(path, lines.number, "element vertex: no x y z properties");
-  const bool normals = ix[3] >= 0 && ix[4] >= 0 && ix[5] >= 0;
-
-  // Every element needs at least a byte (binary) or a character per
-  // instance: a count beyond the file's size is refused before reserving.
-  const size_t left = text.size() - std::min(lines.pos, text.size());
-  for (const auto& e : elements)
-    if (e.count > left) fail_line(path, lines.number, "element " + e.name + ": count " + std::to_string(e.count) +
-                                                          " exceeds the data's " + std::to_string(left) + " bytes");
-
+  bool normals = false;
   Cloud cloud;
-  cloud.points.reserve(vertex->count);
-  if (normals) cloud.normals.reserve(vertex->count);
-  std::vector<double> values;
-  const auto take = [&]() {
+
+  // One vertex from its properties' values (a list's value is 0).
+  void take(const std::vector<double>& values) {
     const Eigen::Vector3f p(static_cast<float>(values[static_cast<size_t>(ix[0])]),
                             static_cast<float>(values[static_cast<size_t>(ix[1])]),
                             static_cast<float>(values[static_cast<size_t>(ix[2])]));
@@ -415,62 +379,106 @@ Cloud parse_ply(const std::string& path, std::string_view text) {
       const float len = m.norm();
       cloud.normals.push_back(std::isfinite(len) && len > 0.0f ? Eigen::Vector3f(m / len) : Eigen::Vector3f::Zero());
     }
-  };
+  }
+};
 
-  if (format == Format::Ascii) {
-    for (const auto& e : elements) {
-      const bool is_vertex = &e == vertex;
-      for (uint64_t k = 0; k < e.count; ++k) {
-        std::string_view l;
-        std::vector<std::string_view> w;
-        do {
-          if (!lines.next(l)) fail_line(path, lines.number, "element " + e.name + ": " + std::to_string(k) + " of " +
-                                                                std::to_string(e.count) + " found, file ends");
-          w = words(l);
-        } while (w.empty());
-        const size_t n = lines.number;
-        size_t t = 0;
-        values.clear();
-        for (const auto& p : e.properties) {
-          if (t >= w.size()) fail_line(path, n, "element " + e.name + ": too few values for '" + p.name + "'");
-          if (p.list) {
-            const uint64_t c = number<uint64_t>(w[t++], path, n, p.name);
-            if (c > w.size() - t) fail_line(path, n, "element " + e.name + ": list '" + p.name + "' too short");
-            for (uint64_t j = 0; j < c; ++j) (void)number<double>(w[t++], path, n, p.name);
-            values.push_back(0.0);
-          } else {
-            values.push_back(number<double>(w[t++], path, n, p.name));
-          }
+PlyVertices ply_vertices(const std::string& path, const Lines& lines, const std::vector<PlyElement>& elements) {
+  PlyVertices v;
+  for (const auto& e : elements)
+    if (e.name == "vertex") v.vertex = &e;
+  if (v.vertex == nullptr) fail_line(path, lines.number, "element vertex: missing");
+  static const char* wanted[6] = {"x", "y", "z", "nx", "ny", "nz"};
+  const auto& properties = v.vertex->properties;
+  for (size_t i = 0; i < properties.size(); ++i)
+    for (int k = 0; k < 6; ++k)
+      if (properties[i].name == wanted[k] && !properties[i].list) v.ix[k] = static_cast<int>(i);
+  if (v.ix[0] < 0 || v.ix[1] < 0 || v.ix[2] < 0) fail_line(path, lines.number, "element vertex: no x y z properties");
+  v.normals = v.ix[3] >= 0 && v.ix[4] >= 0 && v.ix[5] >= 0;
+
+  // Every element needs at least a byte (binary) or a character per
+  // instance: a count beyond the file's size is refused before reserving.
+  const size_t left = lines.text.size() - std::min(lines.pos, lines.text.size());
+  for (const auto& e : elements)
+    if (e.count > left) fail_line(path, lines.number, "element " + e.name + ": count " + std::to_string(e.count) +
+                                                          " exceeds the data's " + std::to_string(left) + " bytes");
+  v.cloud.points.reserve(v.vertex->count);
+  if (v.normals) v.cloud.normals.reserve(v.vertex->count);
+  return v;
+}
+
+// Every element's instances as text lines, from where `lines` stands.
+void read_ply_ascii(const std::string& path, Lines& lines, const std::vector<PlyElement>& elements, PlyVertices& out) {
+  std::vector<double> values;
+  for (const auto& e : elements) {
+    const bool is_vertex = &e == out.vertex;
+    for (uint64_t k = 0; k < e.count; ++k) {
+      std::string_view l;
+      std::vector<std::string_view> w;
+      do {
+        if (!lines.next(l)) fail_line(path, lines.number, "element " + e.name + ": " + std::to_string(k) + " of " +
+                                                              std::to_string(e.count) + " found, file ends");
+        w = words(l);
+      } while (w.empty());
+      const size_t n = lines.number;
+      size_t t = 0;
+      values.clear();
+      for (const auto& p : e.properties) {
+        if (t >= w.size()) fail_line(path, n, "element " + e.name + ": too few values for '" + p.name + "'");
+        if (p.list) {
+          const uint64_t c = number<uint64_t>(w[t++], path, n, p.name);
+          if (c > w.size() - t) fail_line(path, n, "element " + e.name + ": list '" + p.name + "' too short");
+          for (uint64_t j = 0; j < c; ++j) (void)number<double>(w[t++], path, n, p.name);
+          values.push_back(0.0);
+        } else {
+          values.push_back(number<double>(w[t++], path, n, p.name));
         }
-        if (t != w.size()) fail_line(path, n, "element " + e.name + ": " + std::to_string(w.size() - t) + " values too many");
-        if (is_vertex) take();
       }
-    }
-  } else {
-    Bytes b{path, text, lines.pos, format == Format::Big};
-    if (b.pos > text.size()) b.pos = text.size();
-    for (const auto& e : elements) {
-      const bool is_vertex = &e == vertex;
-      for (uint64_t k = 0; k < e.count; ++k) {
-        values.clear();
-        for (const auto& p : e.properties) {
-          if (p.list) {
-            const size_t at = b.pos;
-            const double c = b.read(p.count_type);
-            if (c < 0) fail_byte(path, at, "list '" + p.name + "': negative count");
-            const size_t bytes = static_cast<size_t>(c) * ply_size(p.type);
-            if (bytes > text.size() - b.pos) fail_byte(path, b.pos, "binary data truncated in list '" + p.name + "'");
-            b.pos += bytes;
-            values.push_back(0.0);
-          } else {
-            values.push_back(b.read(p.type));
-          }
-        }
-        if (is_vertex) take();
-      }
+      if (t != w.size()) fail_line(path, n, "element " + e.name + ": " + std::to_string(w.size() - t) + " values too many");
+      if (is_vertex) out.take(values);
     }
   }
-  return cloud;
+}
+
+// Every element's instances as bytes in the file's order, from `b.pos`.
+void read_ply_binary(Bytes& b, const std::vector<PlyElement>& elements, PlyVertices& out) {
+  std::vector<double> values;
+  for (const auto& e : elements) {
+    const bool is_vertex = &e == out.vertex;
+    for (uint64_t k = 0; k < e.count; ++k) {
+      values.clear();
+      for (const auto& p : e.properties) {
+        if (p.list) {
+          const size_t at = b.pos;
+          const double c = b.read(p.count_type);
+          if (c < 0) fail_byte(b.path, at, "list '" + p.name + "': negative count");
+          const size_t bytes = static_cast<size_t>(c) * ply_size(p.type);
+          if (bytes > b.data.size() - b.pos) fail_byte(b.path, b.pos, "binary data truncated in list '" + p.name + "'");
+          b.pos += bytes;
+          values.push_back(0.0);
+        } else {
+          values.push_back(b.read(p.type));
+        }
+      }
+      if (is_vertex) out.take(values);
+    }
+  }
+}
+
+// PLY (Turk's format as in "The PLY Polygon File Format"): the vertex
+// element's x y z and nx ny nz; every other property and element is read
+// past.
+Cloud parse_ply(const std::string& path, std::string_view text) {
+  Lines lines{text};
+  const PlyHeader h = parse_ply_header(path, lines);
+  PlyVertices v = ply_vertices(path, lines, h.elements);
+  if (h.format == PlyFormat::Ascii) {
+    read_ply_ascii(path, lines, h.elements, v);
+  } else {
+    Bytes b{path, text, lines.pos, h.format == PlyFormat::Big};
+    if (b.pos > text.size()) b.pos = text.size();
+    read_ply_binary(b, h.elements, v);
+  }
+  return std::move(v.cloud);
 }
 
 // ---------------------------------------------------------------- XYZ ----

@@ -16,6 +16,11 @@
 namespace rise::semantic {
 namespace {
 
+double huber_weight(double residual, double huber_m) {
+  const double a = std::abs(residual);
+  return (huber_m > 0.0 && a > huber_m) ? huber_m / a : 1.0;
+}
+
 // Per-thread sums of one iteration. Point-to-point keeps the moments of the
 // weighted pairs (Horn/Umeyama closed form); point-to-plane the normal
 // equations JᵀWJ δ = -JᵀWr of the linearised residual n·(p' + ω×p' + v - q).
@@ -41,12 +46,26 @@ struct Sums {
     pairs += o.pairs;
     points += o.points;
   }
-};
 
-double huber_weight(double residual, double huber_m) {
-  const double a = std::abs(residual);
-  return (huber_m > 0.0 && a > huber_m) ? huber_m / a : 1.0;
-}
+  /// A point-to-plane pair: residual r = n·(p' - q), Jacobian row [p' × n, n].
+  void add_plane_pair(const Eigen::Vector3d& pd, const Eigen::Vector3d& qd, const Eigen::Vector3d& nd, double huber_m) {
+    const double r = nd.dot(pd - qd);
+    const double w = huber_weight(r, huber_m);
+    Eigen::Matrix<double, 6, 1> J;
+    J.head<3>() = pd.cross(nd);
+    J.tail<3>() = nd;
+    JtJ.selfadjointView<Eigen::Upper>().rankUpdate(J, w);
+    Jtr += (w * r) * J;
+  }
+  /// A point-to-point pair `distance2_m2` apart: its weighted moments.
+  void add_point_pair(const Eigen::Vector3d& pd, const Eigen::Vector3d& qd, float distance2_m2, double huber_m) {
+    const double w = huber_weight(std::sqrt(static_cast<double>(distance2_m2)), huber_m);
+    Sw += w;
+    Sp += w * pd;
+    Sq += w * qd;
+    Spq += (w * pd) * qd.transpose();
+  }
+};
 
 // The rigid motion that best maps the weighted p' onto q (Umeyama 1991,
 // eq. 39-41 without scale), from the accumulated moments.
@@ -193,6 +212,143 @@ void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
   if (s.coarse_stride < 1) throw std::invalid_argument("icp: coarse_stride must be at least 1");
 }
 
+// The stride of iteration `it`: coarse_stride over the first half, then
+// halving in equal steps down to 1 for the last ones. Each chunk counts
+// its stride from its own first point: the points used depend on the
+// chunks only, not on the threads.
+std::ptrdiff_t stride_of(const IcpSettings& s, int it) {
+  const int coarse_iterations = s.max_iterations / 2;
+  if (it < coarse_iterations) return s.coarse_stride;
+  const int halvings = std::bit_width(static_cast<unsigned>(s.coarse_stride)) - 1;  // log2, rounded down
+  const int rest = s.max_iterations - coarse_iterations;
+  const int step = (it - coarse_iterations) * (halvings + 1) / std::max(1, rest);  // 0 .. halvings
+  return std::max<std::ptrdiff_t>(1, s.coarse_stride >> (step + 1));
+}
+
+// One iteration's pass over the source: each (strided) source point, moved
+// by the current pose, paired with its nearest target point within the
+// iteration's radius, and the pairs' terms summed. Work in fixed chunks
+// handed out dynamically (a thread the OS parks on a busy machine does not
+// hold up the others), each summed into its own slot and the slots added in
+// order: the same answer for any number of threads and any schedule. What
+// the passes carry from one iteration to the next is allocated once, here.
+class PairPass {
+ public:
+  PairPass(const Cloud& source, const Cloud& target, const IcpSettings& s, int threads)
+      : src_(source.points),
+        target_(target),
+        plane_(s.metric == IcpMetric::PointToPlane),
+        reuse_(s.reuse_pairs && s.max_points_per_cell == 0),
+        huber_m_(s.huber_m),
+        threads_(threads),
+        chunks_((static_cast<std::ptrdiff_t>(src_.size()) + kChunk - 1) / kChunk),
+        partial_(static_cast<size_t>(chunks_)),
+        hint_(src_.size(), 0),
+        memo_(reuse_ ? src_.size() : 0) {}
+
+  Sums sum_pairs(const GridPyramid& pyramid, const Eigen::Isometry3d& T, double radius, std::ptrdiff_t stride) {
+    const auto& src = src_;
+    const auto& target = target_;
+    const auto& tn = target.normals;
+    auto& hint = hint_;
+    auto& memo = memo_;
+    auto& partial = partial_;
+    const bool plane = plane_, reuse = reuse_;
+    const double huber = huber_m_;
+    const auto n = static_cast<std::ptrdiff_t>(src.size());
+    const std::ptrdiff_t chunks = chunks_;
+    const float rf = static_cast<float>(radius);
+    const uint8_t widest = pyramid.level_for(rf);
+    const Eigen::Matrix3f R = T.linear().cast<float>();
+    const Eigen::Vector3f t = T.translation().cast<float>();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads_)
+    for (std::ptrdiff_t c = 0; c < chunks; ++c) {
+      Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
+      for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); i += stride) {
+        ++acc.points;
+        const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
+        uint8_t& level = hint[static_cast<size_t>(i)];
+        const VoxelGrid::Neighbour nb = reuse ? nearest_reusing(pyramid, p, rf, widest, level, memo[static_cast<size_t>(i)])
+                                              : pyramid.nearest(p, rf, level, widest);
+        if (nb.index == VoxelGrid::kNone) continue;
+        const Eigen::Vector3d pd = p.cast<double>();
+        const Eigen::Vector3d qd = target.points[nb.index].cast<double>();
+        acc.squared_error += nb.distance2_m2;
+        ++acc.pairs;
+        if (plane) {
+          acc.add_plane_pair(pd, qd, tn[nb.index].cast<double>(), huber);
+        } else {
+          acc.add_point_pair(pd, qd, nb.distance2_m2, huber);
+        }
+      }
+      partial[static_cast<size_t>(c)] = acc;
+    }
+    Sums s;
+    for (const auto& p : partial) s.add(p);
+    return s;
+  }
+
+ private:
+  // Per source point, its last exact search: where it was, its answer and
+  // that answer's clearance (0: none to reuse). Capped cells keep different
+  // points per level: no reuse there.
+  struct Memo {
+    Eigen::Vector3f at = Eigen::Vector3f::Zero();
+    float clear_m = 0.0f;
+    uint32_t index = VoxelGrid::kNone;
+  };
+
+  // Moved by δ since its last exact search: every other target point is
+  // still at least clear − δ away, so while its answer is nearer than that
+  // it is still the nearest, and a search would return it (with the same
+  // start level). The same pairs, without the search.
+  VoxelGrid::Neighbour nearest_reusing(const GridPyramid& pyramid, const Eigen::Vector3f& p, float rf, uint8_t widest,
+                                       uint8_t& level, Memo& m) const {
+    const float delta = (p - m.at).norm();
+    const float slack = delta + 1e-6f * (p.cwiseAbs().maxCoeff() + 1.0f);  // float rounding
+    if (m.clear_m > 0.0f) {
+      if (m.index != VoxelGrid::kNone) {
+        const Eigen::Vector3f& tp = target_.points[m.index];
+        const float d2 = (Eigen::Vector4f(tp.x(), tp.y(), tp.z(), 0.0f) - Eigen::Vector4f(p.x(), p.y(), p.z(), 0.0f)).squaredNorm();
+        if (std::sqrt(d2) + slack < m.clear_m) {
+          if (d2 <= rf * rf) {
+            level = pyramid.level_of(d2);
+            return {m.index, d2};
+          }
+          level = pyramid.coarsest();
+          return {};
+        }
+      } else if (rf + slack < m.clear_m) {
+        level = pyramid.coarsest();  // nothing within the clearance then: nothing within rf now
+        return {};
+      }
+    }
+    float clear = 0.0f;
+    const VoxelGrid::Neighbour nb = pyramid.nearest(p, rf, level, widest, &clear);
+    m = {p, clear, nb.index};
+    return nb;
+  }
+
+  static constexpr std::ptrdiff_t kChunk = 1024;
+  const std::vector<Eigen::Vector3f>& src_;
+  const Cloud& target_;
+  const bool plane_, reuse_;
+  const double huber_m_;
+  const int threads_;
+  const std::ptrdiff_t chunks_;
+  std::vector<Sums> partial_;
+  std::vector<uint8_t> hint_;  // per source point: the pyramid level to start at
+  std::vector<Memo> memo_;     // per source point, with reuse
+};
+
+// The motion this iteration's sums ask for: a Gauss-Newton step
+// (point-to-plane) or the closed form (point-to-point).
+Eigen::Isometry3d step_from(Sums& s, bool plane) {
+  if (!plane) return closed_form(s);
+  s.JtJ = s.JtJ.selfadjointView<Eigen::Upper>();
+  return gauss_newton(s);
+}
+
 }  // namespace
 
 std::vector<double> correspondence_schedule(const IcpSettings& s) {
@@ -217,133 +373,21 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
 
   const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
                             settings.exact_neighbours, settings.max_points_per_cell);
+  PairPass pass(source, target, settings, threads);
 
-  const auto& src = source.points;
-  const auto& tn = target.normals;
-  const auto n = static_cast<std::ptrdiff_t>(src.size());
-  // Work in fixed chunks handed out dynamically (a thread the OS parks on a
-  // busy machine does not hold up the others), each summed into its own
-  // slot and the slots added in order: the same answer for any number of
-  // threads and any schedule. Allocated once, outside the iterations.
-  constexpr std::ptrdiff_t kChunk = 1024;
-  const std::ptrdiff_t chunks = (n + kChunk - 1) / kChunk;
-  std::vector<Sums> partial(static_cast<size_t>(chunks));
-  std::vector<uint8_t> hint(src.size(), 0);  // per source point: the pyramid level to start at
-  // Per source point, its last exact search: where it was, its answer and
-  // that answer's clearance (0: none to reuse). Capped cells keep different
-  // points per level: no reuse there.
-  struct Memo {
-    Eigen::Vector3f at = Eigen::Vector3f::Zero();
-    float clear_m = 0.0f;
-    uint32_t index = VoxelGrid::kNone;
-  };
-  const bool reuse = settings.reuse_pairs && settings.max_points_per_cell == 0;
-  std::vector<Memo> memo(reuse ? src.size() : 0);
-
-  // The stride of each iteration: coarse_stride over the first half, then
-  // halving in equal steps down to 1 for the last ones. Each chunk counts
-  // its stride from its own first point: the points used depend on the
-  // chunks only, not on the threads.
-  const int coarse_iterations = settings.max_iterations / 2;
-  const int halvings = std::bit_width(static_cast<unsigned>(settings.coarse_stride)) - 1;  // log2, rounded down
-  const int rest = settings.max_iterations - coarse_iterations;
-  const auto stride_of = [&](int it) -> std::ptrdiff_t {
-    if (it < coarse_iterations) return settings.coarse_stride;
-    const int step = (it - coarse_iterations) * (halvings + 1) / std::max(1, rest);  // 0 .. halvings
-    return std::max<std::ptrdiff_t>(1, settings.coarse_stride >> (step + 1));
-  };
   IcpResult result;
   Eigen::Isometry3d T = T_initial;
   for (int it = 0; it < settings.max_iterations; ++it) {
     const double radius = schedule[static_cast<size_t>(it)];
-    const float rf = static_cast<float>(radius);
-    const uint8_t widest = pyramid.level_for(rf);
-    const Eigen::Matrix3f R = T.linear().cast<float>();
-    const Eigen::Vector3f t = T.translation().cast<float>();
-    const double huber = settings.huber_m;
-    const std::ptrdiff_t stride = stride_of(it);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (std::ptrdiff_t c = 0; c < chunks; ++c) {
-      Sums acc;  // a local: the compiler keeps it in registers, and threads share no cache line
-      for (std::ptrdiff_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); i += stride) {
-        ++acc.points;
-        const Eigen::Vector3f p = R * src[static_cast<size_t>(i)] + t;
-        uint8_t& level = hint[static_cast<size_t>(i)];
-        VoxelGrid::Neighbour nb;
-        if (reuse) {
-          // Moved by δ since its last exact search: every other target point
-          // is still at least clear − δ away, so while its answer is nearer
-          // than that it is still the nearest, and a search would return it
-          // (with the same start level). The same pairs, without the search.
-          Memo& m = memo[static_cast<size_t>(i)];
-          const float delta = (p - m.at).norm();
-          const float slack = delta + 1e-6f * (p.cwiseAbs().maxCoeff() + 1.0f);  // float rounding
-          bool reused = false;
-          if (m.clear_m > 0.0f) {
-            if (m.index != VoxelGrid::kNone) {
-              const Eigen::Vector3f& tp = target.points[m.index];
-              const float d2 = (Eigen::Vector4f(tp.x(), tp.y(), tp.z(), 0.0f) - Eigen::Vector4f(p.x(), p.y(), p.z(), 0.0f)).squaredNorm();
-              if (std::sqrt(d2) + slack < m.clear_m) {
-                reused = true;
-                if (d2 <= rf * rf) {
-                  nb = {m.index, d2};
-                  level = pyramid.level_of(d2);
-                } else {
-                  level = pyramid.coarsest();
-                }
-              }
-            } else if (rf + slack < m.clear_m) {
-              reused = true;  // nothing within the clearance then: nothing within rf now
-              level = pyramid.coarsest();
-            }
-          }
-          if (!reused) {
-            float clear = 0.0f;
-            nb = pyramid.nearest(p, rf, level, widest, &clear);
-            m = {p, clear, nb.index};
-          }
-        } else {
-          nb = pyramid.nearest(p, rf, level, widest);
-        }
-        if (nb.index == VoxelGrid::kNone) continue;
-        const Eigen::Vector3d pd = p.cast<double>();
-        const Eigen::Vector3d qd = target.points[nb.index].cast<double>();
-        acc.squared_error += nb.distance2_m2;
-        ++acc.pairs;
-        if (plane) {
-          const Eigen::Vector3d nd = tn[nb.index].cast<double>();
-          const double r = nd.dot(pd - qd);
-          const double w = huber_weight(r, huber);
-          Eigen::Matrix<double, 6, 1> J;
-          J.head<3>() = pd.cross(nd);
-          J.tail<3>() = nd;
-          acc.JtJ.selfadjointView<Eigen::Upper>().rankUpdate(J, w);
-          acc.Jtr += (w * r) * J;
-        } else {
-          const double w = huber_weight(std::sqrt(static_cast<double>(nb.distance2_m2)), huber);
-          acc.Sw += w;
-          acc.Sp += w * pd;
-          acc.Sq += w * qd;
-          acc.Spq += (w * pd) * qd.transpose();
-        }
-      }
-      partial[static_cast<size_t>(c)] = acc;
-    }
-    Sums s;
-    for (const auto& p : partial) s.add(p);
+    const std::ptrdiff_t stride = stride_of(settings, it);
+    Sums s = pass.sum_pairs(pyramid, T, radius, stride);
     result.iterations = it + 1;
     result.inlier_ratio = static_cast<double>(s.pairs) / static_cast<double>(s.points);
     result.rmse_m = s.pairs > 0 ? std::sqrt(s.squared_error / static_cast<double>(s.pairs)) : 0.0;
     const size_t needed = plane ? 6 : 3;
     if (s.pairs < needed) break;  // too few pairs to pin the pose down: keep the last one
 
-    Eigen::Isometry3d dT;
-    if (plane) {
-      s.JtJ = s.JtJ.selfadjointView<Eigen::Upper>();
-      dT = gauss_newton(s);
-    } else {
-      dT = closed_form(s);
-    }
+    const Eigen::Isometry3d dT = step_from(s, plane);
     T = dT * T;
     const double moved = dT.translation().norm();
     const double turned = Eigen::AngleAxisd(dT.linear()).angle();

@@ -104,81 +104,88 @@ void check_positive_definite(const Matrix6d& m, const std::string& path, std::si
   }
 }
 
-}  // namespace
+// One line of the file: its words, tag and number.
+struct GraphLine {
+  const std::string& path;
+  const std::vector<std::string_view>& w;
+  std::string tag;
+  std::size_t n;
 
-PoseGraphFile read_pose_graph(const std::string& path) {
-  const std::string text = formats::read_file(path);
+  void expect(std::size_t count, const char* what) const {
+    if (w.size() != count + 1) {
+      fail_line(path, n, tag + ": " + std::to_string(w.size() - 1) + " values, expected " + std::to_string(count) +
+                             " (" + what + ")");
+    }
+  }
+};
+
+// An EDGE_SE3:QUAT, EDGE_SE2 or EDGE3 line; EDGE_SE2 marks the graph planar.
+EdgeLine edge_line(const GraphLine& l, bool& planar) {
+  const std::string& path = l.path;
+  const std::string& tag = l.tag;
+  const std::size_t n = l.n;
+  EdgeLine e;
+  e.line = n;
+  e.tag = tag;
+  if (tag == "EDGE_SE3:QUAT") {
+    l.expect(30, "i j x y z qx qy qz qw and 21 information values");
+  } else if (tag == "EDGE_SE2") {
+    l.expect(11, "i j x y theta and 6 information values");
+  } else {
+    l.expect(29, "i j x y z roll pitch yaw and 21 information values");
+  }
+  e.from = id(l.w[1], path, n, tag);
+  e.to = id(l.w[2], path, n, tag);
+  if (e.from == e.to) fail_line(path, n, tag + ": an edge from vertex " + std::to_string(e.from) + " to itself");
+  const auto v = values(l.w, 3, path, n, tag);
+  if (tag == "EDGE_SE3:QUAT") {
+    e.T_from_to = from_quaternion(v.data(), path, n, tag);
+    e.information = from_quaternion_information(upper_triangle(v.data() + 7));
+  } else if (tag == "EDGE_SE2") {
+    e.T_from_to = from_planar(v[0], v[1], v[2]);
+    e.information = from_planar_information(v.data() + 3);
+    planar = true;
+  } else {
+    e.T_from_to = from_euler(v.data());
+    e.information = upper_triangle(v.data() + 6);
+  }
+  check_positive_definite(e.information, path, n, tag);
+  return e;
+}
+
+// The file as its lines give it: vertices (in file order) in `f`, the
+// edges and FIX lines kept until every vertex is known (an edge may come
+// before its vertices, or a file give no vertices at all).
+struct GraphLines {
+  explicit GraphLines(const std::string& file) : path(file) {}
+
+  const std::string& path;
   PoseGraphFile f;
-  std::unordered_map<long long, std::size_t> node_of;   // vertex id -> node
+  std::unordered_map<long long, std::size_t> node_of;  // vertex id -> node
   std::unordered_map<long long, std::size_t> vertex_line;
   std::vector<EdgeLine> edges;
   std::vector<std::pair<long long, std::size_t>> fix;  // id, line
   std::map<std::string, std::size_t> ignored;
 
-  formats::Lines lines{text};
-  std::string_view line;
-  while (lines.next(line)) {
-    const auto w = formats::words(line);
-    if (w.empty() || w[0].front() == '#') continue;
-    const std::string tag(w[0]);
-    const std::size_t n = lines.number;
-    const auto expect = [&](std::size_t count, const char* what) {
-      if (w.size() != count + 1) {
-        fail_line(path, n, tag + ": " + std::to_string(w.size() - 1) + " values, expected " + std::to_string(count) +
-                               " (" + what + ")");
-      }
-    };
-    const auto add_vertex = [&](long long vertex, const Eigen::Isometry3d& T) {
-      if (const auto it = vertex_line.find(vertex); it != vertex_line.end()) {
-        fail_line(path, n, tag + ": vertex " + std::to_string(vertex) + " given twice (first on line " +
-                               std::to_string(it->second) + ")");
-      }
-      vertex_line[vertex] = n;
-      node_of[vertex] = f.ids.size();
-      f.ids.push_back(vertex);
-      f.graph.T_world_node.push_back(T);
-    };
+  void read(const GraphLine& l) {
+    const std::string& tag = l.tag;
+    const std::size_t n = l.n;
+    const auto& w = l.w;
     if (tag == "VERTEX_SE3:QUAT") {
-      expect(8, "id x y z qx qy qz qw");
+      l.expect(8, "id x y z qx qy qz qw");
       const auto v = values(w, 2, path, n, tag);
-      add_vertex(id(w[1], path, n, tag), from_quaternion(v.data(), path, n, tag));
+      add_vertex(l, id(w[1], path, n, tag), from_quaternion(v.data(), path, n, tag));
     } else if (tag == "VERTEX_SE2") {
-      expect(4, "id x y theta");
+      l.expect(4, "id x y theta");
       const auto v = values(w, 2, path, n, tag);
-      add_vertex(id(w[1], path, n, tag), from_planar(v[0], v[1], v[2]));
+      add_vertex(l, id(w[1], path, n, tag), from_planar(v[0], v[1], v[2]));
       f.planar = true;
     } else if (tag == "VERTEX3") {
-      expect(7, "id x y z roll pitch yaw");
+      l.expect(7, "id x y z roll pitch yaw");
       const auto v = values(w, 2, path, n, tag);
-      add_vertex(id(w[1], path, n, tag), from_euler(v.data()));
+      add_vertex(l, id(w[1], path, n, tag), from_euler(v.data()));
     } else if (tag == "EDGE_SE3:QUAT" || tag == "EDGE_SE2" || tag == "EDGE3") {
-      EdgeLine e;
-      e.line = n;
-      e.tag = tag;
-      if (tag == "EDGE_SE3:QUAT") {
-        expect(30, "i j x y z qx qy qz qw and 21 information values");
-      } else if (tag == "EDGE_SE2") {
-        expect(11, "i j x y theta and 6 information values");
-      } else {
-        expect(29, "i j x y z roll pitch yaw and 21 information values");
-      }
-      e.from = id(w[1], path, n, tag);
-      e.to = id(w[2], path, n, tag);
-      if (e.from == e.to) fail_line(path, n, tag + ": an edge from vertex " + std::to_string(e.from) + " to itself");
-      const auto v = values(w, 3, path, n, tag);
-      if (tag == "EDGE_SE3:QUAT") {
-        e.T_from_to = from_quaternion(v.data(), path, n, tag);
-        e.information = from_quaternion_information(upper_triangle(v.data() + 7));
-      } else if (tag == "EDGE_SE2") {
-        e.T_from_to = from_planar(v[0], v[1], v[2]);
-        e.information = from_planar_information(v.data() + 3);
-        f.planar = true;
-      } else {
-        e.T_from_to = from_euler(v.data());
-        e.information = upper_triangle(v.data() + 6);
-      }
-      check_positive_definite(e.information, path, n, tag);
-      edges.push_back(std::move(e));
+      edges.push_back(edge_line(l, f.planar));
     } else if (tag == "FIX") {
       if (w.size() < 2) fail_line(path, n, tag + ": no vertex id");
       for (std::size_t i = 1; i < w.size(); ++i) fix.emplace_back(id(w[i], path, n, tag), n);
@@ -186,18 +193,27 @@ PoseGraphFile read_pose_graph(const std::string& path) {
       ++ignored[tag];
     }
   }
-  f.ignored.assign(ignored.begin(), ignored.end());
-  if (edges.empty()) throw std::runtime_error(path + ": no edges (EDGE_SE3:QUAT, EDGE_SE2 or EDGE3 lines)");
 
-  f.chained = f.ids.empty();
-  if (f.chained) {
+  void add_vertex(const GraphLine& l, long long vertex, const Eigen::Isometry3d& T) {
+    if (const auto it = vertex_line.find(vertex); it != vertex_line.end()) {
+      fail_line(path, l.n, l.tag + ": vertex " + std::to_string(vertex) + " given twice (first on line " +
+                               std::to_string(it->second) + ")");
+    }
+    vertex_line[vertex] = l.n;
+    node_of[vertex] = f.ids.size();
+    f.ids.push_back(vertex);
+    f.graph.T_world_node.push_back(T);
+  }
+
+  // No VERTEX lines: the nodes are the edges' vertices, and the guess is
+  // pose(i+1) = pose(i)·T_i,i+1 from the smallest id, using the first
+  // i -> i+1 edge of each i.
+  void place_by_odometry() {
     for (const auto& e : edges) {
       for (const long long v : {e.from, e.to}) {
         if (node_of.emplace(v, f.ids.size()).second) f.ids.push_back(v);
       }
     }
-    // The guess: pose(i+1) = pose(i)·T_i,i+1 from the smallest id, using
-    // the first i -> i+1 edge of each i.
     std::unordered_map<long long, const EdgeLine*> odometry;
     for (const auto& e : edges) {
       if (e.to == e.from + 1) odometry.emplace(e.from, &e);
@@ -222,21 +238,43 @@ PoseGraphFile read_pose_graph(const std::string& path) {
     }
   }
 
-  f.graph.edges.reserve(edges.size());
-  for (const auto& e : edges) {
-    const auto a = node_of.find(e.from), b = node_of.find(e.to);
-    if (a == node_of.end() || b == node_of.end()) {
-      fail_line(path, e.line, e.tag + ": unknown vertex " + std::to_string(a == node_of.end() ? e.from : e.to));
+  // The edges and FIX lines on the nodes.
+  void connect() {
+    f.graph.edges.reserve(edges.size());
+    for (const auto& e : edges) {
+      const auto a = node_of.find(e.from), b = node_of.find(e.to);
+      if (a == node_of.end() || b == node_of.end()) {
+        fail_line(path, e.line, e.tag + ": unknown vertex " + std::to_string(a == node_of.end() ? e.from : e.to));
+      }
+      f.graph.edges.push_back({a->second, b->second, e.T_from_to, e.information});
+      if (e.to != e.from + 1) ++f.loop_closures;
     }
-    f.graph.edges.push_back({a->second, b->second, e.T_from_to, e.information});
-    if (e.to != e.from + 1) ++f.loop_closures;
+    for (const auto& [vertex, n] : fix) {
+      const auto it = node_of.find(vertex);
+      if (it == node_of.end()) fail_line(path, n, "FIX: unknown vertex " + std::to_string(vertex));
+      f.fixed.push_back(it->second);
+    }
   }
-  for (const auto& [vertex, n] : fix) {
-    const auto it = node_of.find(vertex);
-    if (it == node_of.end()) fail_line(path, n, "FIX: unknown vertex " + std::to_string(vertex));
-    f.fixed.push_back(it->second);
+};
+
+}  // namespace
+
+PoseGraphFile read_pose_graph(const std::string& path) {
+  const std::string text = formats::read_file(path);
+  GraphLines g(path);
+  formats::Lines lines{text};
+  std::string_view line;
+  while (lines.next(line)) {
+    const auto w = formats::words(line);
+    if (w.empty() || w[0].front() == '#') continue;
+    g.read(GraphLine{path, w, std::string(w[0]), lines.number});
   }
-  return f;
+  g.f.ignored.assign(g.ignored.begin(), g.ignored.end());
+  if (g.edges.empty()) throw std::runtime_error(path + ": no edges (EDGE_SE3:QUAT, EDGE_SE2 or EDGE3 lines)");
+  g.f.chained = g.f.ids.empty();
+  if (g.f.chained) g.place_by_odometry();
+  g.connect();
+  return std::move(g.f);
 }
 
 }  // namespace rise::semantic

@@ -39,9 +39,10 @@ double sharpness(const std::vector<Point3>& pts, double theta) {
   return sum;
 }
 
-std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const SegmentationSettings& s) {
-  if (pts.size() < 200) return std::nullopt;
-  // Climb direction: the height gradient, z ≈ g·xy + c (least squares).
+// The climb direction (angle of +x): the height gradient, z ≈ g·xy + c
+// (least squares), turned so that the risers are sharpest; none when the
+// points do not climb.
+std::optional<double> climb_direction(const std::vector<Point3>& pts) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
   for (const auto& p : pts) {
@@ -52,7 +53,7 @@ std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const Segmentat
   const Eigen::Vector3d g = A.ldlt().solve(rhs);
   if (!g.allFinite() || g.head<2>().norm() < 0.15) return std::nullopt;
   double theta = std::atan2(g.y(), g.x());
-  // Refine so that the risers are sharpest: coarse then fine search.
+  // Coarse then fine search.
   for (const double step : {0.5 * M_PI / 180.0, 0.05 * M_PI / 180.0}) {
     double best = theta, best_v = -1;
     for (int k = -20; k <= 20; ++k) {
@@ -65,27 +66,44 @@ std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const Segmentat
     }
     theta = best;
   }
-  const Eigen::Vector2d d(std::cos(theta), std::sin(theta)), c(-d.y(), d.x());
-  // Profile: the top of each 2 cm slice along the climb.
+  return theta;
+}
+
+struct Top {
+  double along, z;
+  std::size_t points;
+};
+
+// Profile: the top of each 2 cm slice along the climb `d` holding 3 points
+// or more; lo: where the points begin along it.
+struct Profile {
+  double lo = 0;
+  std::vector<Top> tops;
+  static constexpr double kBin = 0.02;
+};
+
+Profile profile_along(const std::vector<Point3>& pts, const Eigen::Vector2d& d) {
+  Profile out;
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (const auto& p : pts) {
     lo = std::min(lo, d.dot(p.xy));
     hi = std::max(hi, d.dot(p.xy));
   }
-  constexpr double kBin = 0.02;
+  out.lo = lo;
+  constexpr double kBin = Profile::kBin;
   const auto nb = static_cast<std::size_t>((hi - lo) / kBin) + 1;
   std::vector<std::vector<double>> col(nb);
   for (const auto& p : pts) col[static_cast<std::size_t>((d.dot(p.xy) - lo) / kBin)].push_back(p.z);
-  struct Top {
-    double along, z;
-    std::size_t points;
-  };
-  std::vector<Top> tops;
   for (std::size_t i = 0; i < nb; ++i)
     if (col[i].size() >= 3)
-      tops.push_back({lo + (static_cast<double>(i) + 0.5) * kBin, quantile(col[i], 0.95), col[i].size()});
-  // Levels: tops within 2 cm of each other holding 20 points or more (a
-  // riser seen from below is one or two slices: its top edge is the level).
+      out.tops.push_back({lo + (static_cast<double>(i) + 0.5) * kBin, quantile(col[i], 0.95), col[i].size()});
+  return out;
+}
+
+// Levels: tops within 2 cm of each other holding 20 points or more (a
+// riser seen from below is one or two slices: its top edge is the level),
+// each the median height of its tops, lowest first.
+std::vector<double> levels_of(const std::vector<Top>& tops, const SegmentationSettings& s) {
   std::vector<Top> by_z = tops;
   std::sort(by_z.begin(), by_z.end(), [](const Top& a, const Top& b) { return a.z < b.z; });
   std::vector<std::vector<Top>> groups;
@@ -103,33 +121,49 @@ std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const Segmentat
     }
     if (points >= 20 && quantile(z, 0.5) > 0.5 * s.stairs_min_riser_m) levels.push_back(quantile(z, 0.5));
   }
-  const int n = static_cast<int>(levels.size());
-  if (n < s.stairs_min_steps) return std::nullopt;
-  // Equal steps: z_k = k·riser + b, k = 1..n, least squares.
-  double sk = 0, sz = 0, skk = 0, skz = 0;
+  return levels;
+}
+
+// Equal steps: y_k = slope·k + intercept, k = 1..n, least squares.
+struct StepFit {
+  double slope = 0, intercept = 0;
+};
+
+StepFit fit_steps(const std::vector<double>& y) {
+  const int n = static_cast<int>(y.size());
+  double sk = 0, sy = 0, skk = 0, sky = 0;
   for (int k = 1; k <= n; ++k) {
     sk += k;
-    sz += levels[static_cast<std::size_t>(k - 1)];
+    sy += y[static_cast<std::size_t>(k - 1)];
     skk += k * k;
-    skz += k * levels[static_cast<std::size_t>(k - 1)];
+    sky += k * y[static_cast<std::size_t>(k - 1)];
   }
-  const double riser = (n * skz - sk * sz) / (n * skk - sk * sk);
-  const double b = (sz - riser * sk) / n;
-  if (riser < s.stairs_min_riser_m || riser > s.stairs_max_riser_m || std::abs(b) > 0.3 * riser) return std::nullopt;
-  for (int k = 1; k <= n; ++k)
-    if (std::abs(levels[static_cast<std::size_t>(k - 1)] - (k * riser + b)) > 0.25 * riser) return std::nullopt;
-  // Width across the climb.
-  std::vector<double> across;
-  for (const auto& p : pts) across.push_back(c.dot(p.xy));
-  const double c0 = quantile(across, 0.0), c1 = quantile(across, 1.0), cm = (c0 + c1) / 2;
-  // Riser k stands where level k begins; its face points (clear of the
-  // stairs' sides) give its position along the climb.
+  const double slope = (n * sky - sk * sy) / (n * skk - sk * sk);
+  return {slope, (sy - slope * sk) / n};
+}
+
+// The stairs' axes: d along the climb, c across it, and the points' extent
+// [c0, c1] across.
+struct StairAxes {
+  Eigen::Vector2d d, c;
+  double c0 = 0, c1 = 0;
+  double mid() const { return (c0 + c1) / 2; }
+};
+
+// Riser k stands where level k begins; its face points (clear of the
+// stairs' sides) give its position along the climb. Also where the top
+// level ends.
+std::vector<double> riser_positions(const std::vector<Point3>& pts, const Profile& profile,
+                                    const std::vector<double>& levels, double riser, const StairAxes& axes,
+                                    double& last_end) {
+  const int n = static_cast<int>(levels.size());
+  const double cm = axes.mid();
   std::vector<double> riser_at(static_cast<std::size_t>(n));
-  double last_end = lo;
+  last_end = profile.lo;
   for (int k = 1; k <= n; ++k) {
     const double zk = levels[static_cast<std::size_t>(k - 1)];
     double first = std::numeric_limits<double>::infinity();
-    for (const auto& t : tops)
+    for (const auto& t : profile.tops)
       if (std::abs(t.z - zk) < 0.03) {
         first = std::min(first, t.along);
         if (k == n) last_end = std::max(last_end, t.along);
@@ -137,20 +171,42 @@ std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const Segmentat
     const double z_below = k == 1 ? 0.0 : levels[static_cast<std::size_t>(k - 2)];
     std::vector<double> face;
     for (const auto& p : pts) {
-      const double a = d.dot(p.xy);
-      if (std::abs(a - first) > 0.06 || std::abs(c.dot(p.xy) - cm) > 0.4 * (c1 - c0)) continue;
+      const double a = axes.d.dot(p.xy);
+      if (std::abs(a - first) > 0.06 || std::abs(axes.c.dot(p.xy) - cm) > 0.4 * (axes.c1 - axes.c0)) continue;
       if (p.z < z_below + 0.25 * riser || p.z > zk - 0.25 * riser) continue;
       face.push_back(a);
     }
     riser_at[static_cast<std::size_t>(k - 1)] = face.size() >= 5 ? quantile(face, 0.5) : first;
   }
-  double sa = 0, ska = 0;
-  for (int k = 1; k <= n; ++k) {
-    sa += riser_at[static_cast<std::size_t>(k - 1)];
-    ska += k * riser_at[static_cast<std::size_t>(k - 1)];
-  }
-  const double tread = (n * ska - sk * sa) / (n * skk - sk * sk);
-  const double a1 = (sa - tread * sk) / n + tread;  // riser 1
+  return riser_at;
+}
+
+std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const SegmentationSettings& s) {
+  if (pts.size() < 200) return std::nullopt;
+  const std::optional<double> theta = climb_direction(pts);
+  if (!theta) return std::nullopt;
+  StairAxes axes;
+  axes.d = Eigen::Vector2d(std::cos(*theta), std::sin(*theta));
+  axes.c = Eigen::Vector2d(-axes.d.y(), axes.d.x());
+  const Profile profile = profile_along(pts, axes.d);
+  const std::vector<double> levels = levels_of(profile.tops, s);
+  const int n = static_cast<int>(levels.size());
+  if (n < s.stairs_min_steps) return std::nullopt;
+  const StepFit rise = fit_steps(levels);
+  const double riser = rise.slope, b = rise.intercept;
+  if (riser < s.stairs_min_riser_m || riser > s.stairs_max_riser_m || std::abs(b) > 0.3 * riser) return std::nullopt;
+  for (int k = 1; k <= n; ++k)
+    if (std::abs(levels[static_cast<std::size_t>(k - 1)] - (k * riser + b)) > 0.25 * riser) return std::nullopt;
+  // Width across the climb.
+  std::vector<double> across;
+  for (const auto& p : pts) across.push_back(axes.c.dot(p.xy));
+  axes.c0 = quantile(across, 0.0);
+  axes.c1 = quantile(across, 1.0);
+  double last_end = 0;
+  const std::vector<double> riser_at = riser_positions(pts, profile, levels, riser, axes, last_end);
+  const StepFit run = fit_steps(riser_at);
+  const double tread = run.slope;
+  const double a1 = run.intercept + tread;  // riser 1
   if (tread < s.stairs_min_tread_m || tread > s.stairs_max_tread_m) return std::nullopt;
   double rss = 0;
   for (int k = 1; k <= n; ++k) {
@@ -160,13 +216,13 @@ std::optional<Stairs> fit_stairs(const std::vector<Point3>& pts, const Segmentat
   Stairs st;
   st.rms_m = std::sqrt(rss / n);
   if (st.rms_m > 0.3 * tread) return std::nullopt;
-  st.start_m = d * a1 + c * cm;
-  st.yaw_rad = theta;
+  st.start_m = axes.d * a1 + axes.c * axes.mid();
+  st.yaw_rad = *theta;
   st.steps = n;
   st.riser_m = riser;
   st.tread_m = tread;
-  st.width_m = c1 - c0;
-  st.landing_m = std::max(0.1, last_end + kBin / 2 - (a1 + n * tread));
+  st.width_m = axes.c1 - axes.c0;
+  st.landing_m = std::max(0.1, last_end + Profile::kBin / 2 - (a1 + n * tread));
   st.points = static_cast<int>(pts.size());
   return st;
 }

@@ -52,6 +52,19 @@ class VtkReader {
   VtkReader(const std::string& path, std::string_view text) : path_(path), text_(text) {}
 
   Cloud read() {
+    read_preamble();
+    while (true) {
+      const KeyLine k = next_key();
+      if (k.key.empty()) break;
+      read_section(k);
+    }
+    if (!saw_points_) fail_line(path_, last_line(), "POINTS: missing");
+    return cloud();
+  }
+
+ private:
+  // The version, title and format lines, and DATASET with a point list.
+  void read_preamble() {
     Lines lines{text_};
     std::string_view line;
     static constexpr std::string_view kMagic = "# vtk DataFile Version";
@@ -75,110 +88,113 @@ class VtkReader {
     if (type != "polydata" && type != "unstructured_grid" && type != "structured_grid")
       fail_line(path_, dataset.line, "DATASET: '" + std::string(dataset.args[0]) +
                                          "' has no point list (expected POLYDATA, UNSTRUCTURED_GRID or STRUCTURED_GRID)");
+  }
 
-    std::vector<double> xyz, normals;
-    bool point_data = false;  // in POINT_DATA (NORMALS there are the points')
-    uint64_t tuples = 0;      // the current attribute section's count
-    while (true) {
-      const KeyLine k = next_key();
-      if (k.key.empty()) break;
-      const auto count = [&](size_t i) { return arg<uint64_t>(k, i); };
-      if (k.key == "points") {
-        expect_args(k, 2);
-        if (saw_points_) fail_line(path_, k.line, "POINTS: given twice");
-        values(k, count(0), 3, k.args[1], &xyz);
-      } else if (k.key == "dimensions") {
-        expect_args(k, 3);
-        for (size_t i = 0; i < 3; ++i) (void)count(i);
-      } else if (k.key == "vertices" || k.key == "lines" || k.key == "polygons" || k.key == "triangle_strips" ||
-                 k.key == "cells") {
-        expect_args(k, 2);
-        if (major_ >= 5) {
-          array_after(k, "OFFSETS", count(0));
-          array_after(k, "CONNECTIVITY", count(1));
-        } else {
-          values(k, count(1), 1, "int", nullptr);
-        }
-      } else if (k.key == "cell_types") {
-        expect_args(k, 1);
-        values(k, count(0), 1, "int", nullptr);
-      } else if (k.key == "point_data" || k.key == "cell_data") {
-        expect_args(k, 1);
-        tuples = count(0);
-        point_data = k.key == "point_data";
-      } else if (k.key == "scalars") {
-        if (k.args.size() != 2 && k.args.size() != 3) fail_line(path_, k.line, "SCALARS: expected a name, a type and optionally a count");
-        const uint64_t components = k.args.size() == 3 ? count(2) : 1;
-        // The LOOKUP_TABLE line that belongs to the scalars.
-        const size_t at = pos_;
-        const KeyLine table = next_key();
-        if (table.key != "lookup_table") pos_ = at;
-        values(k, tuples, components, k.args[1], nullptr);
-      } else if (k.key == "lookup_table") {
-        expect_args(k, 2);
-        values(k, count(1), 4, binary_ ? "unsigned_char" : "float", nullptr);
-      } else if (k.key == "color_scalars") {
-        expect_args(k, 2);
-        values(k, tuples, count(1), binary_ ? "unsigned_char" : "float", nullptr);
-      } else if (k.key == "normals") {
-        expect_args(k, 2);
-        values(k, tuples, 3, k.args[1], point_data ? &normals : nullptr);
-      } else if (k.key == "vectors" || k.key == "tensors" || k.key == "tensors6") {
-        expect_args(k, 2);
-        values(k, tuples, k.key == "vectors" ? 3 : k.key == "tensors" ? 9 : 6, k.args[1], nullptr);
-      } else if (k.key == "texture_coordinates") {
-        expect_args(k, 3);
-        values(k, tuples, count(1), k.args[2], nullptr);
-      } else if (k.key == "global_ids" || k.key == "pedigree_ids" || k.key == "edge_flags") {
-        expect_args(k, 2);
-        values(k, tuples, 1, k.args[1], nullptr);
-      } else if (k.key == "field") {
-        expect_args(k, 2);
-        const uint64_t arrays = count(1);
-        uint64_t read = 0;
-        while (read < arrays) {
-          const KeyLine a = next_key();
-          if (a.key.empty())
-            fail_line(path_, last_line(), "FIELD: file ends after " + std::to_string(read) + " of " + std::to_string(arrays) + " arrays");
-          if (a.key == "metadata") {
-            skip_metadata();
-            continue;
-          }
-          ++read;
-          if (a.key == "null_array") continue;
-          expect_args(a, 3);
-          values(a, arg<uint64_t>(a, 1), arg<uint64_t>(a, 0), a.args[2], nullptr);
-        }
-      } else if (k.key == "metadata") {
-        skip_metadata();
+  // One keyword line's section: the points and the points' normals kept,
+  // everything else read past.
+  void read_section(const KeyLine& k) {
+    const auto count = [&](size_t i) { return arg<uint64_t>(k, i); };
+    if (k.key == "points") {
+      expect_args(k, 2);
+      if (saw_points_) fail_line(path_, k.line, "POINTS: given twice");
+      values(k, count(0), 3, k.args[1], &xyz_);
+    } else if (k.key == "dimensions") {
+      expect_args(k, 3);
+      for (size_t i = 0; i < 3; ++i) (void)count(i);
+    } else if (k.key == "vertices" || k.key == "lines" || k.key == "polygons" || k.key == "triangle_strips" ||
+               k.key == "cells") {
+      expect_args(k, 2);
+      if (major_ >= 5) {
+        array_after(k, "OFFSETS", count(0));
+        array_after(k, "CONNECTIVITY", count(1));
       } else {
-        fail_line(path_, k.line, "unknown keyword '" + k.name + "'");
+        values(k, count(1), 1, "int", nullptr);
       }
+    } else if (k.key == "cell_types") {
+      expect_args(k, 1);
+      values(k, count(0), 1, "int", nullptr);
+    } else if (k.key == "point_data" || k.key == "cell_data") {
+      expect_args(k, 1);
+      tuples_ = count(0);
+      point_data_ = k.key == "point_data";
+    } else if (k.key == "scalars") {
+      if (k.args.size() != 2 && k.args.size() != 3) fail_line(path_, k.line, "SCALARS: expected a name, a type and optionally a count");
+      const uint64_t components = k.args.size() == 3 ? count(2) : 1;
+      // The LOOKUP_TABLE line that belongs to the scalars.
+      const size_t at = pos_;
+      const KeyLine table = next_key();
+      if (table.key != "lookup_table") pos_ = at;
+      values(k, tuples_, components, k.args[1], nullptr);
+    } else if (k.key == "lookup_table") {
+      expect_args(k, 2);
+      values(k, count(1), 4, binary_ ? "unsigned_char" : "float", nullptr);
+    } else if (k.key == "color_scalars") {
+      expect_args(k, 2);
+      values(k, tuples_, count(1), binary_ ? "unsigned_char" : "float", nullptr);
+    } else if (k.key == "normals") {
+      expect_args(k, 2);
+      values(k, tuples_, 3, k.args[1], point_data_ ? &normals_ : nullptr);
+    } else if (k.key == "vectors" || k.key == "tensors" || k.key == "tensors6") {
+      expect_args(k, 2);
+      values(k, tuples_, k.key == "vectors" ? 3 : k.key == "tensors" ? 9 : 6, k.args[1], nullptr);
+    } else if (k.key == "texture_coordinates") {
+      expect_args(k, 3);
+      values(k, tuples_, count(1), k.args[2], nullptr);
+    } else if (k.key == "global_ids" || k.key == "pedigree_ids" || k.key == "edge_flags") {
+      expect_args(k, 2);
+      values(k, tuples_, 1, k.args[1], nullptr);
+    } else if (k.key == "field") {
+      expect_args(k, 2);
+      skip_field_arrays(count(1));
+    } else if (k.key == "metadata") {
+      skip_metadata();
+    } else {
+      fail_line(path_, k.line, "unknown keyword '" + k.name + "'");
     }
+  }
 
-    if (!saw_points_) fail_line(path_, last_line(), "POINTS: missing");
-    const size_t n = xyz.size() / 3;
-    if (!normals.empty() && normals.size() != xyz.size())
-      fail_line(path_, normals_line_, "NORMALS: " + std::to_string(normals.size() / 3) + " normals for " +
+  // FIELD's arrays, each "name components tuples type" and its values.
+  void skip_field_arrays(uint64_t arrays) {
+    uint64_t read = 0;
+    while (read < arrays) {
+      const KeyLine a = next_key();
+      if (a.key.empty())
+        fail_line(path_, last_line(), "FIELD: file ends after " + std::to_string(read) + " of " + std::to_string(arrays) + " arrays");
+      if (a.key == "metadata") {
+        skip_metadata();
+        continue;
+      }
+      ++read;
+      if (a.key == "null_array") continue;
+      expect_args(a, 3);
+      values(a, arg<uint64_t>(a, 1), arg<uint64_t>(a, 0), a.args[2], nullptr);
+    }
+  }
+
+  // The finite points, with their normals (unit length, zero where there is
+  // none) when POINT_DATA gave one per point.
+  Cloud cloud() const {
+    const size_t n = xyz_.size() / 3;
+    if (!normals_.empty() && normals_.size() != xyz_.size())
+      fail_line(path_, normals_line_, "NORMALS: " + std::to_string(normals_.size() / 3) + " normals for " +
                                           std::to_string(n) + " points");
     Cloud cloud;
     cloud.points.reserve(n);
-    if (!normals.empty()) cloud.normals.reserve(n);
+    if (!normals_.empty()) cloud.normals.reserve(n);
     for (size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3f p(static_cast<float>(xyz[3 * i]), static_cast<float>(xyz[3 * i + 1]),
-                              static_cast<float>(xyz[3 * i + 2]));
+      const Eigen::Vector3f p(static_cast<float>(xyz_[3 * i]), static_cast<float>(xyz_[3 * i + 1]),
+                              static_cast<float>(xyz_[3 * i + 2]));
       if (!p.allFinite()) continue;
       cloud.points.push_back(p);
-      if (normals.empty()) continue;
-      const Eigen::Vector3f m(static_cast<float>(normals[3 * i]), static_cast<float>(normals[3 * i + 1]),
-                              static_cast<float>(normals[3 * i + 2]));
+      if (normals_.empty()) continue;
+      const Eigen::Vector3f m(static_cast<float>(normals_[3 * i]), static_cast<float>(normals_[3 * i + 1]),
+                              static_cast<float>(normals_[3 * i + 2]));
       const float len = m.norm();
       cloud.normals.push_back(std::isfinite(len) && len > 0.0f ? Eigen::Vector3f(m / len) : Eigen::Vector3f::Zero());
     }
     return cloud;
   }
 
- private:
   // The 1-based line of byte `at`, counting on from the last question (the
   // reader asks in file order, so the file is counted through once).
   size_t line_at(size_t at) const {
@@ -294,6 +310,9 @@ class VtkReader {
   int major_ = 0;
   bool saw_points_ = false;
   size_t normals_line_ = 0;
+  std::vector<double> xyz_, normals_;
+  bool point_data_ = false;  // in POINT_DATA (NORMALS there are the points')
+  uint64_t tuples_ = 0;      // the current attribute section's count
   mutable size_t counted_to_ = 0, counted_lines_ = 0;
 };
 

@@ -477,6 +477,17 @@ struct Slab {
   double top_m = 0, cell_m = 0.05;
 };
 
+// The slab's top from the heights of its points on the faces' runs, and
+// its cell from their spacing.
+void set_top_and_cell(Slab& slab, std::vector<double>& heights, const std::vector<Run>& runs, bool both) {
+  std::sort(heights.begin(), heights.end());
+  slab.top_m = heights.size() > 5 ? heights[heights.size() - 5] : quantile(heights, 1.0);
+  double seen_m2 = 0;
+  for (const auto& r : runs) seen_m2 += (r.second - r.first) * std::max(slab.top_m, 0.1) * (both ? 2.0 : 1.0);
+  const double spacing_m = std::sqrt(seen_m2 / std::max<double>(1.0, static_cast<double>(heights.size())));
+  slab.cell_m = std::clamp(2 * spacing_m, 0.05, 0.25);
+}
+
 Slab slab_of(const Cloud& cloud, const Line2& line, double half_m, double a0, double a1, const std::vector<Run>& runs,
              bool both, double z_floor, double z_roof) {
   Slab out;
@@ -494,12 +505,7 @@ Slab slab_of(const Cloud& cloud, const Line2& line, double half_m, double a0, do
         break;
       }
   }
-  std::sort(heights.begin(), heights.end());
-  out.top_m = heights.size() > 5 ? heights[heights.size() - 5] : quantile(heights, 1.0);
-  double seen_m2 = 0;
-  for (const auto& r : runs) seen_m2 += (r.second - r.first) * std::max(out.top_m, 0.1) * (both ? 2.0 : 1.0);
-  const double spacing_m = std::sqrt(seen_m2 / std::max<double>(1.0, static_cast<double>(heights.size())));
-  out.cell_m = std::clamp(2 * spacing_m, 0.05, 0.25);
+  set_top_and_cell(out, heights, runs, both);
   return out;
 }
 
@@ -606,92 +612,103 @@ void walls_from_floor_plan(const Cloud& cloud, const SegmentationSettings& s, co
     close(len);
   }
 }
-}  // namespace
 
-void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
-                          const Ceiling& ceiling, std::vector<Wall>& walls, std::vector<Door>& doors) {
-  const double zlo = floor.height_m + s.wall_band_margin_m;
-  double zhi = floor.height_m + s.wall_band_top_m;
-  if (ceiling.found) zhi = std::min(zhi, ceiling.height_m - s.wall_band_margin_m);
-  const double z_roof = ceiling.found ? ceiling.height_m - 0.04 : std::numeric_limits<double>::infinity();
+// The points find_walls_and_doors works from: the wall band's (between
+// floor and ceiling) as xy and z, and the floor's as xy.
+struct BandPoints {
   std::vector<Eigen::Vector2d> band_xy, floor_xy;
   std::vector<double> band_z;
+};
+
+BandPoints band_points(const Cloud& cloud, const SegmentationSettings& s, double floor_m, double zlo, double zhi) {
+  BandPoints out;
   for (const auto& p : cloud.points) {
     if (p.z() >= zlo && p.z() <= zhi) {
-      band_xy.push_back(p.head<2>().cast<double>());
-      band_z.push_back(p.z());
-    } else if (std::abs(p.z() - floor.height_m) < s.plane_band_m) {
-      floor_xy.push_back(p.head<2>().cast<double>());
+      out.band_xy.push_back(p.head<2>().cast<double>());
+      out.band_z.push_back(p.z());
+    } else if (std::abs(p.z() - floor_m) < s.plane_band_m) {
+      out.floor_xy.push_back(p.head<2>().cast<double>());
     }
   }
   // Floor points thinned: the side test needs their density, not each one.
-  if (floor_xy.size() > 50000) {
-    const std::size_t stride = floor_xy.size() / 50000 + 1;
+  if (out.floor_xy.size() > 50000) {
+    const std::size_t stride = out.floor_xy.size() / 50000 + 1;
     std::vector<Eigen::Vector2d> thin;
-    for (std::size_t i = 0; i < floor_xy.size(); i += stride) thin.push_back(floor_xy[i]);
-    floor_xy.swap(thin);
+    for (std::size_t i = 0; i < out.floor_xy.size(); i += stride) thin.push_back(out.floor_xy[i]);
+    out.floor_xy.swap(thin);
   }
-  if (s.walls_from_floor_plan) {
-    walls_from_floor_plan(cloud, s, floor, zlo, zhi, z_roof, band_xy, band_z, floor_xy, walls, doors);
-    return;
-  }
-  const auto faces = find_faces(band_xy, band_z, zlo, zhi, s);
-  const auto lines = build_wall_lines(faces, floor_xy, s);
+  return out;
+}
 
-  // Split each wall line at its gaps; a gap of door width with wall above
-  // it or a panel in it is a door.
-  struct PendingDoor {
-    Door door;
-    std::size_t seg_before, seg_after;  // segment indices; SIZE_MAX: none
-    bool in_wall;
-  };
+// A door found in a wall line's gap; its walls are known once the
+// segments are snapped at the corners.
+struct PendingDoor {
+  Door door;
+  std::size_t seg_before, seg_after;  // segment indices; SIZE_MAX: none
+  bool in_wall;
+};
+
+// A wall line's slab as slab_of gathers it over the line's runs, and the
+// along positions of its faces' points 0.3 to 1.5 m above the floor (where
+// a gap's jambs are).
+struct LineSlab {
+  Slab slab;
+  std::vector<double> face_low;
+};
+
+LineSlab line_slab(const Cloud& cloud, const WallLine& w, double half_m, double inlier_m, double z_floor, double z_roof) {
+  LineSlab out;
+  std::vector<double> heights;
+  for (const auto& p : cloud.points) {
+    if (p.z() > z_roof) continue;
+    const Eigen::Vector2d xy = p.head<2>().cast<double>();
+    if (std::abs(w.line.offset(xy)) > half_m) continue;
+    const double a = w.line.along(xy);
+    if (a < w.runs.front().first - 0.2 || a > w.runs.back().second + 0.2) continue;
+    out.slab.along_height.push_back({a, p.z() - z_floor});
+    const double h = p.z() - z_floor;
+    if (h > 0.3 && h < 1.5 && std::abs(std::abs(w.line.offset(xy)) - w.thickness_m / 2) < inlier_m)
+      out.face_low.push_back(a);
+    for (const auto& r : w.runs)
+      if (a >= r.first && a <= r.second) {
+        heights.push_back(p.z() - z_floor);
+        break;
+      }
+  }
+  set_top_and_cell(out.slab, heights, w.runs, w.both);
+  return out;
+}
+
+// A gap's sides (the jambs), from the points on the faces below any
+// lintel, clear of a panel in the middle of the slab.
+std::pair<double, double> jambs(const std::vector<double>& face_low, double g0, double g1) {
+  const double mid = (g0 + g1) / 2;
+  double a0 = g0, a1 = g1;
+  std::vector<double> before, after;
+  for (double a : face_low) {
+    if (a >= g0 - 0.1 && a <= mid) before.push_back(a);
+    if (a >= mid && a <= g1 + 0.1) after.push_back(a);
+  }
+  // Robust ends: the jamb's own points scatter by the range noise.
+  if (before.size() >= 10) a0 = quantile(before, 0.97);
+  if (after.size() >= 10) a1 = quantile(after, 0.03);
+  return {a0, a1};
+}
+
+// Each wall line split at its gaps into segments; a gap of door width with
+// wall above it or a panel in it is a door.
+struct GapSplit {
+  const Cloud& cloud;
+  const SegmentationSettings& s;
+  double z_floor, z_roof;
+  const std::vector<Eigen::Vector2d>& floor_xy;
   std::vector<Segment> segs;
   std::vector<PendingDoor> pending;
-  for (std::size_t li = 0; li < lines.size(); ++li) {
-    const WallLine& w = lines[li];
+
+  void split(const WallLine& w, std::size_t li) {
     const double half = w.thickness_m / 2 + s.wall_inlier_m;
-    std::vector<std::pair<double, double>> slab;  // (along, height above floor)
-    std::vector<double> heights, face_low;
-    for (const auto& p : cloud.points) {
-      if (p.z() > z_roof) continue;
-      const Eigen::Vector2d xy = p.head<2>().cast<double>();
-      if (std::abs(w.line.offset(xy)) > half) continue;
-      const double a = w.line.along(xy);
-      if (a < w.runs.front().first - 0.2 || a > w.runs.back().second + 0.2) continue;
-      slab.push_back({a, p.z() - floor.height_m});
-      const double h = p.z() - floor.height_m;
-      if (h > 0.3 && h < 1.5 && std::abs(std::abs(w.line.offset(xy)) - w.thickness_m / 2) < s.wall_inlier_m)
-        face_low.push_back(a);
-      for (const auto& r : w.runs)
-        if (a >= r.first && a <= r.second) {
-          heights.push_back(p.z() - floor.height_m);
-          break;
-        }
-    }
-    // The top: the fifth highest point (the ceiling's band is left out).
-    std::sort(heights.begin(), heights.end());
-    const double top_m = heights.size() > 5 ? heights[heights.size() - 5] : quantile(heights, 1.0);
-    // The faces' point spacing sets the cells a gap is inspected in: twice
-    // it, 5 to 25 cm (a sparse far wall has holes between its points).
-    double seen_m2 = 0;
-    for (const auto& r : w.runs) seen_m2 += (r.second - r.first) * std::max(top_m, 0.1) * (w.both ? 2.0 : 1.0);
-    const double spacing_m = std::sqrt(seen_m2 / std::max<double>(1.0, static_cast<double>(heights.size())));
-    const double cell_m = std::clamp(2 * spacing_m, 0.05, 0.25);
-    // A gap's sides (the jambs), from the points on the faces below any
-    // lintel, clear of a panel in the middle of the slab.
-    const auto jambs = [&](double g0, double g1) {
-      const double mid = (g0 + g1) / 2;
-      double a0 = g0, a1 = g1;
-      std::vector<double> before, after;
-      for (double a : face_low) {
-        if (a >= g0 - 0.1 && a <= mid) before.push_back(a);
-        if (a >= mid && a <= g1 + 0.1) after.push_back(a);
-      }
-      // Robust ends: the jamb's own points scatter by the range noise.
-      if (before.size() >= 10) a0 = quantile(before, 0.97);
-      if (after.size() >= 10) a1 = quantile(after, 0.03);
-      return std::pair<double, double>{a0, a1};
-    };
+    const LineSlab ls = line_slab(cloud, w, half, s.wall_inlier_m, z_floor, z_roof);
+    const double top_m = ls.slab.top_m;
     Segment cur{li, w.runs.front().first, w.runs.front().second, {}, top_m, w.points};
     for (std::size_t k = 1; k <= w.runs.size(); ++k) {
       if (k == w.runs.size()) {
@@ -701,8 +718,9 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
       double g0 = w.runs[k - 1].second, g1 = w.runs[k].first;
       GapReport rep;
       if (g1 - g0 >= s.door_min_width_m - 0.15 && g1 - g0 <= s.door_max_width_m + 0.05) {
-        std::tie(g0, g1) = jambs(g0, g1);
-        if (g1 - g0 >= s.door_min_width_m && g1 - g0 <= s.door_max_width_m) rep = inspect_gap(slab, g0, g1, top_m, cell_m, s);
+        std::tie(g0, g1) = jambs(ls.face_low, g0, g1);
+        if (g1 - g0 >= s.door_min_width_m && g1 - g0 <= s.door_max_width_m)
+          rep = inspect_gap(ls.slab.along_height, g0, g1, top_m, ls.slab.cell_m, s);
       }
       const double gap = g1 - g0;
       // The floor seen through a gap up to a doorway's width, on both sides
@@ -742,12 +760,14 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
       cur = Segment{li, w.runs[k].first, w.runs[k].second, {}, top_m, w.points};
     }
   }
+};
 
-  // Corners: an end near another wall's centre line (both ends within
-  // corner_gap_m past the faces: a corner seen sparsely) is moved onto it; a
-  // free end is drawn in by half the thickness (the world file's walls are
-  // lengthened by that much past each end).
-  const auto end_point = [&](const Segment& g, double a) { return lines[g.line].line.point + lines[g.line].line.direction * a; };
+// Corners: an end near another wall's centre line (both ends within
+// corner_gap_m past the faces: a corner seen sparsely) is moved onto it; a
+// free end is drawn in by half the thickness (the world file's walls are
+// lengthened by that much past each end). Per segment, its ends along its line.
+std::vector<std::pair<double, double>> snapped_ends(const std::vector<Segment>& segs, const std::vector<WallLine>& lines,
+                                                    const SegmentationSettings& s) {
   std::vector<std::pair<double, double>> ends(segs.size());
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const Line2& li = lines[segs[i].line].line;
@@ -779,6 +799,16 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
     }
     ends[i] = {e[0], e[1]};
   }
+  return ends;
+}
+
+// The split's segments, snapped at the corners, as walls (those at least
+// wall_min_length_m long) and its doors on them.
+void add_walls_and_doors(const GapSplit& split, const std::vector<WallLine>& lines, const SegmentationSettings& s,
+                         std::vector<Wall>& walls, std::vector<Door>& doors) {
+  const auto& segs = split.segs;
+  const auto ends = snapped_ends(segs, lines, s);
+  const auto end_point = [&](const Segment& g, double a) { return lines[g.line].line.point + lines[g.line].line.direction * a; };
   std::vector<int> index(segs.size(), -1);
   for (std::size_t i = 0; i < segs.size(); ++i) {
     const auto [a0, a1] = ends[i];
@@ -798,7 +828,7 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
     index[i] = static_cast<int>(walls.size());
     walls.push_back(w);
   }
-  for (const auto& p : pending) {
+  for (const auto& p : split.pending) {
     Door d = p.door;
     if (p.in_wall) {
       d.wall = p.seg_before < segs.size() ? index[p.seg_before] : -1;
@@ -809,6 +839,25 @@ void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, con
     }
     doors.push_back(d);
   }
+}
+}  // namespace
+
+void find_walls_and_doors(const Cloud& cloud, const SegmentationSettings& s, const Floor& floor,
+                          const Ceiling& ceiling, std::vector<Wall>& walls, std::vector<Door>& doors) {
+  const double zlo = floor.height_m + s.wall_band_margin_m;
+  double zhi = floor.height_m + s.wall_band_top_m;
+  if (ceiling.found) zhi = std::min(zhi, ceiling.height_m - s.wall_band_margin_m);
+  const double z_roof = ceiling.found ? ceiling.height_m - 0.04 : std::numeric_limits<double>::infinity();
+  const BandPoints band = band_points(cloud, s, floor.height_m, zlo, zhi);
+  if (s.walls_from_floor_plan) {
+    walls_from_floor_plan(cloud, s, floor, zlo, zhi, z_roof, band.band_xy, band.band_z, band.floor_xy, walls, doors);
+    return;
+  }
+  const auto faces = find_faces(band.band_xy, band.band_z, zlo, zhi, s);
+  const auto lines = build_wall_lines(faces, band.floor_xy, s);
+  GapSplit split{cloud, s, floor.height_m, z_roof, band.floor_xy, {}, {}};
+  for (std::size_t li = 0; li < lines.size(); ++li) split.split(lines[li], li);
+  add_walls_and_doors(split, lines, s, walls, doors);
 }
 
 }  // namespace rise::semantic::detail

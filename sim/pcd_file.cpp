@@ -5,11 +5,15 @@
 #include <charconv>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
+#include <string_view>
+
+#include "semantic/text_reading.hpp"
 
 namespace rise::sim {
 namespace {
+
+namespace formats = semantic::formats;
 
 static_assert(std::endian::native == std::endian::little, "PCD binary data is little-endian");
 
@@ -28,32 +32,12 @@ void write_file(const std::string& path, const std::string& bytes) {
   if (!out) throw std::runtime_error(path + ": cannot write: " + std::strerror(errno));
 }
 
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::stringstream buf;
-  buf << in.rdbuf();
-  return buf.str();
-}
-
-std::vector<std::string> words(const std::string& line) {
-  std::vector<std::string> out;
-  std::istringstream in(line);
-  for (std::string w; in >> w;) out.push_back(w);
-  return out;
-}
-
+// `text` as a number, else "where: cannot read 'text'". "nan" is what PCL
+// writes for an invalid point; from_chars reads it too.
 template <typename T>
-bool parse(const std::string& text, T& v) {
-  const auto r = std::from_chars(text.data(), text.data() + text.size(), v);
-  return r.ec == std::errc() && r.ptr == text.data() + text.size();
-}
-
-// "nan" is what PCL writes for an invalid point; from_chars reads it too.
-template <typename T>
-T number(const std::string& text, const std::string& where) {
+T number(std::string_view text, const std::string& where) {
   T v{};
-  if (!parse(text, v)) throw std::runtime_error(where + ": cannot read '" + text + "'");
+  if (!formats::parse(text, v)) throw std::runtime_error(where + ": cannot read '" + std::string(text) + "'");
   return v;
 }
 
@@ -112,28 +96,24 @@ void write_pcd(const std::string& path, const std::vector<Eigen::Vector3f>& poin
 }
 
 PointCloud read_pcd(const std::string& path) {
-  const std::string text = read_file(path);
+  const std::string text = formats::read_file(path);
   PointCloud cloud;
   std::vector<std::string> fields, sizes, types, counts;
   std::size_t points = 0;
   bool have_points = false;
   std::string data;
-  std::size_t pos = 0;
-  int line = 0;
+  formats::Lines lines{text};
+  std::string_view l;
   std::string where;
   const auto fail = [&](const std::string& key, const std::string& what) -> void {
-    throw std::runtime_error(path + ":" + std::to_string(line) + ": " + key + ": " + what);
+    formats::fail_line(path, lines.number, key + ": " + what);
   };
   while (data.empty()) {
-    if (pos >= text.size()) fail("DATA", "missing");
-    const std::size_t end = std::min(text.find('\n', pos), text.size());
-    const std::string l = text.substr(pos, end - pos);
-    pos = end + 1;
-    ++line;
-    const auto w = words(l);
+    if (!lines.next(l)) fail("DATA", "missing");
+    const auto w = formats::words(l);
     if (w.empty() || w[0][0] == '#') continue;
-    const std::string& key = w[0];
-    where = path + ":" + std::to_string(line) + ": " + key;
+    const std::string key(w[0]);
+    where = path + ":" + std::to_string(lines.number) + ": " + key;
     const std::vector<std::string> rest(w.begin() + 1, w.end());
     if (key == "VERSION") {
       if (rest.size() != 1 || (rest[0] != "0.7" && rest[0] != ".7" && rest[0] != "0.6" && rest[0] != ".6"))
@@ -195,6 +175,7 @@ PointCloud read_pcd(const std::string& path) {
   }
   if (!(found[0] && found[1] && found[2])) fail("FIELDS", "needs x, y and z");
   cloud.points.resize(points);
+  const std::size_t pos = lines.pos;
   if (data == "binary") {
     if (text.size() - std::min(pos, text.size()) < points * stride) fail("DATA", "shorter than POINTS × point size");
     for (std::size_t i = 0; i < points; ++i)
@@ -203,15 +184,12 @@ PointCloud read_pcd(const std::string& path) {
                     sizeof(float));
   } else {
     for (std::size_t i = 0; i < points; ++i) {
-      if (pos >= text.size()) fail("DATA", "fewer points than POINTS");
-      const std::size_t end = std::min(text.find('\n', pos), text.size());
-      ++line;
-      const auto w = words(text.substr(pos, end - pos));
-      pos = end + 1;
+      if (!lines.next(l)) fail("DATA", "fewer points than POINTS");
+      const auto w = formats::words(l);
       if (w.size() != values) fail("DATA", "expected " + std::to_string(values) + " values");
       for (std::size_t k = 0; k < 3; ++k)
         cloud.points[i][static_cast<Eigen::Index>(k)] =
-            number<float>(w[index[k]], path + ":" + std::to_string(line) + ": DATA");
+            number<float>(w[index[k]], path + ":" + std::to_string(lines.number) + ": DATA");
     }
   }
   return cloud;
@@ -245,16 +223,15 @@ void write_pose(const std::string& path, const Eigen::Isometry3d& T_world_sensor
 }
 
 PoseFile read_pose(const std::string& path) {
-  std::istringstream in(read_file(path));
+  const std::string text = formats::read_file(path);
+  formats::Lines lines{text};
   PoseFile p;
   double t[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0};
   bool have_t = false, have_q = false;
-  int line = 0;
-  for (std::string l; std::getline(in, l);) {
-    ++line;
-    const auto w = words(l);
+  for (std::string_view l; lines.next(l);) {
+    const auto w = formats::words(l);
     if (w.empty() || w[0][0] == '#') continue;
-    const std::string where = path + ":" + std::to_string(line) + ": " + w[0];
+    const std::string where = path + ":" + std::to_string(lines.number) + ": " + std::string(w[0]);
     const auto expect = [&](std::size_t n) {
       if (w.size() != n + 1) throw std::runtime_error(where + ": expected " + std::to_string(n) + " numbers");
     };
@@ -273,7 +250,7 @@ PoseFile read_pose(const std::string& path) {
       throw std::runtime_error(where + ": unknown key");
     }
   }
-  if (!have_t || !have_q) throw std::runtime_error(path + ":" + std::to_string(line) + ": position_m: missing");
+  if (!have_t || !have_q) formats::fail_line(path, lines.number, "position_m: missing");
   p.T_world_sensor = pose_from(t, q);
   return p;
 }

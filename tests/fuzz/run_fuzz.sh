@@ -15,12 +15,12 @@ case "$target" in
   hid_descriptor) sources=("$root"/firmware_protocol/hid_{descriptor,report,text}.cpp) ;;
   # The semantic readers: PLY/XYZ and 3DTK/sim poses without PCL; the PCD
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
-  ply | scan3d) sources=("$root"/semantic/cloud{,_formats}.cpp) ;;
-  maps) sources=("$root"/semantic/{cloud,cloud_formats,octomap_format,vtk_format}.cpp) ;;
-  pcd) sources=("$root"/semantic/{cloud,cloud_formats,cloud_io,octomap_format,vtk_format}.cpp) ;;
+  ply | scan3d) sources=("$root"/semantic/{cloud,cloud_formats,text_reading}.cpp) ;;
+  maps) sources=("$root"/semantic/{cloud,cloud_formats,text_reading,octomap_format,vtk_format}.cpp) ;;
+  pcd) sources=("$root"/semantic/{cloud,cloud_formats,text_reading,cloud_io,octomap_format,vtk_format}.cpp) ;;
   # The CARMEN log reader and grid_from_scans (occupancy_grid.cpp links
   # yaml-cpp, OpenCV and zlib for the other readers there; not sanitized).
-  carmen) sources=("$root"/semantic/{cloud,cloud_formats,occupancy_grid}.cpp) ;;
+  carmen) sources=("$root"/semantic/{cloud,cloud_formats,text_reading,occupancy_grid}.cpp) ;;
   *) echo "run_fuzz.sh: unknown target $target" >&2; exit 2 ;;
 esac
 sources+=("$root/tests/fuzz/${target}_fuzz.cpp")
