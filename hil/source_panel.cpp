@@ -1,0 +1,19 @@
+#include "hil/source_panel.hpp"
+
+#include <algorithm>
+#include <utility>
+
+#include "hil/bridge.hpp"
+
+namespace rise::hil {
+
+void SourcePanel::note(std::string text) {
+  std::lock_guard lock(shared_.mutex);
+  if (std::find(shared_.notes_seen.begin(), shared_.notes_seen.end(), text) != shared_.notes_seen.end()) return;
+  shared_.notes_seen.push_back(text);
+  shared_.notes.push_back(std::move(text));
+}
+
+int64_t SourcePanel::now_us() { return monotonic_us(); }
+
+}  // namespace rise::hil
