@@ -28,13 +28,13 @@ void mark_down(SourcePanel& panel, const std::string& reason, bool now) {
 
 // What one source's loop keeps while its transport is closed.
 struct Reconnect {
-  ReopenPolicy policy;
+  ConnectionPolicy policy;
   ReopenSchedule schedule;
   std::string down_reason;  // the transport's error, read when it fails (not every loop)
 };
 
 // A closed transport: reopened when due, its source down while it stays
-// closed (ReopenPolicy says from when). True when it is open now.
+// closed (ConnectionPolicy says from when). True when it is open now.
 bool reconnect(SourcePanel& panel, SourceTransport& transport, Reconnect& r, int64_t now_us) {
   if (r.policy.closed_is_down) mark_down(panel, r.down_reason, false);
   if (r.schedule.due(now_us)) {
@@ -128,7 +128,7 @@ Bridge::FeedbackState Bridge::feedback_state(int64_t now_us) {
 void Bridge::source_loop(std::size_t source) {
   SourceTransport& transport = *transports_[source];
   SourcePanel panel(panel_, source);
-  const ReopenPolicy policy = transport.reopen_policy();
+  const ConnectionPolicy policy = transport.connection_policy();
   Reconnect reconnecting{policy,
                          policy.enumerate ? ReopenSchedule::enumeration(settings_.hid_enumerate_ms)
                                           : ReopenSchedule::back_off(settings_.reopen_min_ms, settings_.reopen_max_ms),
@@ -140,14 +140,14 @@ void Bridge::source_loop(std::size_t source) {
 
   while (running_) {
     const int64_t now = monotonic_us();
-    if (!transport.is_open()) {
-      if (!reconnect(panel, transport, reconnecting, now)) continue;
-      feedback.forget();
-    }
-    panel.update([&](PanelMapper& mapper, int64_t) {
-      mapper.on_connection(source, true, now);
-      return false;
-    });
+    const bool reopened = !transport.is_open();
+    if (reopened && !reconnect(panel, transport, reconnecting, now)) continue;
+    if (reopened) feedback.forget();
+    if (reopened || policy.up_while_open)
+      panel.update([&](PanelMapper& mapper, int64_t) {
+        mapper.on_connection(source, true, now);
+        return false;
+      });
     io::IoStatus status = transport.receive(panel, 5);
     if (status != io::IoStatus::Disconnected && transport.is_open() && transport.shows_feedback())
       status = write_feedback(panel, transport, feedback, status == io::IoStatus::Ok);

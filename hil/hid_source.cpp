@@ -13,8 +13,8 @@ HidSource::HidSource(std::unique_ptr<io::InputDevice> device, const panels::Pane
   for (const auto& rumble : definition.rumbles) has_outputs_ = has_outputs_ || rumble.source == source;
 }
 
-ReopenPolicy HidSource::reopen_policy() const {
-  ReopenPolicy policy;
+ConnectionPolicy HidSource::connection_policy() const {
+  ConnectionPolicy policy;
   policy.enumerate = true;
   if (!device_->hotplug_active()) policy.unseen_arrivals = "no USB hot-plug (" + device_->hotplug_error() + ")";
   return policy;

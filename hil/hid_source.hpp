@@ -5,7 +5,7 @@
 // input report goes to the panel, and the LEDs' output reports are written
 // on (re)open, when the request changes and, checked every feedback period,
 // when the panel's own LEDs (fault, estop) change. A lost device is looked
-// for by hot-plug (ReopenPolicy::enumerate).
+// for by hot-plug (ConnectionPolicy::enumerate).
 
 #include <array>
 #include <cstdint>
@@ -30,7 +30,7 @@ class HidSource final : public SourceTransport {
   /// the device cannot show.
   io::IoStatus reopen(SourcePanel& panel) override;
   std::string last_error() const override { return device_->last_error(); }
-  ReopenPolicy reopen_policy() const override;
+  ConnectionPolicy connection_policy() const override;
   bool wait_while_closed(int timeout_ms) override { return device_->wait_for_arrival(timeout_ms); }
   io::IoStatus receive(SourcePanel& panel, int timeout_ms) override;
   /// Once open, when the device has an output report for an LED or rumble of the source.

@@ -19,8 +19,9 @@ ModbusSource::ModbusSource(std::unique_ptr<io::ModbusLink> link, const panels::P
       poll_period_us_(static_cast<int64_t>(1e6 / definition.sources[source].poll_hz)),
       poll_(modbus_poll_reads(definition, source)) {}
 
-ReopenPolicy ModbusSource::reopen_policy() const {
-  ReopenPolicy policy;
+ConnectionPolicy ModbusSource::connection_policy() const {
+  ConnectionPolicy policy;
+  policy.up_while_open = false;
   policy.closed_is_down = false;
   return policy;
 }
@@ -63,6 +64,8 @@ io::IoStatus ModbusSource::receive(SourcePanel& panel, int timeout_ms) {
   bool open = true;
   panel.update([&](PanelMapper& mapper, int64_t now_us) {
     open = apply_modbus_result(mapper, panel.source(), r, link_->is_open(), now_us);
+    if (!open) return false;
+    mapper.on_connection(panel.source(), true, now_us);
     return r.ok() && apply_modbus_poll(mapper, panel.source(), poll_, last_counter_, now_us);
   });
   const io::IoStatus status = outcome(r, open);

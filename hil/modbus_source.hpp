@@ -6,7 +6,7 @@
 // after a poll: rise-modbus-v1's coils and holding registers when they
 // change and every feedback period, a modbus device's own points when they
 // change (ModbusFeedbackWriter). A request's failure is counted; a link
-// left closed by a timeout is reopened at once (ReopenPolicy), one closed
+// left closed by a timeout is reopened at once (ConnectionPolicy), one closed
 // by anything else is lost.
 
 #include <cstdint>
@@ -29,7 +29,7 @@ class ModbusSource final : public SourceTransport {
   bool is_open() const override { return link_->is_open(); }
   io::IoStatus reopen(SourcePanel& panel) override;
   std::string last_error() const override { return link_->last_error(); }
-  ReopenPolicy reopen_policy() const override;
+  ConnectionPolicy connection_policy() const override;
   /// Sleeps until the next poll is due (at most timeout_ms; Timeout), then polls.
   io::IoStatus receive(SourcePanel& panel, int timeout_ms) override;
   bool shows_feedback() const override { return true; }

@@ -24,8 +24,14 @@
 
 namespace rise::hil {
 
-/// How the bridge brings a closed transport back.
-struct ReopenPolicy {
+/// How the bridge judges a source's connection by its transport, and brings
+/// a closed transport back.
+struct ConnectionPolicy {
+  /// The source is up while its transport is open (CAN, HID). False for a
+  /// transport whose source is up only once the loop reopened it or the
+  /// peer answered (a Modbus link, opened before the loop starts: receive()
+  /// marks it up at each answered poll).
+  bool up_while_open = true;
   /// A closed transport is a lost one: its source is marked down at once
   /// (CAN, HID). False for a transport that closes itself to restart
   /// cleanly (a Modbus link after a timeout, so that a late answer is not
@@ -75,7 +81,7 @@ class SourceTransport {
   virtual io::IoStatus reopen(SourcePanel& panel) = 0;
   /// Why the transport is down: the OS's or the library's last error.
   virtual std::string last_error() const = 0;
-  virtual ReopenPolicy reopen_policy() const { return {}; }
+  virtual ConnectionPolicy connection_policy() const { return {}; }
   /// While closed: waits up to timeout_ms; true when the device arrived
   /// (reopen now). This one sleeps and says no.
   virtual bool wait_while_closed(int timeout_ms) {
