@@ -6,9 +6,9 @@
 // hid_source.hpp). Each adapts its io class (io::CanBus, io::ModbusLink,
 // io::InputDevice) to these calls; the bridge runs one loop for all of them
 // (bridge.cpp): reopen when due, read or poll the inputs into the panel,
-// write the feedback when it is due (source_schedule.hpp). Every call comes
-// from the source's own thread and, but reopen(), is cyclic-path safe: no
-// throw. io::IoStatus is the one status of every call.
+// write the feedback when it is due (source_schedule.hpp). Every call but
+// decorate() comes from the source's own thread, and none throws;
+// io::IoStatus is the one status of every call.
 
 #include <chrono>
 #include <memory>
