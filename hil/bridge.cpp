@@ -140,10 +140,10 @@ void Bridge::source_loop(std::size_t source) {
 
   while (running_) {
     const int64_t now = monotonic_us();
-    const bool reopened = !transport.is_open();
-    if (reopened && !reconnect(panel, transport, reconnecting, now)) continue;
-    if (reopened) feedback.forget();
-    if (reopened || policy.up_while_open)
+    const bool was_closed = !transport.is_open();
+    if (was_closed && !reconnect(panel, transport, reconnecting, now)) continue;
+    if (was_closed) feedback.forget();  // reopened: what the device shows is unknown
+    if (was_closed || policy.up_while_open)
       panel.update([&](PanelMapper& mapper, int64_t) {
         mapper.on_connection(source, true, now);
         return false;
