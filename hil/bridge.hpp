@@ -1,26 +1,25 @@
 #pragma once
 
-// The daemon's cyclic core: one thread per source (CAN: receive frames;
-// Modbus: poll the register map at the source's poll_hz), one publisher
-// thread at the panel's rate that also publishes at once when a control
-// changes. Transport-agnostic: frames come from io::CanBus, register blocks
-// from io::ModbusLink, snapshots go to a callback (the program publishes
-// them on LCM).
+// The daemon's cyclic core: one thread per source running one loop for any
+// transport (source_transport.hpp: CAN frames received, Modbus registers
+// polled at the source's poll_hz, HID reports read), one publisher thread
+// at the panel's rate that also publishes at once when a control changes.
+// Snapshots go to a callback (the program publishes them on LCM).
 
 #include <atomic>
-#include <condition_variable>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "hil/feedback.hpp"
 #include "hil/io/can_bus.hpp"
-#include "hil/io/input_device.hpp"
-#include "hil/io/modbus_link.hpp"
 #include "hil/panel_mapper.hpp"
+#include "hil/source_panel.hpp"
+#include "hil/source_schedule.hpp"
+#include "hil/source_transport.hpp"
+#include "msgs/clock.hpp"
 
 namespace rise::hil {
 
@@ -32,29 +31,18 @@ struct BridgeSettings {
   int64_t hid_enumerate_ms = 500;    ///< hot-plug: HID devices are enumerated this often while one is away
 };
 
-/// Monotonic microseconds (steady clock).
-int64_t monotonic_us();
-
-/// The transport of one source: a CAN bus (rise-can-v1, dbc), a Modbus link
-/// (rise-modbus-v1) or a HID device (hid: a HidDevice or a HidReplayDevice);
-/// exactly one is set.
-struct SourceTransport {
-  std::unique_ptr<io::CanBus> can;
-  std::unique_ptr<io::ModbusLink> modbus;
-  std::unique_ptr<io::InputDevice> hid;
-};
-
 class Bridge {
  public:
   using PublishFn = std::function<void(const PanelSnapshot&)>;
 
-  /// One bus per source of the definition, in the same order.
+  /// One bus per source of the definition, in the same order (each a CanSource).
   Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<io::CanBus>> buses,
          PublishFn publish, BridgeSettings settings = {});
-  /// One transport per source of the definition, in the same order. Each
-  /// Modbus link is used only from its source's thread.
-  Bridge(panels::PanelDefinition definition, std::vector<SourceTransport> transports, PublishFn publish,
-         BridgeSettings settings = {});
+  /// One transport per source of the definition, in the same order
+  /// (source_factory.hpp opens them from URLs). Each is used only from its
+  /// source's thread.
+  Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<SourceTransport>> transports,
+         PublishFn publish, BridgeSettings settings = {});
   ~Bridge();
   Bridge(const Bridge&) = delete;
   Bridge& operator=(const Bridge&) = delete;
@@ -70,7 +58,7 @@ class Bridge {
   /// a line in the log but is no failsafe (a hid source's LED its device
   /// cannot show), each once. The program logs them; allocates.
   std::vector<std::string> take_notes();
-  const panels::PanelDefinition& definition() const { return mapper_.definition(); }
+  const panels::PanelDefinition& definition() const { return panel_.mapper.definition(); }
   /// Thread-safe: PanelMapper::inject_input_fault, published at once.
   std::string inject_input_fault(InputFault fault);
   /// Thread-safe: PanelMapper::clear_input_faults at now, published at once.
@@ -78,12 +66,10 @@ class Bridge {
 
  private:
   void source_loop(std::size_t source);
-  void modbus_source_loop(std::size_t source);
-  void hid_source_loop(std::size_t source);
-  bool report_modbus(std::size_t source, const io::ModbusResult& result);
+  // Builds and writes a source's feedback when `schedule` says it is due;
+  // Ok when it is not.
+  io::IoStatus write_feedback(SourcePanel& panel, SourceTransport& transport, FeedbackSchedule& schedule, bool polled);
   void publish_loop();
-  void send_feedback(std::size_t source, const PanelSnapshot& snap, bool force);
-  void note(std::string text);
   /// What feedback needs, taken together under the lock: the state at
   /// now_us, the request and its version.
   struct FeedbackState {
@@ -93,20 +79,13 @@ class Bridge {
   };
   FeedbackState feedback_state(int64_t now_us);
 
-  PanelMapper mapper_;
-  std::vector<std::unique_ptr<io::CanBus>> buses_;            // null for a Modbus source
-  std::vector<std::unique_ptr<io::ModbusLink>> modbus_links_;  // null for a CAN source
-  std::vector<std::unique_ptr<io::InputDevice>> hid_devices_;  // null unless a hid source
+  SharedPanel panel_;  // the mapper, its lock, the publisher's wake-up, the notes
+  std::vector<std::unique_ptr<SourceTransport>> transports_;
   PublishFn publish_;
   BridgeSettings settings_;
 
-  mutable std::mutex mutex_;  // guards mapper_, feedback_, changed_
-  std::condition_variable wake_;
-  bool changed_ = false;
-  FeedbackRequest feedback_;
-  uint64_t feedback_version_ = 0;
-  std::vector<std::string> notes_;       // not yet taken
-  std::vector<std::string> notes_seen_;  // every note once
+  FeedbackRequest feedback_;  // guarded by panel_.mutex
+  std::atomic<uint64_t> feedback_version_{0};  // written under panel_.mutex
 
   std::atomic<bool> running_{false};
   std::vector<std::thread> threads_;

@@ -76,7 +76,7 @@ class FaultInjector {
   /// there); `transport`: the publisher's faults (null: none).
   FaultInjector(Bridge& bridge, std::vector<io::WireFaultSet*> wires, TransportFaults* transport);
 
-  /// Applies `spec` from now_us (monotonic, hil::monotonic_us) for its
+  /// Applies `spec` from now_us (monotonic, msgs::monotonic_us) for its
   /// duration. Returns "" or why it was refused (unknown kind, target or a
   /// layer that is not the daemon's). Thread-safe.
   std::string inject(const FaultSpec& spec, int64_t now_us);

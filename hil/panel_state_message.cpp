@@ -6,10 +6,6 @@
 namespace rise::hil {
 namespace fp = rise::firmware_protocol;
 
-std::string channel(const std::string& trainee_id, const std::string& what) {
-  return "rise/" + trainee_id + "/" + what;
-}
-
 rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
                                  const PanelSnapshot& snapshot, const std::string& trainee_id,
                                  int64_t seq, int64_t utime,

@@ -20,7 +20,4 @@ rise_msgs::PanelState to_message(const panels::PanelDefinition& definition,
 /// Reads a PanelFeedback message into a request for build_feedback().
 FeedbackRequest from_message(const rise_msgs::PanelFeedback& message);
 
-/// LCM channel names of one trainee station: rise/<id>/<what>.
-std::string channel(const std::string& trainee_id, const std::string& what);
-
 }  // namespace rise::hil

@@ -22,35 +22,54 @@ SessionRecorder::SessionRecorder(std::string dir)
   files_.push_back(dir_ + "/panel_state.lcmlog");
 }
 
-bool SessionRecorder::record_source(const std::string& name, SourceTransport& transport, int modbus_unit) {
-  if (transport.can) {
-    const std::string path = dir_ + "/" + name + ".log";
+// Puts the recorder of a source's kind around its io object.
+class SessionRecorder::SourceRecorder final : public IoDecorator {
+ public:
+  SourceRecorder(SessionRecorder& recorder, const std::string& name, int modbus_unit)
+      : recorder_(recorder), name_(name), modbus_unit_(modbus_unit) {}
+  bool recorded() const { return recorded_; }
+
+  std::unique_ptr<io::CanBus> wrap(std::unique_ptr<io::CanBus> bus) override {
+    const std::string path = path_of(".log");
     // Stamped when read: the time the bridge decoded the frame at, which is
     // what a verified replay must reproduce (the kernel's stamp is earlier
     // by the queueing; a plain candump beside the daemon records that).
-    auto bus = std::make_unique<io::RecordingBus>(std::move(transport.can), path, name, io::RecordingBus::Stamp::Receive);
-    buses_.push_back(bus.get());
-    transport.can = std::move(bus);
-    files_.push_back(path);
-    return true;
+    auto recording = std::make_unique<io::RecordingBus>(std::move(bus), path, name_, io::RecordingBus::Stamp::Receive);
+    recorder_.buses_.push_back(recording.get());
+    listed(path);
+    return recording;
   }
-  if (transport.modbus) {
-    const std::string path = dir_ + "/" + name + ".modbus.log";
-    auto link = std::make_unique<io::RecordingModbusLink>(std::move(transport.modbus), path, name, modbus_unit);
-    links_.push_back(link.get());
-    transport.modbus = std::move(link);
-    files_.push_back(path);
-    return true;
+  std::unique_ptr<io::ModbusLink> wrap(std::unique_ptr<io::ModbusLink> link) override {
+    const std::string path = path_of(".modbus.log");
+    auto recording = std::make_unique<io::RecordingModbusLink>(std::move(link), path, name_, modbus_unit_);
+    recorder_.links_.push_back(recording.get());
+    listed(path);
+    return recording;
   }
-  if (transport.hid) {
-    const std::string path = dir_ + "/" + name + ".hid";
-    auto device = std::make_unique<io::RecordingInputDevice>(std::move(transport.hid), path, name);
-    hid_devices_.push_back(device.get());
-    transport.hid = std::move(device);
-    files_.push_back(path);
-    return true;
+  std::unique_ptr<io::InputDevice> wrap(std::unique_ptr<io::InputDevice> device) override {
+    const std::string path = path_of(".hid");
+    auto recording = std::make_unique<io::RecordingInputDevice>(std::move(device), path, name_);
+    recorder_.hid_devices_.push_back(recording.get());
+    listed(path);
+    return recording;
   }
-  return false;
+
+ private:
+  std::string path_of(const char* suffix) const { return recorder_.dir_ + "/" + name_ + suffix; }
+  void listed(const std::string& path) {
+    recorder_.files_.push_back(path);
+    recorded_ = true;
+  }
+  SessionRecorder& recorder_;
+  const std::string& name_;
+  int modbus_unit_;
+  bool recorded_ = false;
+};
+
+bool SessionRecorder::record_source(const std::string& name, SourceTransport& transport, int modbus_unit) {
+  SourceRecorder recorder(*this, name, modbus_unit);
+  transport.decorate(recorder);
+  return recorder.recorded();
 }
 
 void SessionRecorder::record_message(const std::string& channel, const rise_msgs::PanelState& message) {

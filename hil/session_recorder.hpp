@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "hil/bridge.hpp"
+#include "hil/source_transport.hpp"
 #include "hil/io/recording_bus.hpp"
 #include "hil/io/recording_input_device.hpp"
 #include "hil/io/recording_modbus_link.hpp"
@@ -38,9 +38,10 @@ class SessionRecorder {
   SessionRecorder(const SessionRecorder&) = delete;
   SessionRecorder& operator=(const SessionRecorder&) = delete;
 
-  /// Wraps a source's transport so that its traffic is recorded into
-  /// DIR/<name>.log (CAN), DIR/<name>.modbus.log (Modbus, `modbus_unit` on
-  /// each line) or DIR/<name>.hid (HID); false when it has none. Throws
+  /// Wraps a source's transport's io object so that its traffic is
+  /// recorded into DIR/<name>.log (CAN), DIR/<name>.modbus.log (Modbus,
+  /// `modbus_unit` on each line) or DIR/<name>.hid (HID); false when it
+  /// has none of these. Throws
   /// std::runtime_error when the file cannot be created. The recorder keeps
   /// a pointer to the wrapper for its counts: call counts() only while the
   /// transport (the bridge) lives.
@@ -64,6 +65,8 @@ class SessionRecorder {
   const std::string& dir() const { return dir_; }
 
  private:
+  class SourceRecorder;
+
   std::string dir_;
   std::vector<std::string> files_;
   lcm::LogFile log_;

@@ -24,7 +24,7 @@ int verify_command(const VerifyOptions& o, std::ostream& out, std::ostream& err)
     for (const auto& c : o.captures) captures.push_back(capture_for(definition, c));
     if (captures.empty()) throw std::invalid_argument("no capture: give --capture FILE or --record-dir DIR");
     if (golden_file.empty()) throw std::invalid_argument("no golden: give --golden FILE or --record-dir DIR");
-    golden = read_panel_state_log(golden_file, o.id.empty() ? "" : channel(o.id, "panel_state"));
+    golden = read_panel_state_log(golden_file, o.id.empty() ? "" : rise::msgs::panel_state_channel(o.id));
     VerifySettings settings;
     settings.axis_tolerance = static_cast<float>(o.axis_tolerance);
     settings.time_tolerance_us = static_cast<int64_t>(o.time_tolerance_ms * 1000.0);

@@ -212,33 +212,31 @@ void HidRecordingReader::rewind() {
 
 bool HidRecordingReader::next(HidRecordingRecord& record) { return step(record, Mode::Play); }
 
+void HidRecordingReader::bad(Mode mode, std::string_view key, std::string_view what) const {
+  if (mode == Mode::Check)
+    throw std::runtime_error(path_ + ":" + std::to_string(line_) + ": " + std::string(key) + ": " + std::string(what));
+}
+
+bool HidRecordingReader::emit_plug(HidRecordingRecord& record, int block_line) {
+  held_ = true;  // the line that ended the block is acted on next
+  record.kind = HidRecordingRecord::Kind::Plug;
+  record.time_us = epoch_ && have_plug_time_ ? plug_time_us_ : last_us_;
+  record.line = block_line;
+  record.identity = std::exchange(pending_identity_, {});
+  have_plug_time_ = false;
+  plugged_ = true;
+  last_us_ = record.time_us;
+  return true;
+}
+
 bool HidRecordingReader::step(HidRecordingRecord& record, Mode mode) {
-  using Kind = HidRecordingRecord::Kind;
   bool block = false;  // an R: block of device 0 is being read into `record`
   int block_line = 0;
-  // A line that is not hid-recorder's: an error while checking; when
-  // playing (the file changed since), it is left out.
-  auto bad = [&](std::string_view key, std::string_view what) {
-    if (mode == Mode::Check)
-      throw std::runtime_error(path_ + ":" + std::to_string(line_) + ": " + std::string(key) + ": " +
-                               std::string(what));
-  };
-  auto emit_plug = [&] {
-    held_ = true;  // the line that ended the block is acted on next
-    record.kind = Kind::Plug;
-    record.time_us = epoch_ && have_plug_time_ ? plug_time_us_ : last_us_;
-    record.line = block_line;
-    record.identity = std::exchange(pending_identity_, {});
-    have_plug_time_ = false;
-    plugged_ = true;
-    last_us_ = record.time_us;
-    return true;
-  };
   for (;;) {
     if (!held_) {
       if (!std::getline(in_, text_)) {
         if (!block) return false;
-        emit_plug();
+        emit_plug(record, block_line);
         held_ = false;  // nothing is left to act on
         return true;
       }
@@ -247,112 +245,127 @@ bool HidRecordingReader::step(HidRecordingRecord& record, Mode mode) {
     held_ = false;
     const std::string_view l = trim(text_);
     if (l.empty()) continue;
-    if (l.front() == '#') {
-      int64_t t = 0;
-      const Mark mark = parse_mark(l, t);
-      if (mark == Mark::None) continue;
-      if (mark == Mark::BadTime) {
-        bad("#", "the time is not SEC.USEC with six digits of microseconds");
-        continue;
-      }
-      if (mark == Mark::Start) {
-        if (!start_seen_) start_us_ = t;
-        start_seen_ = true;
-        continue;
-      }
-      if (block) return emit_plug();
-      if (device_ != 0) continue;
-      if (mark == Mark::Plugged) {
-        have_plug_time_ = true;
-        plug_time_us_ = t;
-        continue;
-      }
-      if (!plugged_) continue;  // nothing to unplug
-      record.kind = mark == Mark::End ? Kind::End : Kind::Unplug;
-      record.time_us = epoch_ ? t : last_us_;
-      record.line = line_;
-      last_us_ = record.time_us;
-      return true;
-    }
-    if (l.size() < 2 || l[1] != ':') {
-      bad(l.substr(0, 1), "not a hid-recorder line (R:, N:, P:, I:, E:, D: or a # comment)");
-      continue;
-    }
-    const char key = l.front();
-    std::string_view rest = l.substr(2);
-    switch (key) {
-      case 'N':
-      case 'P':
-        if (device_ == 0) (key == 'N' ? pending_identity_.name : pending_identity_.phys) = std::string(trim(rest));
-        continue;
-      case 'I': {
-        uint32_t bus = 0;
-        uint16_t vid = 0, pid = 0;
-        const std::string_view b = next_word(rest), v = next_word(rest), p = next_word(rest);
-        if (!parse_number(b, bus, 16) || !parse_number(v, vid, 16) || !parse_number(p, pid, 16) ||
-            !next_word(rest).empty()) {
-          bad("I", "expected '<bus> <vid> <pid>' in hex");
-          continue;
-        }
-        if (device_ == 0) {
-          pending_identity_.bus = bus;
-          pending_identity_.vendor_id = vid;
-          pending_identity_.product_id = pid;
-        }
-        continue;
-      }
-      case 'D': {
-        if (block) return emit_plug();
-        int n = 0;
-        if (!parse_number(trim(rest), n) || n < 0) {
-          bad("D", "expected a device number");
-          continue;
-        }
-        device_ = n;
-        continue;
-      }
-      case 'R': {
-        if (block) return emit_plug();
-        if (const char* what = parse_length_and_bytes(rest, max_hid_report_bytes, record.bytes)) {
-          bad("R", what);
-          continue;
-        }
-        if (device_ != 0) continue;
+    switch (l.front() == '#' ? read_mark(l, record, mode, block) : read_line(l, record, mode, block)) {
+      case Action::Next: continue;
+      case Action::Emit: return true;
+      case Action::EndBlock: return emit_plug(record, block_line);
+      case Action::StartBlock:
         block = true;
         block_line = line_;
         continue;
-      }
-      case 'E': {
-        if (block) return emit_plug();
-        int64_t t = 0;
-        if (!parse_time(next_word(rest), t)) {
-          bad("E", "the time is not SEC.USEC with six digits of microseconds");
-          continue;
-        }
-        if (const char* what = parse_length_and_bytes(rest, max_hid_report_bytes, record.bytes)) {
-          bad("E", what);
-          continue;
-        }
-        if (record.bytes.empty()) {
-          bad("E", "an empty report");
-          continue;
-        }
-        if (device_ != 0) continue;
-        if (!plugged_) {
-          bad("E", "a report before any R: descriptor");
-          continue;
-        }
-        record.kind = Kind::Report;
-        record.time_us = (epoch_ ? start_us_ : 0) + t;
-        record.line = line_;
-        last_us_ = record.time_us;
-        return true;
-      }
-      default:
-        bad(l.substr(0, 1), "not a hid-recorder line (R:, N:, P:, I:, E:, D: or a # comment)");
-        continue;
     }
   }
+}
+
+HidRecordingReader::Action HidRecordingReader::read_mark(std::string_view l, HidRecordingRecord& record, Mode mode,
+                                                         bool in_block) {
+  int64_t t = 0;
+  const Mark mark = parse_mark(l, t);
+  if (mark == Mark::None) return Action::Next;
+  if (mark == Mark::BadTime) {
+    bad(mode, "#", "the time is not SEC.USEC with six digits of microseconds");
+    return Action::Next;
+  }
+  if (mark == Mark::Start) {
+    if (!start_seen_) start_us_ = t;
+    start_seen_ = true;
+    return Action::Next;
+  }
+  if (in_block) return Action::EndBlock;
+  if (device_ != 0) return Action::Next;
+  if (mark == Mark::Plugged) {
+    have_plug_time_ = true;
+    plug_time_us_ = t;
+    return Action::Next;
+  }
+  if (!plugged_) return Action::Next;  // nothing to unplug
+  record.kind = mark == Mark::End ? HidRecordingRecord::Kind::End : HidRecordingRecord::Kind::Unplug;
+  record.time_us = epoch_ ? t : last_us_;
+  record.line = line_;
+  last_us_ = record.time_us;
+  return Action::Emit;
+}
+
+HidRecordingReader::Action HidRecordingReader::read_line(std::string_view l, HidRecordingRecord& record, Mode mode,
+                                                         bool in_block) {
+  if (l.size() < 2 || l[1] != ':') {
+    bad(mode, l.substr(0, 1), "not a hid-recorder line (R:, N:, P:, I:, E:, D: or a # comment)");
+    return Action::Next;
+  }
+  const char key = l.front();
+  std::string_view rest = l.substr(2);
+  switch (key) {
+    case 'N':
+    case 'P':
+      if (device_ == 0) (key == 'N' ? pending_identity_.name : pending_identity_.phys) = std::string(trim(rest));
+      return Action::Next;
+    case 'I': return read_identity(rest, mode);
+    case 'D': {
+      if (in_block) return Action::EndBlock;
+      int n = 0;
+      if (!parse_number(trim(rest), n) || n < 0) {
+        bad(mode, "D", "expected a device number");
+        return Action::Next;
+      }
+      device_ = n;
+      return Action::Next;
+    }
+    case 'R':
+      if (in_block) return Action::EndBlock;
+      if (const char* what = parse_length_and_bytes(rest, max_hid_report_bytes, record.bytes)) {
+        bad(mode, "R", what);
+        return Action::Next;
+      }
+      return device_ != 0 ? Action::Next : Action::StartBlock;
+    case 'E': return in_block ? Action::EndBlock : read_event(rest, record, mode);
+    default:
+      bad(mode, l.substr(0, 1), "not a hid-recorder line (R:, N:, P:, I:, E:, D: or a # comment)");
+      return Action::Next;
+  }
+}
+
+HidRecordingReader::Action HidRecordingReader::read_identity(std::string_view rest, Mode mode) {
+  uint32_t bus = 0;
+  uint16_t vid = 0, pid = 0;
+  const std::string_view b = next_word(rest), v = next_word(rest), p = next_word(rest);
+  if (!parse_number(b, bus, 16) || !parse_number(v, vid, 16) || !parse_number(p, pid, 16) ||
+      !next_word(rest).empty()) {
+    bad(mode, "I", "expected '<bus> <vid> <pid>' in hex");
+    return Action::Next;
+  }
+  if (device_ == 0) {
+    pending_identity_.bus = bus;
+    pending_identity_.vendor_id = vid;
+    pending_identity_.product_id = pid;
+  }
+  return Action::Next;
+}
+
+HidRecordingReader::Action HidRecordingReader::read_event(std::string_view rest, HidRecordingRecord& record,
+                                                          Mode mode) {
+  int64_t t = 0;
+  if (!parse_time(next_word(rest), t)) {
+    bad(mode, "E", "the time is not SEC.USEC with six digits of microseconds");
+    return Action::Next;
+  }
+  if (const char* what = parse_length_and_bytes(rest, max_hid_report_bytes, record.bytes)) {
+    bad(mode, "E", what);
+    return Action::Next;
+  }
+  if (record.bytes.empty()) {
+    bad(mode, "E", "an empty report");
+    return Action::Next;
+  }
+  if (device_ != 0) return Action::Next;
+  if (!plugged_) {
+    bad(mode, "E", "a report before any R: descriptor");
+    return Action::Next;
+  }
+  record.kind = HidRecordingRecord::Kind::Report;
+  record.time_us = (epoch_ ? start_us_ : 0) + t;
+  record.line = line_;
+  last_us_ = record.time_us;
+  return Action::Emit;
 }
 
 bool looks_like_hid_recording(const std::string& path) {

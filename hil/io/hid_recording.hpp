@@ -172,6 +172,19 @@ class HidRecordingReader {
   // bad line is skipped).
   enum class Mode { Check, Play };
   bool step(HidRecordingRecord& record, Mode mode);
+  // What a line does to the record being read: nothing more (Next), it is
+  // complete (Emit), it ends the R: block being read (EndBlock: the block's
+  // Plug is complete, the line is acted on next) or begins one of device 0.
+  enum class Action { Next, Emit, EndBlock, StartBlock };
+  Action read_mark(std::string_view line, HidRecordingRecord& record, Mode mode, bool in_block);  // a # line
+  Action read_line(std::string_view line, HidRecordingRecord& record, Mode mode, bool in_block);  // a KEY: line
+  Action read_identity(std::string_view rest, Mode mode);                                        // I: bus vid pid
+  Action read_event(std::string_view rest, HidRecordingRecord& record, Mode mode);               // E: time length bytes
+  // The Plug of the R: block that began at block_line; true.
+  bool emit_plug(HidRecordingRecord& record, int block_line);
+  // A line that is not hid-recorder's: an error while checking; when
+  // playing (the file changed since), it is left out.
+  void bad(Mode mode, std::string_view key, std::string_view what) const;
   void restart();
 
   std::string path_;

@@ -98,7 +98,7 @@ class ReplayModbusLink final : public ModbusLink {
   };
   Window window() const { return {window_begin_us_, window_end_us_}; }
   /// The trace time that the steady-clock time `steady_us` (µs since the
-  /// steady clock's epoch, as hil::monotonic_us()) plays, within the pass it
+  /// steady clock's epoch, as msgs::monotonic_us()) plays, within the pass it
   /// falls in; nullopt before the first request. With fast=1: the trace time
   /// of the last request.
   std::optional<int64_t> trace_time_us(int64_t steady_us) const;

@@ -88,9 +88,10 @@ TEST_CASE("bridge over a HID replay shows the recorded values at their times, th
     w.report(t0 + 400'000, std::vector<uint8_t>{0xff, 0x00, 0x00, 0x00});
     w.end(t0 + 600'000);
   }
-  std::vector<SourceTransport> transports(1);
-  transports[0].hid = std::make_unique<rise::io::HidReplayDevice>("replay://" + path);
-  const auto* replay = static_cast<const rise::io::HidReplayDevice*>(transports[0].hid.get());
+  auto device = std::make_unique<rise::io::HidReplayDevice>("replay://" + path);
+  const auto* replay = device.get();
+  std::vector<std::unique_ptr<SourceTransport>> transports;
+  transports.push_back(std::make_unique<rise::hil::HidSource>(std::move(device), def, 0));
   struct Stamped {
     double at_ms;
     PanelSnapshot snap;

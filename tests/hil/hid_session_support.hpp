@@ -20,9 +20,11 @@
 
 #include "firmware_protocol/hid_descriptor.hpp"
 #include "hil/bridge.hpp"
+#include "hil/hid_source.hpp"
 #include "hil/io/hid_recording.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "panels/hid_emulator.hpp"
 #include "panels/panel_definition.hpp"
@@ -87,12 +89,13 @@ class RecordedHidSession {
  public:
   RecordedHidSession(const panels::PanelDefinition& definition, std::unique_ptr<io::InputDevice> device,
                      const std::string& dir)
-      : definition_(definition), recorder_(dir), channel_(hil::channel("rec", "panel_state")) {
-    std::vector<SourceTransport> transports(1);
-    transports[0].hid = std::move(device);
-    if (!recorder_.record_source(definition_.sources[0].name, transports[0], 0))
+      : definition_(definition), recorder_(dir), channel_(msgs::panel_state_channel("rec")) {
+    auto source = std::make_unique<HidSource>(std::move(device), definition_, 0);
+    if (!recorder_.record_source(definition_.sources[0].name, *source, 0))
       throw std::runtime_error("RecordedHidSession: the HID device is not recorded");
-    recording_ = static_cast<const io::RecordingInputDevice*>(transports[0].hid.get());
+    recording_ = static_cast<const io::RecordingInputDevice*>(&source->device());
+    std::vector<std::unique_ptr<SourceTransport>> transports;
+    transports.push_back(std::move(source));
     bridge_ = std::make_unique<Bridge>(definition_, std::move(transports), [this](const PanelSnapshot& snap) {
       const int64_t utime = rise::msgs::wall_us();
       recorder_.record_message(channel_, to_message(definition_, snap, "rec", messages_++, utime, {}));

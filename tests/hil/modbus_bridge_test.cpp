@@ -20,6 +20,7 @@
 
 #include "hil/bridge.hpp"
 #include "hil/io/modbus_server.hpp"
+#include "hil/source_factory.hpp"
 #include "msgs/failsafe.hpp"
 #include "panels/console_emulator.hpp"
 #include "tests/hil/bridge_test_support.hpp"
@@ -56,14 +57,16 @@ rise::panels::TimelineEvent directive(rise::panels::TimelineEvent::Kind kind, in
 }
 
 
-std::vector<rise::hil::SourceTransport> modbus_transport(const std::string& url) {
-  std::vector<rise::hil::SourceTransport> t(1);
-  t[0].modbus = rise::io::open_modbus_link(url);
+std::vector<std::unique_ptr<rise::hil::SourceTransport>> modbus_transport(const rise::panels::PanelDefinition& def,
+                                                                          const std::string& url) {
+  std::vector<std::unique_ptr<rise::hil::SourceTransport>> t;
+  t.push_back(rise::hil::open_source(def, 0, url));
   return t;
 }
 
-std::vector<rise::hil::SourceTransport> modbus_transport(uint16_t port) {
-  return modbus_transport("modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=50");
+std::vector<std::unique_ptr<rise::hil::SourceTransport>> modbus_transport(const rise::panels::PanelDefinition& def,
+                                                                          uint16_t port) {
+  return modbus_transport(def, "modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=50");
 }
 
 // socat linking a pty pair at two paths, stopped by PID. With -d -d it
@@ -133,7 +136,7 @@ TEST_CASE("the bridge polls a Modbus console, writes its feedback, fails safe wh
   emulator->apply(set(def, "drive_y", 0.6f, false));
 
   Published published;
-  rise::hil::Bridge bridge(def, modbus_transport(port), [&](const PanelSnapshot& s) { published.add(s); });
+  rise::hil::Bridge bridge(def, modbus_transport(def, port), [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();
 
   const auto live = published.wait_for(
@@ -193,7 +196,7 @@ TEST_CASE("a Modbus console whose registers freeze goes stale after timeout_ms, 
   ModbusEmulatorThread emulator(def, 0);
   emulator.apply(set(def, "deadman", 0, true));
   Published published;
-  rise::hil::Bridge bridge(def, modbus_transport(emulator.port()), [&](const PanelSnapshot& s) { published.add(s); });
+  rise::hil::Bridge bridge(def, modbus_transport(def, emulator.port()), [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();
   REQUIRE(published.wait_for([](const PanelSnapshot& s) { return !s.failsafe; }, 3000).has_value());
 
@@ -241,7 +244,7 @@ TEST_CASE("the bridge polls a Modbus RTU console across a socat pty pair, fails 
   emulator.apply(set(def, "deadman", 0, true));
   emulator.apply(set(def, "drive_y", 0.6f, false));
   Published published;
-  rise::hil::Bridge bridge(def, modbus_transport("modbus+rtu://" + host_end + "?baud=115200&unit=3&timeout_ms=50"),
+  rise::hil::Bridge bridge(def, modbus_transport(def, "modbus+rtu://" + host_end + "?baud=115200&unit=3&timeout_ms=50"),
                            [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();
   REQUIRE(published.wait_for([&](const PanelSnapshot& s) { return !s.failsafe && s.controls[drive_y].axis > 0.5f; },

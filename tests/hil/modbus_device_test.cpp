@@ -18,6 +18,8 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
 #include "hil/session_recorder.hpp"
+#include "hil/source_factory.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
@@ -383,15 +385,15 @@ TEST_CASE("the bridge polls a third-party Modbus device over TCP, writes its fee
   serve(*device, 600);
   const std::string dir = temp_dir("rise-modbus-device");
   std::filesystem::remove_all(dir);
-  const std::string channel = rise::hil::channel("dev", "panel_state");
+  const std::string channel = rise::msgs::panel_state_channel("dev");
   const auto drive_y = control(def, "drive_y"), speed = control(def, "speed");
   Published published;
   {
     SessionRecorder recorder(dir);
-    std::vector<SourceTransport> transports(1);
-    transports[0].modbus =
-        rise::io::open_modbus_link("modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=50");
-    REQUIRE(recorder.record_source("plc", transports[0], 1));
+    std::vector<std::unique_ptr<SourceTransport>> transports;
+    transports.push_back(
+        rise::hil::open_source(def, 0, "modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=50"));
+    REQUIRE(recorder.record_source("plc", *transports[0], 1));
     int64_t seq = 0;
     Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& snap) {
       recorder.record_message(channel, to_message(def, snap, "dev", seq++, rise::msgs::wall_us(), {}));

@@ -12,6 +12,7 @@
 
 #include "hil/bridge.hpp"
 #include "hil/io/replay_modbus_link.hpp"
+#include "hil/modbus_source.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
 #include "tests/hil/bridge_test_support.hpp"
@@ -43,8 +44,8 @@ struct ReplayRun {
   explicit ReplayRun(const std::string& options) {
     auto replay = rise::io::open_modbus_replay("replay://" + kSession + "/console.modbus.log" + options);
     link = replay.get();
-    std::vector<SourceTransport> transports(1);
-    transports[0].modbus = std::move(replay);
+    std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
+    transports.push_back(std::make_unique<rise::hil::ModbusSource>(std::move(replay), def, 0));
     bridge = std::make_unique<Bridge>(def, std::move(transports), [this](const PanelSnapshot& snap) {
       const int64_t t = link->trace_time_us(snap.time_us).value_or(0);
       {

@@ -12,6 +12,8 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
 #include "hil/session_recorder.hpp"
+#include "hil/source_factory.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
@@ -32,14 +34,14 @@ TEST_CASE("a session recorded from a live bridge replays to the PanelState strea
   const auto def = console();
   const std::string dir = temp_dir("rise-session");
   std::filesystem::remove_all(dir);
-  const std::string channel = rise::hil::channel("rec", "panel_state");
+  const std::string channel = rise::msgs::panel_state_channel("rec");
   Published published;
   std::size_t frames_seen = 0;
   {
     SessionRecorder recorder(dir);
-    std::vector<SourceTransport> transports(1);
-    transports[0].can = rise::io::open_can_bus("mem://session_recorder_test");
-    REQUIRE(recorder.record_source("console", transports[0], 0));
+    std::vector<std::unique_ptr<SourceTransport>> transports;
+    transports.push_back(rise::hil::open_source(def, 0, "mem://session_recorder_test"));
+    REQUIRE(recorder.record_source("console", *transports[0], 0));
     EmulatorThread emulator(def, "mem://session_recorder_test");
     int64_t seq = 0;
     Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& snap) {

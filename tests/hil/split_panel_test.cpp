@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "hil/source_factory.hpp"
 #include "tests/hil/bridge_test_support.hpp"
 
 using rise::hil::PanelSnapshot;
@@ -26,9 +27,9 @@ TEST_CASE("a panel fed by a CAN board and a Modbus board combines both and fails
   fast.position = 2;
   buttons->apply(fast);
 
-  std::vector<rise::hil::SourceTransport> transports(2);
-  transports[0].can = rise::io::open_can_bus("mem://split_test");
-  transports[1].modbus = rise::io::open_modbus_link("modbus+tcp://127.0.0.1:" + std::to_string(buttons->port()) + "?unit=1");
+  std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
+  transports.push_back(rise::hil::open_source(def, 0, "mem://split_test"));
+  transports.push_back(rise::hil::open_source(def, 1, "modbus+tcp://127.0.0.1:" + std::to_string(buttons->port()) + "?unit=1"));
   Published published;
   rise::hil::Bridge bridge(def, std::move(transports), [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();

@@ -30,6 +30,7 @@
 #include "process/child_process.hpp"
 #include "hil/bridge.hpp"
 #include "hil/io/hid_device.hpp"
+#include "hil/hid_source.hpp"
 #include "hil/io/usb_hotplug.hpp"
 #include "panels/panel_definition.hpp"
 #include "tests/hid_test_devices.hpp"
@@ -159,14 +160,17 @@ TEST_CASE("a USB HID device re-plugged is reopened through libusb's arrival call
   UsbHidGadget gadget;
   gadget.plug();
 
-  std::vector<rise::hil::SourceTransport> transports(1);
-  transports[0].hid = std::make_unique<io::HidDevice>("hid://1209:0002?name=LED test pad");
-  io::InputDevice& device = *transports[0].hid;
+  const auto definition = rise::panels::parse_panel_definition(usb_pad_panel, "usb_pad.yaml");
+  auto source = std::make_unique<rise::hil::HidSource>(std::make_unique<io::HidDevice>("hid://1209:0002?name=LED test pad"),
+                                                       definition, 0);
+  const io::InputDevice& device = source->device();
   INFO("libusb: " << device.hotplug_error());
   REQUIRE(device.hotplug_active());
+  std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
+  transports.push_back(std::move(source));
   rise::hil::BridgeSettings settings;
   settings.hid_enumerate_ms = 60000;
-  Bridge bridge(rise::panels::parse_panel_definition(usb_pad_panel, "usb_pad.yaml"), std::move(transports),
+  Bridge bridge(definition, std::move(transports),
                 [](const PanelSnapshot&) {}, settings);
   const auto control = [&](const char* name) { return *bridge.definition().find_control(name); };
   const auto started = Clock::now();

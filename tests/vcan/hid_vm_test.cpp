@@ -30,6 +30,7 @@
 #include "hil/io/hid_device.hpp"
 #include "hil/io/uhid_device.hpp"
 #include "hil/replay_verify.hpp"
+#include "hil/source_factory.hpp"
 #include "panels/hid_emulator.hpp"
 #include "panels/panel_definition.hpp"
 #include "panels/timeline.hpp"
@@ -247,10 +248,11 @@ TEST_CASE("uhid device answers the host's feature requests at once and passes it
 
 TEST_CASE("bridge decodes a uhid gamepad, goes failsafe when it is unplugged and reopens it", "[vcan]") {
   auto pad = std::make_unique<UhidGamepad>();
-  std::vector<rise::hil::SourceTransport> transports(1);
-  transports[0].hid = std::make_unique<io::HidDevice>("hid://0428:4001");
+  const auto definition = rise::panels::parse_panel_definition(definition_text, "gravis.yaml");
+  std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
+  transports.push_back(rise::hil::open_source(definition, 0, "hid://0428:4001"));
   rise::hil::BridgeSettings settings;
-  Bridge bridge(rise::panels::parse_panel_definition(definition_text, "gravis.yaml"), std::move(transports),
+  Bridge bridge(definition, std::move(transports),
                 [](const PanelSnapshot&) {}, settings);
   bridge.start();
   const auto control = [&](const char* name) { return *bridge.definition().find_control(name); };
@@ -423,8 +425,8 @@ TEST_CASE("the HID emulator's timeline reaches the bridge through uhid, and the 
   EmulatedPad pad(definition,
                   "0.0 drive_x 0.5\n0.0 drive_y -1\n0.0 deadman pressed\n"
                   "0.3 horn pressed\n0.3 drive_x -0.25\n");
-  std::vector<rise::hil::SourceTransport> transports(1);
-  transports[0].hid = std::make_unique<io::HidDevice>("hid://1209:0001");
+  std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
+  transports.push_back(rise::hil::open_source(definition, 0, "hid://1209:0001"));
   Bridge bridge(definition, std::move(transports), [](const PanelSnapshot&) {});
   bridge.start();
   const auto control = [&](const char* name) { return *bridge.definition().find_control(name); };
@@ -504,9 +506,10 @@ TEST_CASE("rise-panel emulate --hid is a HID device the bridge reads and lights"
     std::ifstream in("/tmp/rise-panel.log");
     return std::string(std::istreambuf_iterator<char>(in), {});
   };
-  std::vector<rise::hil::SourceTransport> transports(1);
-  transports[0].hid = std::make_unique<io::HidDevice>("hid://1209:0003?name=rise-panel LED pad");
-  Bridge bridge(rise::panels::parse_panel_definition(led_pad_panel, "led_pad.yaml"), std::move(transports),
+  const auto definition = rise::panels::parse_panel_definition(led_pad_panel, "led_pad.yaml");
+  std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
+  transports.push_back(rise::hil::open_source(definition, 0, "hid://1209:0003?name=rise-panel LED pad"));
+  Bridge bridge(definition, std::move(transports),
                 [](const PanelSnapshot&) {});
   bridge.start();
   const auto control = [&](const char* name) { return *bridge.definition().find_control(name); };
