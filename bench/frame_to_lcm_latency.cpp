@@ -46,8 +46,8 @@ struct Listener {
   }
 };
 
-rise::io::CanFrame to_can(const fp::WireFrame& w) {
-  rise::io::CanFrame f;
+rise::hil::io::CanFrame to_can(const fp::WireFrame& w) {
+  rise::hil::io::CanFrame f;
   f.id = w.can_id;
   f.len = 8;
   std::copy(w.data.begin(), w.data.end(), f.data.begin());
@@ -64,8 +64,8 @@ int main(int argc, char** argv) {
   const int samples = argc > 1 ? std::stoi(argv[1]) : 2000;
   const std::string lcm_url = rise::msgs::kDefaultLcmUrl;
   const std::string id = "bench" + std::to_string(::getpid());
-  auto server = rise::io::open_can_bus("socketcand+listen://127.0.0.1:0/can0?settle_ms=0");
-  const uint16_t port = rise::io::listening_port(*server);
+  auto server = rise::hil::io::open_can_bus("socketcand+listen://127.0.0.1:0/can0?settle_ms=0");
+  const uint16_t port = rise::hil::io::listening_port(*server);
 
   lcm::LCM lcm(lcm_url);
   Listener listener;
@@ -92,9 +92,9 @@ int main(int argc, char** argv) {
     pollfd pfd{lcm.getFileno(), POLLIN, 0};
     if (::poll(&pfd, 1, timeout_ms) > 0) lcm.handle();
   };
-  rise::io::CanFrame dummy;
+  rise::hil::io::CanFrame dummy;
   auto drain_feedback = [&] {
-    while (server->receive(dummy, 0) == rise::io::IoStatus::Ok) {
+    while (server->receive(dummy, 0) == rise::hil::io::IoStatus::Ok) {
     }
   };
 

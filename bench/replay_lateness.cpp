@@ -92,13 +92,13 @@ int main(int argc, char** argv) {
                                       "'" + log + "' " + std::to_string(seconds) + " " + out + " 2>/dev/null");
 
   const std::string url = "replay://" + log + "?loop=-1";
-  rise::io::ReplayBus bus(url, std::get<rise::io::ReplayAddress>(rise::io::parse_can_url(url)));
+  rise::hil::io::ReplayBus bus(url, std::get<rise::hil::io::ReplayAddress>(rise::hil::io::parse_can_url(url)));
   std::vector<double> ours;
   ours.reserve(static_cast<std::size_t>(seconds * 3000));
-  rise::io::CanFrame f;
+  rise::hil::io::CanFrame f;
   const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
   while (std::chrono::steady_clock::now() < end) {
-    if (bus.receive(f, 100) != rise::io::IoStatus::Ok) continue;
+    if (bus.receive(f, 100) != rise::hil::io::IoStatus::Ok) continue;
     ours.push_back(static_cast<double>(bus.last_lateness_us()));
   }
   print("rise replay://", figures(ours));

@@ -26,11 +26,11 @@ int main(int argc, char** argv) {
   const int passes = argc > 2 ? std::atoi(argv[2]) : 200;
   std::printf("replay throughput, %d passes over %s\n", passes, log.c_str());
 
-  auto bus = rise::io::open_can_bus("replay://" + log + "?fast=1&loop=" + std::to_string(passes - 1));
-  rise::io::CanFrame f;
+  auto bus = rise::hil::io::open_can_bus("replay://" + log + "?fast=1&loop=" + std::to_string(passes - 1));
+  rise::hil::io::CanFrame f;
   long long frames = 0, checksum = 0;
   const auto t0 = std::chrono::steady_clock::now();
-  while (bus->receive(f, 0) == rise::io::IoStatus::Ok) {
+  while (bus->receive(f, 0) == rise::hil::io::IoStatus::Ok) {
     ++frames;
     checksum += f.data[0];
   }

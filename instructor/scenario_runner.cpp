@@ -5,8 +5,8 @@
 namespace rise::instructor {
 namespace {
 
-uint64_t draw(uint64_t seed, uint64_t index) { return io::seeded_bits(seed, index); }
-double uniform(uint64_t seed, uint64_t index) { return io::seeded_uniform(seed, index); }
+uint64_t draw(uint64_t seed, uint64_t index) { return hil::io::seeded_bits(seed, index); }
+double uniform(uint64_t seed, uint64_t index) { return hil::io::seeded_uniform(seed, index); }
 
 }  // namespace
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "msgs/clock.hpp"
 #include "msgs/failsafe.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/panel_definition.hpp"

@@ -164,7 +164,7 @@ struct WebServer::Impl {
       if (bound_port < 0) throw std::runtime_error("cannot bind " + settings.host);
       return;
     }
-    const std::string address = io::format_host_port(settings.host, static_cast<uint16_t>(settings.port));
+    const std::string address = hil::io::format_host_port(settings.host, static_cast<uint16_t>(settings.port));
     if (!http.bind_to_port(settings.host, settings.port)) {
       // cpp-httplib closes the socket after the failed bind() or listen(), which keeps errno.
       if (errno == EADDRINUSE) throw std::runtime_error(address + ": address in use");

@@ -91,22 +91,22 @@ void ConsoleEmulator::apply(const TimelineEvent& e) {
   }
 }
 
-bool ConsoleEmulator::send(io::CanBus& bus, const fp::Message& message) {
+bool ConsoleEmulator::send(hil::io::CanBus& bus, const fp::Message& message) {
   fp::WireFrame w = encoder_.next(message);
   if (corrupt_left_ > 0) {
     w.data[0] ^= 0x5A;  // a wrong CRC, as a flipped bit on the wire would give
     --corrupt_left_;
   }
-  io::CanFrame f;
+  hil::io::CanFrame f;
   f.id = w.can_id;
   f.len = static_cast<uint8_t>(w.data.size());
   std::copy(w.data.begin(), w.data.end(), f.data.begin());
-  if (bus.send(f) != io::IoStatus::Ok) return false;
+  if (bus.send(f) != hil::io::IoStatus::Ok) return false;
   ++frames_sent_;
   return true;
 }
 
-int ConsoleEmulator::tick(io::CanBus& bus, int64_t now_us) {
+int ConsoleEmulator::tick(hil::io::CanBus& bus, int64_t now_us) {
   if (start_us_ < 0) {
     start_us_ = now_us;
     next_axes_us_ = next_digital_us_ = next_heartbeat_us_ = now_us;
@@ -144,7 +144,7 @@ int ConsoleEmulator::tick(io::CanBus& bus, int64_t now_us) {
   return sent;
 }
 
-bool ConsoleEmulator::on_frame(const io::CanFrame& frame) {
+bool ConsoleEmulator::on_frame(const hil::io::CanFrame& frame) {
   if (frame.error || frame.remote || frame.fd || frame.extended) return false;
   const auto r = feedback_decoder_.decode(frame.id, std::span<const uint8_t>(frame.data.data(), frame.len));
   if (!r.ok()) {
@@ -175,11 +175,11 @@ fp::ConsoleInputs ConsoleEmulator::inputs(int64_t now_us) const {
   return in;
 }
 
-io::ModbusTableSizes ConsoleEmulator::modbus_table_sizes() {
+hil::io::ModbusTableSizes ConsoleEmulator::modbus_table_sizes() {
   return {fp::kModbusCoils, fp::kModbusDiscreteInputs, fp::modbus_hr::kCount, fp::modbus_ir::kCount};
 }
 
-bool ConsoleEmulator::tick_modbus(io::ModbusServer& server, int64_t now_us) {
+bool ConsoleEmulator::tick_modbus(hil::io::ModbusServer& server, int64_t now_us) {
   if (start_us_ < 0) {
     start_us_ = now_us;
     next_modbus_cycle_us_ = now_us;
@@ -199,7 +199,7 @@ bool ConsoleEmulator::tick_modbus(io::ModbusServer& server, int64_t now_us) {
   return true;
 }
 
-bool ConsoleEmulator::poll_modbus_feedback(const io::ModbusServer& server) {
+bool ConsoleEmulator::poll_modbus_feedback(const hil::io::ModbusServer& server) {
   const int64_t writes = server.writes_served();
   if (writes == feedback_.frames) return false;
   fp::ModbusFeedbackBlock block;

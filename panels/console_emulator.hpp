@@ -45,11 +45,11 @@ class ConsoleEmulator {
 
   /// Sends every frame that is due at now_us (monotonic). Returns the number
   /// of frames sent. Does not throw.
-  int tick(io::CanBus& bus, int64_t now_us);
+  int tick(hil::io::CanBus& bus, int64_t now_us);
 
   /// Takes a frame from the bus; returns true when the console's feedback
   /// (LEDs, displays, buzzer) changed.
-  bool on_frame(const io::CanFrame& frame);
+  bool on_frame(const hil::io::CanFrame& frame);
 
   /// The firmware's state at now_us as one block (both protocols read it).
   firmware_protocol::ConsoleInputs inputs(int64_t now_us) const;
@@ -58,12 +58,12 @@ class ConsoleEmulator {
   /// discrete inputs with the alive counter +1; silent or ended → the
   /// registers freeze (still served, counter stopped). Returns true when a
   /// cycle ran. Does not throw.
-  bool tick_modbus(io::ModbusServer& server, int64_t now_us);
+  bool tick_modbus(hil::io::ModbusServer& server, int64_t now_us);
   /// Reads the coils and holding registers the host wrote; returns true when
   /// the console's feedback changed. Does not throw.
-  bool poll_modbus_feedback(const io::ModbusServer& server);
+  bool poll_modbus_feedback(const hil::io::ModbusServer& server);
   /// Table sizes of the rise-modbus-v1 map.
-  static io::ModbusTableSizes modbus_table_sizes();
+  static hil::io::ModbusTableSizes modbus_table_sizes();
 
   const ConsoleFeedback& feedback() const { return feedback_; }
   /// "leds power=on fault=off estop=off; display speed=0.42; buzzer off"
@@ -76,7 +76,7 @@ class ConsoleEmulator {
   int16_t axis_raw(std::size_t index) const { return axes_[index]; }
 
  private:
-  bool send(io::CanBus& bus, const firmware_protocol::Message& message);
+  bool send(hil::io::CanBus& bus, const firmware_protocol::Message& message);
   void power_up_inputs();
 
   const PanelDefinition& definition_;

@@ -158,8 +158,8 @@ int HidEmulator::tick(int64_t now_us, const ReportSink& send) {
   return sent;
 }
 
-int HidEmulator::tick(io::UhidDevice& device, int64_t now_us) {
-  return tick(now_us, [&device](std::span<const uint8_t> r) { return device.send_input(r) == io::IoStatus::Ok; });
+int HidEmulator::tick(hil::io::UhidDevice& device, int64_t now_us) {
+  return tick(now_us, [&device](std::span<const uint8_t> r) { return device.send_input(r) == hil::io::IoStatus::Ok; });
 }
 
 bool HidEmulator::on_output(std::span<const uint8_t> report) {

@@ -3,7 +3,7 @@
 // A HID device's firmware, emulated: the input reports of a described device
 // (its report descriptor) carrying the values a timeline gives the panel's
 // controls, and the output reports (LEDs, rumble) the host writes back,
-// decoded. Runs over io::UhidDevice (rise-panel emulate --hid), so the host
+// decoded. Runs over hil::io::UhidDevice (rise-panel emulate --hid), so the host
 // sees a real HID device; doubles as the test double of the daemon's hid
 // sources.
 //
@@ -63,8 +63,8 @@ class HidEmulator {
   /// and every report when the period is due (the first call starts the
   /// period). Returns the number of reports sent. No allocation, no throw.
   int tick(int64_t now_us, const ReportSink& send);
-  /// tick() through a device (io::UhidDevice::send_input).
-  int tick(io::UhidDevice& device, int64_t now_us);
+  /// tick() through a device (hil::io::UhidDevice::send_input).
+  int tick(hil::io::UhidDevice& device, int64_t now_us);
 
   /// Takes an output report as the host wrote it: id byte first, or (no
   /// report ids) hidraw's leading 0 byte, with or without it. True when an

@@ -19,14 +19,15 @@
 #include "hil/app/verify_command.hpp"
 #include "hil/bridge.hpp"
 #include "hil/fault_injector.hpp"
-#include "msgs/command_auth.hpp"
-#include "rise_msgs/FaultCommand.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/session_recorder.hpp"
 #include "hil/source_factory.hpp"
-#include "panels/data_path.hpp"
-#include "msgs/publisher_session.hpp"
+#include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/command_auth.hpp"
+#include "msgs/publisher_session.hpp"
+#include "panels/data_path.hpp"
+#include "rise_msgs/FaultCommand.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -326,7 +327,7 @@ void log_status(const rise::hil::PanelSnapshot& snap, const rise::hil::SessionRe
     spdlog::info("source {}: connected={} stale={} ok={} bad={} reconnects={} timeouts={} exceptions={} "
                  "error_frames={} bus={}",
                  s.name, s.connected, s.stale, s.frames_ok, s.frames_bad(), s.reconnects, s.timeouts,
-                 s.exceptions, s.error_frames, rise::io::to_string(s.bus_state));
+                 s.exceptions, s.error_frames, rise::hil::io::to_string(s.bus_state));
   if (recorder) {
     const auto c = recorder->counts();
     spdlog::info("recorder: {} CAN frames, {} Modbus lines, {} HID reports, {} PanelState events, {} failed writes",

@@ -5,6 +5,7 @@
 
 #include "hil/panel_state_message.hpp"
 #include "hil/replay_verify.hpp"
+#include "msgs/channels.hpp"
 #include "panels/data_path.hpp"
 
 namespace rise::hil {

@@ -11,7 +11,7 @@
 #include "hil/io/socketcand_client.hpp"
 #include "hil/io/socketcand_server.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 const char* to_string(IoStatus s) {
   switch (s) {
@@ -62,4 +62,4 @@ uint16_t listening_port(const CanBus& bus) {
   return server != nullptr ? server->port() : 0;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

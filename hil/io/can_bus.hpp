@@ -7,7 +7,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// Outcome of one transport call; the cyclic path never throws.
 enum class IoStatus {
@@ -60,4 +60,4 @@ std::unique_ptr<CanBus> open_can_bus(std::string_view url);
 /// the URL asked for port 0); 0 for any other bus or a server not listening.
 uint16_t listening_port(const CanBus& bus);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

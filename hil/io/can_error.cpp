@@ -5,7 +5,7 @@
 
 #include <utility>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 std::string_view to_string(CanBusState state) {
   switch (state) {
@@ -76,4 +76,4 @@ std::string can_error_text(const CanFrame& frame) {
   return out.empty() ? "error frame" : out;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -15,7 +15,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// The fault confinement states of ISO 11898-1 (§12.1.4), as SocketCAN
 /// reports them (enum can_state of linux/can/netlink.h; warning is its
@@ -40,4 +40,4 @@ CanErrorReport describe_can_error(const CanFrame& frame);
 /// "restarted-after-bus-off", joined by ", ". Allocates.
 std::string can_error_text(const CanFrame& frame);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

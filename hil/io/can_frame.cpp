@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 namespace {
 
@@ -43,4 +43,4 @@ bool same_content(const CanFrame& a, const CanFrame& b) {
   return std::equal(a.data.begin(), a.data.begin() + static_cast<std::ptrdiff_t>(n), b.data.begin());
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -3,7 +3,7 @@
 #include <array>
 #include <cstdint>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// One CAN or CAN FD frame as the transports carry it. Mirrors struct
 /// canfd_frame of <linux/can.h> without depending on it, so code above the
@@ -35,4 +35,4 @@ bool is_well_formed(const CanFrame& frame);
 /// (bytes past len and the timestamp are ignored). Safe in the cyclic path.
 bool same_content(const CanFrame& a, const CanFrame& b);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

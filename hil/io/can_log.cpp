@@ -10,7 +10,7 @@
 
 #include "hil/io/candump_log.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 namespace {
 
@@ -495,4 +495,4 @@ std::vector<CanLogRecord> read_can_log(const std::string& path) {
   return records;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -17,7 +17,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 enum class CanLogFormat { Candump, VectorAsc, PeakTrc };
 const char* to_string(CanLogFormat format);
@@ -99,4 +99,4 @@ class CanLogReader {
 /// in the cyclic path). Throws as CanLogReader's constructor.
 std::vector<CanLogRecord> read_can_log(const std::string& path);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -9,7 +9,7 @@
 
 #include "hil/io/host_port.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 namespace {
 
@@ -350,4 +350,4 @@ CanAddress parse_can_url(std::string_view url) {
                 "' (known: socketcan, socketcand, socketcand+listen, mem, slcan, replay)");
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

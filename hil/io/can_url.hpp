@@ -6,7 +6,7 @@
 #include <variant>
 #include <vector>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// One CAN_RAW_FILTER entry: a frame passes when (frame id & mask) ==
 /// (id & mask) and its id kind (11 or 29 bit) is the filter's.
@@ -82,4 +82,4 @@ using CanAddress =
 /// message names the URL and what is wrong with it. Not for the cyclic path.
 CanAddress parse_can_url(std::string_view url);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <cstring>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 constexpr uint32_t kErrFlag = 0x20000000u;  // CAN_ERR_FLAG in <linux/can.h>
@@ -298,4 +298,4 @@ void append_candump_line(std::string& out, const CanFrame& f, std::string_view i
   if (direction == CandumpDirection::Sent) out += " T";
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

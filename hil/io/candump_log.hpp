@@ -16,7 +16,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 struct CandumpRecord {
   CanFrame frame;          ///< frame.timestamp_us holds the log's time
@@ -75,4 +75,4 @@ std::string format_candump_line(const CanFrame& frame, std::string_view interfac
 void append_candump_line(std::string& out, const CanFrame& frame, std::string_view interface,
                          CandumpDirection direction = CandumpDirection::None);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

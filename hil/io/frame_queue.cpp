@@ -2,7 +2,7 @@
 
 #include <chrono>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 FrameQueue::FrameQueue(size_t capacity) : ring_(capacity == 0 ? 1 : capacity) {}
 
@@ -42,4 +42,4 @@ size_t FrameQueue::size() const {
   return count_;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

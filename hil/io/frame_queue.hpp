@@ -8,7 +8,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// Bounded multi-producer multi-consumer queue of frames: storage is
 /// allocated once, a full queue drops the new frame and counts it (a CAN
@@ -39,4 +39,4 @@ class FrameQueue {
   uint64_t dropped_ = 0;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -14,7 +14,7 @@
 
 #include "hil/io/posix_io.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 // hid_init() is not thread-safe and hid_exit() would pull the library from
@@ -215,4 +215,4 @@ IoStatus HidDevice::write(std::span<const uint8_t> report) {
   return IoStatus::Ok;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

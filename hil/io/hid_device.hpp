@@ -28,7 +28,7 @@
 
 struct hid_device_;
 
-namespace rise::io {
+namespace rise::hil::io {
 
 struct HidUrl {
   uint16_t vendor_id = 0;
@@ -103,4 +103,4 @@ class HidDevice final : public InputDevice {
   detail::ErrorText error_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

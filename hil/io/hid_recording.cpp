@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 constexpr char kHex[] = "0123456789abcdef";
@@ -379,4 +379,4 @@ bool looks_like_hid_recording(const std::string& path) {
   return false;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -77,7 +77,7 @@
 #include "hil/io/input_device.hpp"
 #include "hil/io/record_file.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// One thing a recording says happened to its device.
 struct HidRecordingRecord {
@@ -210,4 +210,4 @@ class HidRecordingReader {
 /// is an R: or D: line (hid-recorder's first). Does not throw.
 bool looks_like_hid_recording(const std::string& path);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -7,7 +7,7 @@
 #include <utility>
 #include <variant>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 ReplayAddress hid_replay_address(const std::string& url) {
@@ -207,4 +207,4 @@ bool HidReplayDevice::wait_for_arrival(int timeout_ms) {
   return wait_due(timeout_ms);
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

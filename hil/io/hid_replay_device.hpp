@@ -36,7 +36,7 @@
 #include "hil/io/posix_io.hpp"
 #include "hil/io/replay_schedule.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class HidReplayDevice final : public InputDevice {
  public:
@@ -125,4 +125,4 @@ class HidReplayDevice final : public InputDevice {
   std::atomic<uint64_t> writes_dropped_{0};
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -3,7 +3,7 @@
 #include <charconv>
 #include <utility>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 bool is_hex_digit(char c) {
@@ -99,4 +99,4 @@ std::string format_host_port(std::string_view host, uint16_t port) {
   return text.append(":").append(std::to_string(port));
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -5,7 +5,7 @@
 #include <string>
 #include <string_view>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// A TCP endpoint. host is a name, an IPv4 address or an IPv6 address
 /// (without the brackets it is written with).
@@ -31,4 +31,4 @@ std::optional<HostPort> parse_host_port(std::string_view text, std::string* erro
 /// HOST:PORT as a user writes it: an IPv6 host in brackets ("[::1]:8080").
 std::string format_host_port(std::string_view host, uint16_t port);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -5,7 +5,7 @@
 #include "hil/io/hid_device.hpp"
 #include "hil/io/hid_replay_device.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 bool is_input_device_url(std::string_view url) {
   return url.starts_with("hid://") || url.starts_with("replay://");
@@ -17,4 +17,4 @@ std::unique_ptr<InputDevice> open_input_device(const std::string& url) {
   throw std::invalid_argument("'" + url + "': a HID source takes hid://VID:PID or replay://FILE.hid");
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

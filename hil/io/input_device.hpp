@@ -22,7 +22,7 @@
 
 #include "hil/io/can_bus.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// Largest input report read (hidraw caps reports at 4096 bytes).
 constexpr std::size_t max_hid_report_bytes = 4096;
@@ -88,4 +88,4 @@ bool is_input_device_url(std::string_view url);
 /// or not a hid-recorder file. Not for the cyclic path.
 std::unique_ptr<InputDevice> open_input_device(const std::string& url);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

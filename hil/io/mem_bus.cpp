@@ -8,7 +8,7 @@
 #include "hil/io/posix_io.hpp"
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 namespace detail {
 
@@ -73,4 +73,4 @@ IoStatus MemBus::receive(CanFrame& frame, int timeout_ms) {
   return queue_.pop(frame, timeout_ms) ? IoStatus::Ok : IoStatus::Timeout;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -8,7 +8,7 @@
 #include "hil/io/can_bus.hpp"
 #include "hil/io/frame_queue.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 namespace detail {
 struct MemChannel;
@@ -48,4 +48,4 @@ class MemBus final : public CanBus {
   FrameQueue queue_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 // libmodbus reports a Modbus exception as errno MODBUS_ENOBASE + code
@@ -169,4 +169,4 @@ std::unique_ptr<ModbusLink> open_modbus_link(std::string_view url) {
   return open_modbus_link(parse_modbus_url(url));
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

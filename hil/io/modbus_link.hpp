@@ -14,7 +14,7 @@
 
 #include "hil/io/modbus_url.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 enum class ModbusStatus : uint8_t {
   Ok = 0,
@@ -85,4 +85,4 @@ class ModbusLink {
 std::unique_ptr<ModbusLink> open_modbus_link(std::string_view url);
 std::unique_ptr<ModbusLink> open_modbus_link(const ModbusAddress& address);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

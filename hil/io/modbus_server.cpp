@@ -15,7 +15,7 @@
 
 #include "hil/io/host_port.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 constexpr int kSelectTimeoutUs = 20000;  // how quickly the thread notices stop
 }  // namespace
@@ -194,4 +194,4 @@ void ModbusServer::serve_rtu() {
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -17,7 +17,7 @@
 struct _modbus;
 struct _modbus_mapping_t;
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// Sizes of the four tables, each starting at address 0.
 struct ModbusTableSizes {
@@ -78,4 +78,4 @@ class ModbusServer {
   std::thread thread_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -9,7 +9,7 @@
 
 #include "hil/io/candump_log.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 const char* result_text(ModbusStatus status) {
@@ -262,4 +262,4 @@ bool looks_like_modbus_trace(const std::string& path) {
   return false;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

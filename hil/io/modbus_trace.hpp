@@ -48,7 +48,7 @@
 
 #include "hil/io/modbus_link.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// Function codes the trace knows (Modbus Application Protocol V1.1b3 §6).
 enum class ModbusFunction : uint8_t {
@@ -129,4 +129,4 @@ class ModbusTraceReader {
 /// True when the file's first non-empty line is a Modbus trace line or its header.
 bool looks_like_modbus_trace(const std::string& path);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -6,7 +6,7 @@
 
 #include "hil/io/host_port.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 [[noreturn]] void fail(std::string_view url, const std::string& what) {
@@ -84,4 +84,4 @@ ModbusAddress parse_modbus_url(std::string_view url) {
   return a;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

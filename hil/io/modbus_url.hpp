@@ -4,7 +4,7 @@
 #include <string>
 #include <string_view>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// A Modbus endpoint:
 ///   modbus+tcp://HOST:PORT?unit=N&timeout_ms=T              (client)
@@ -34,4 +34,4 @@ ModbusAddress parse_modbus_url(std::string_view url);
 /// True when the URL's scheme is one of the modbus+ schemes above.
 bool is_modbus_url(std::string_view url);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -11,7 +11,7 @@
 
 #include "msgs/clock.hpp"
 
-namespace rise::io::detail {
+namespace rise::hil::io::detail {
 
 int remaining_ms(Clock::time_point deadline) {
   const auto left = std::chrono::ceil<std::chrono::milliseconds>(deadline - Clock::now()).count();
@@ -83,4 +83,4 @@ std::string ErrorText::get() const {
   return std::string(text_.data());
 }
 
-}  // namespace rise::io::detail
+}  // namespace rise::hil::io::detail

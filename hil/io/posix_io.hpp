@@ -12,7 +12,7 @@
 
 #include "hil/io/can_bus.hpp"
 
-namespace rise::io::detail {
+namespace rise::hil::io::detail {
 
 using Clock = std::chrono::steady_clock;
 
@@ -50,4 +50,4 @@ class ErrorText {
   std::array<char, 512> text_{};
 };
 
-}  // namespace rise::io::detail
+}  // namespace rise::hil::io::detail

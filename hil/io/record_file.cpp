@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 RecordFile::RecordFile(const std::string& path, std::string_view what)
     : out_(path, std::ios::trunc), last_flush_(std::chrono::steady_clock::now()) {
@@ -28,4 +28,4 @@ bool RecordFile::write_line(std::string_view line) {
   return true;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -12,7 +12,7 @@
 #include <string>
 #include <string_view>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class RecordFile {
  public:
@@ -38,4 +38,4 @@ class RecordFile {
   std::atomic<int64_t> errors_{0};
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

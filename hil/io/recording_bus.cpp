@@ -3,7 +3,7 @@
 #include "hil/io/posix_io.hpp"
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 RecordingBus::RecordingBus(std::unique_ptr<CanBus> bus, const std::string& path, std::string interface,
                            Stamp stamp)
@@ -35,4 +35,4 @@ IoStatus RecordingBus::receive(CanFrame& frame, int timeout_ms) {
   return st;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -15,7 +15,7 @@
 #include "hil/io/candump_log.hpp"
 #include "hil/io/record_file.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class RecordingBus final : public CanBus {
  public:
@@ -57,4 +57,4 @@ class RecordingBus final : public CanBus {
   std::string line_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

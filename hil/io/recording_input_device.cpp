@@ -3,7 +3,7 @@
 #include "hil/io/posix_io.hpp"
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 RecordingInputDevice::RecordingInputDevice(std::unique_ptr<InputDevice> device, const std::string& path,
                                            std::string source)
@@ -37,4 +37,4 @@ IoStatus RecordingInputDevice::read(std::span<uint8_t> report, std::size_t& leng
   return st;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

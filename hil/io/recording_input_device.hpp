@@ -14,7 +14,7 @@
 #include "hil/io/hid_recording.hpp"
 #include "hil/io/input_device.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class RecordingInputDevice final : public InputDevice {
  public:
@@ -51,4 +51,4 @@ class RecordingInputDevice final : public InputDevice {
   HidRecordingWriter writer_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

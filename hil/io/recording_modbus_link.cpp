@@ -3,7 +3,7 @@
 #include "hil/io/posix_io.hpp"
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 RecordingModbusLink::RecordingModbusLink(std::unique_ptr<ModbusLink> link, const std::string& path,
                                          std::string source, int unit)
@@ -90,4 +90,4 @@ void RecordingModbusLink::close() {
   link_->close();
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

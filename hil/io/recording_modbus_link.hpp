@@ -13,7 +13,7 @@
 #include "hil/io/modbus_trace.hpp"
 #include "hil/io/record_file.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class RecordingModbusLink final : public ModbusLink {
  public:
@@ -56,4 +56,4 @@ class RecordingModbusLink final : public ModbusLink {
   std::string line_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

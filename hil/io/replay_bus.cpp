@@ -5,7 +5,7 @@
 
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 ReplayBus::ReplayBus(std::string url, ReplayAddress address)
     : url_(std::move(url)),
@@ -122,4 +122,4 @@ IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
   return IoStatus::Ok;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

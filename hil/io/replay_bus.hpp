@@ -12,7 +12,7 @@
 #include "hil/io/can_url.hpp"
 #include "hil/io/replay_schedule.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// replay://PATH?speed=&loop=&start=&stop=&ids=&channel=&fast=: a bus that
 /// plays a CAN log (candump, ASC, TRC) as if a device sent it. Frame i is
@@ -95,4 +95,4 @@ class ReplayBus final : public CanBus {
   int64_t last_played_ts_us_ = 0;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

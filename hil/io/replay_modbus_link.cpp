@@ -13,7 +13,7 @@
 
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 // Time between two passes of a window that holds at most one request.
@@ -241,4 +241,4 @@ std::unique_ptr<ReplayModbusLink> open_modbus_replay(std::string_view url) {
   return std::make_unique<ReplayModbusLink>(std::string(url), std::move(*address));
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

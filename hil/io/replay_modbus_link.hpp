@@ -60,7 +60,7 @@
 #include "hil/io/modbus_link.hpp"
 #include "hil/io/modbus_trace.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// True when the URL's scheme is replay:// (a CAN log or a Modbus trace).
 bool is_replay_url(std::string_view url);
@@ -175,4 +175,4 @@ class ReplayModbusLink final : public ModbusLink {
 /// for a file that is no Modbus trace.
 std::unique_ptr<ReplayModbusLink> open_modbus_replay(std::string_view url);
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <thread>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 // Time between the last record of a pass and the first of the next when the
@@ -85,4 +85,4 @@ void ReplayPasses::restart() {
   loops_done_ = 0;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -15,7 +15,7 @@
 #include <chrono>
 #include <cstdint>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class ReplayClock {
  public:
@@ -94,4 +94,4 @@ class ReplayPasses {
   int loops_done_ = 0;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

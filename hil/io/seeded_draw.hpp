@@ -8,7 +8,7 @@
 
 #include <cstdint>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 constexpr uint64_t splitmix64(uint64_t x) {
   x += 0x9e3779b97f4a7c15ull;
@@ -27,4 +27,4 @@ constexpr double seeded_uniform(uint64_t seed, uint64_t index) {
   return static_cast<double>(seeded_bits(seed, index) >> 11) * 0x1.0p-53;
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -20,7 +20,7 @@
 //   remote id 0x321, length 2       → "r3212\r"      ("R" + 8 digits for 29 bit)
 //   with Z1, 8000 ms adapter time   → "t12331122331F40\r"  (ms, wraps at 60000)
 
-namespace rise::io {
+namespace rise::hil::io {
 
 using detail::Clock;
 
@@ -425,4 +425,4 @@ void SlcanBus::drop_port(const char* what, int err) {
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

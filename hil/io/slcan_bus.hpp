@@ -11,7 +11,7 @@
 #include "hil/io/can_url.hpp"
 #include "hil/io/posix_io.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// slcan://PATH?bitrate=N: a Lawicel serial-line CAN adapter (CANable /
 /// candleLight slcan firmware, USBtin, Lawicel CANUSB; what Linux's slcand
@@ -97,4 +97,4 @@ class SlcanBus final : public CanBus {
   detail::ErrorText error_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

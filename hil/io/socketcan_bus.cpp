@@ -16,7 +16,7 @@
 
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 using detail::Clock;
 
@@ -242,4 +242,4 @@ IoStatus SocketCanBus::receive(CanFrame& frame, int timeout_ms) {
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

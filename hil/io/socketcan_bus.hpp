@@ -8,7 +8,7 @@
 #include "hil/io/can_url.hpp"
 #include "hil/io/posix_io.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// socketcan://IFACE: a Linux CAN_RAW socket bound to one interface
 /// (can0, vcan0, slcan0 after slcand). CAN FD frames are enabled when the
@@ -61,4 +61,4 @@ class SocketCanBus final : public CanBus {
   detail::ErrorText error_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

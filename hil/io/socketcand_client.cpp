@@ -10,7 +10,7 @@
 #include <cerrno>
 #include <cstdio>
 
-namespace rise::io {
+namespace rise::hil::io {
 
 using detail::Clock;
 using socketcand::MessageKind;
@@ -206,4 +206,4 @@ void SocketcandClient::drop_connection(const char* what, int err) {
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -10,7 +10,7 @@
 #include "hil/io/posix_io.hpp"
 #include "hil/io/socketcand_wire.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// socketcand://HOST:PORT/BUS: a client of a socketcand server (linux-can
 /// socketcand, or socketcand+listen:// of this library) in raw mode.
@@ -72,4 +72,4 @@ class SocketcandClient final : public CanBus {
   detail::ErrorText error_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

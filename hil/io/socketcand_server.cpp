@@ -17,7 +17,7 @@
 #include "hil/io/socketcand_wire.hpp"
 #include "msgs/clock.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 using detail::Clock;
 using socketcand::MessageKind;
@@ -323,4 +323,4 @@ void SocketcandServer::reply_locked(Peer& peer, const char* data, size_t length)
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -14,7 +14,7 @@
 #include "hil/io/frame_queue.hpp"
 #include "hil/io/posix_io.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 /// socketcand+listen://HOST:PORT/BUS: serves one bus to any number of
 /// socketcand clients (python-can's "socketcand" interface, Kayak,
@@ -92,4 +92,4 @@ class SocketcandServer final : public CanBus {
   detail::ErrorText error_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

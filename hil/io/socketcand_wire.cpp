@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
-namespace rise::io::socketcand {
+namespace rise::hil::io::socketcand {
 
 namespace {
 
@@ -426,4 +426,4 @@ std::optional<std::string_view> StreamParser::next() {
 
 void StreamParser::clear() { begin_ = end_ = 0; }
 
-}  // namespace rise::io::socketcand
+}  // namespace rise::hil::io::socketcand

@@ -24,7 +24,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io::socketcand {
+namespace rise::hil::io::socketcand {
 
 /// Room for the longest message written here: an fdsend of 64 bytes.
 inline constexpr size_t kMaxMessageLength = 256;
@@ -87,4 +87,4 @@ class StreamParser {
   uint64_t skipped_ = 0;
 };
 
-}  // namespace rise::io::socketcand
+}  // namespace rise::hil::io::socketcand

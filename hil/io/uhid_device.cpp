@@ -12,7 +12,7 @@
 #include <memory>
 #include <stdexcept>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 // uhid's report types are ours in the same order (UHID_FEATURE_REPORT = 0,
@@ -224,4 +224,4 @@ IoStatus UhidDevice::poll(UhidEvent& event, int timeout_ms) {
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -27,7 +27,7 @@
 #include "hil/io/can_bus.hpp"
 #include "hil/io/posix_io.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 struct UhidSettings {
   std::string name = "rise-panel HID emulator";  ///< product string, at most 127 bytes
@@ -132,4 +132,4 @@ class UhidDevice {
   detail::ErrorText error_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

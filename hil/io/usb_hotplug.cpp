@@ -4,7 +4,7 @@
 
 #include <chrono>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 int LIBUSB_CALL on_hotplug(libusb_context*, libusb_device*, libusb_hotplug_event, void* user_data) {
@@ -75,4 +75,4 @@ bool UsbHotplug::wait_for_arrival(int timeout_ms) {
   }
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

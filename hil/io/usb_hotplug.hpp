@@ -20,7 +20,7 @@
 
 struct libusb_context;
 
-namespace rise::io {
+namespace rise::hil::io {
 
 class UsbHotplug {
  public:
@@ -61,4 +61,4 @@ class UsbHotplug {
   std::thread events_;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

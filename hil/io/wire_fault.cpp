@@ -8,7 +8,7 @@
 #include <algorithm>
 #include <chrono>
 
-namespace rise::io {
+namespace rise::hil::io {
 namespace {
 
 CanFrame error_frame(uint32_t classes) {
@@ -181,4 +181,4 @@ ModbusResult FaultyModbusLink::write_registers(uint16_t address, std::span<const
   return count(inner_->write_registers(address, registers));
 }
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

@@ -29,7 +29,7 @@
 #include "hil/io/can_bus.hpp"
 #include "hil/io/modbus_link.hpp"
 
-namespace rise::io {
+namespace rise::hil::io {
 
 enum class WireFaultKind { CanDrop, CanDelay, CanCorrupt, CanBusOff, ModbusException, ModbusTimeout };
 const char* to_string(WireFaultKind kind);
@@ -115,4 +115,4 @@ class FaultyModbusLink : public ModbusLink, public WireFaultSet {
   uint64_t requests_ = 0;
 };
 
-}  // namespace rise::io
+}  // namespace rise::hil::io

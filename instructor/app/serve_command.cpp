@@ -52,7 +52,7 @@ std::string read_token(const std::string& file) {
 int serve(const ServeOptions& o) {
   WebServerSettings s;
   std::string error;
-  const auto listen = io::parse_host_port(o.listen, &error);
+  const auto listen = hil::io::parse_host_port(o.listen, &error);
   if (!listen) throw std::runtime_error("--listen '" + o.listen + "': " + error);
   s.host = listen->host;
   s.port = listen->port;
@@ -83,7 +83,7 @@ int serve(const ServeOptions& o) {
   server.start();
   spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "
                "LCM {}",
-               io::format_host_port(s.host, static_cast<uint16_t>(server.port())), s.lcm_url);
+               hil::io::format_host_port(s.host, static_cast<uint16_t>(server.port())), s.lcm_url);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   g_stop.acquire();

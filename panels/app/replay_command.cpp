@@ -52,17 +52,17 @@ void add_replay_options(CLI::App& app, ReplayOptions& o) {
 
 int run_replay(const ReplayOptions& o, const volatile int& stop) {
   const std::string url = replay_url(o);
-  std::unique_ptr<io::ReplayBus> replay;
-  std::unique_ptr<io::CanBus> out;
+  std::unique_ptr<hil::io::ReplayBus> replay;
+  std::unique_ptr<hil::io::CanBus> out;
   try {
-    replay = std::make_unique<io::ReplayBus>(url, std::get<io::ReplayAddress>(io::parse_can_url(url)));
-    out = io::open_can_bus(o.to);
+    replay = std::make_unique<hil::io::ReplayBus>(url, std::get<hil::io::ReplayAddress>(hil::io::parse_can_url(url)));
+    out = hil::io::open_can_bus(o.to);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
   if (o.wait_peer) {
-    auto* server = dynamic_cast<io::SocketcandServer*>(out.get());
+    auto* server = dynamic_cast<hil::io::SocketcandServer*>(out.get());
     if (!server) {
       spdlog::error("--wait-peer is for socketcand+listen:// transports, not {}", o.to);
       return 2;
@@ -76,7 +76,7 @@ int run_replay(const ReplayOptions& o, const volatile int& stop) {
   const auto t0 = Clock::now();
   auto next_progress = t0 + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.progress_every_s));
   uint64_t sent = 0, send_errors = 0;
-  io::CanFrame frame;
+  hil::io::CanFrame frame;
   while (!stop) {
     if (o.step) {
       // Enter lets the next frame out; end of input ends the replay.
@@ -87,16 +87,16 @@ int run_replay(const ReplayOptions& o, const volatile int& stop) {
         replay->step(1);
       }
     }
-    const io::IoStatus st = replay->receive(frame, 100);
-    if (st == io::IoStatus::Disconnected) break;  // end of the capture
-    if (st == io::IoStatus::Ok) {
-      if (out->send(frame) == io::IoStatus::Ok) {
+    const hil::io::IoStatus st = replay->receive(frame, 100);
+    if (st == hil::io::IoStatus::Disconnected) break;  // end of the capture
+    if (st == hil::io::IoStatus::Ok) {
+      if (out->send(frame) == hil::io::IoStatus::Ok) {
         ++sent;
       } else {
         ++send_errors;
         if (!out->is_open()) out->reopen();
       }
-      if (o.step) std::printf("%s\n", io::format_candump_line(frame, "can0").c_str()), std::fflush(stdout);
+      if (o.step) std::printf("%s\n", hil::io::format_candump_line(frame, "can0").c_str()), std::fflush(stdout);
     }
     if (o.progress_every_s > 0 && Clock::now() >= next_progress) {
       next_progress += std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(o.progress_every_s));

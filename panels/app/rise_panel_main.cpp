@@ -88,7 +88,7 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
                     const rise::panels::Timeline& timeline) {
   using namespace rise;
   namespace fp = rise::firmware_protocol;
-  io::UhidSettings settings;
+  hil::io::UhidSettings settings;
   std::unique_ptr<panels::HidEmulator> emulator;
   try {
     const fp::HidDescriptorSource file = fp::read_hid_descriptor_file(o.hid_file);
@@ -104,7 +104,7 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
       throw std::runtime_error(o.hid_file + " gives no VID:PID and source '" + definition.sources[source].name +
                                "' no device: give --hid-id VID:PID");
     std::string error;
-    const auto parsed_url = io::parse_hid_url(url, &error);
+    const auto parsed_url = hil::io::parse_hid_url(url, &error);
     if (!parsed_url) throw std::runtime_error("--hid-id: " + error);
     settings.vendor_id = parsed_url->vendor_id;
     settings.product_id = parsed_url->product_id;
@@ -120,14 +120,14 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
     spdlog::error("{}", e.what());
     return 2;
   }
-  std::unique_ptr<io::UhidDevice> device;
+  std::unique_ptr<hil::io::UhidDevice> device;
   try {
-    device = std::make_unique<io::UhidDevice>(settings);
+    device = std::make_unique<hil::io::UhidDevice>(settings);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
-  if (device->create() != io::IoStatus::Ok) {
+  if (device->create() != hil::io::IoStatus::Ok) {
     spdlog::error("{}", device->last_error());
     return 2;
   }
@@ -138,7 +138,7 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
   ScriptClock script(timeline, o);
   bool started = !o.start_on_feedback;
   script.start(rise::msgs::monotonic_us());
-  io::UhidEvent event;
+  hil::io::UhidEvent event;
   while (!g_stop) {
     const int64_t now = rise::msgs::monotonic_us();
     // The scripted person starts once the host has opened the device.
@@ -153,13 +153,13 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
     if (emulator->ended()) break;
     emulator->tick(*device, now);
     // Host events until the next millisecond tick.
-    io::IoStatus st;
-    while ((st = device->poll(event, 1)) == io::IoStatus::Ok) {
-      if (event.kind == io::UhidEvent::Kind::Output && emulator->on_output(event.data))
+    hil::io::IoStatus st;
+    while ((st = device->poll(event, 1)) == hil::io::IoStatus::Ok) {
+      if (event.kind == hil::io::UhidEvent::Kind::Output && emulator->on_output(event.data))
         spdlog::info("feedback: {}", emulator->feedback_text());
-      if (event.kind == io::UhidEvent::Kind::Start) spdlog::info("the kernel bound the device");
+      if (event.kind == hil::io::UhidEvent::Kind::Start) spdlog::info("the kernel bound the device");
     }
-    if (st == io::IoStatus::Disconnected) {
+    if (st == hil::io::IoStatus::Disconnected) {
       spdlog::error("{}", device->last_error());
       return 1;
     }
@@ -192,27 +192,27 @@ int run_emulate(const EmulateOptions& o) {
   std::signal(SIGPIPE, SIG_IGN);
   if (!o.hid_file.empty()) return run_emulate_hid(o, definition, source, timeline);
 
-  std::unique_ptr<io::CanBus> bus;
-  std::unique_ptr<io::ModbusServer> server;
+  std::unique_ptr<hil::io::CanBus> bus;
+  std::unique_ptr<hil::io::ModbusServer> server;
   try {
     if (o.modbus_url.empty())
-      bus = io::open_can_bus(o.can_url);
+      bus = hil::io::open_can_bus(o.can_url);
     else
-      server = std::make_unique<io::ModbusServer>(o.modbus_url, panels::ConsoleEmulator::modbus_table_sizes());
+      server = std::make_unique<hil::io::ModbusServer>(o.modbus_url, panels::ConsoleEmulator::modbus_table_sizes());
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;
   }
   panels::ConsoleEmulator emulator(definition, source);
 
-  const uint16_t port = server ? server->port() : io::listening_port(*bus);
+  const uint16_t port = server ? server->port() : hil::io::listening_port(*bus);
   spdlog::info("rise-panel ready: emulating '{}' source '{}' (node {}) on {}{}{}", definition.name,
                definition.sources[source].name, definition.sources[source].node,
                server ? o.modbus_url : o.can_url, port ? " port " : "", port ? std::to_string(port) : "");
 
   ScriptClock script(timeline, o);
   script.start(rise::msgs::monotonic_us());
-  io::CanFrame frame;
+  hil::io::CanFrame frame;
   int64_t next_reopen_us = 0;
   bool started = !o.start_on_feedback;
   while (!g_stop) {
@@ -245,7 +245,7 @@ int run_emulate(const EmulateOptions& o) {
       emulator.tick(*bus, now);
     }
     // Drain feedback until the next millisecond tick.
-    while (bus->is_open() && bus->receive(frame, 1) == io::IoStatus::Ok)
+    while (bus->is_open() && bus->receive(frame, 1) == hil::io::IoStatus::Ok)
       if (emulator.on_frame(frame)) spdlog::info("feedback: {}", emulator.feedback_text());
     if (!bus->is_open()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }

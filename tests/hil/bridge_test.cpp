@@ -21,8 +21,8 @@ TEST_CASE("the bridge publishes the emulated console's state, sends feedback, an
   const auto def = console();
   const auto drive_y = *def.find_control("drive_y");
   Published published;
-  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
-  buses.push_back(rise::io::open_can_bus("mem://bridge_test"));
+  std::vector<std::unique_ptr<rise::hil::io::CanBus>> buses;
+  buses.push_back(rise::hil::io::open_can_bus("mem://bridge_test"));
   rise::hil::Bridge bridge(def, std::move(buses), [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();
 

@@ -74,8 +74,8 @@ TEST_CASE("every pedal frame of a real capture becomes the throttle the DBC says
   const fp::DbcMessage* command = db.find(0x2C1, false);
   REQUIRE(command != nullptr);
 
-  rise::io::CanLogReader reader(d.log);
-  rise::io::CanLogRecord r;
+  rise::hil::io::CanLogReader reader(d.log);
+  rise::hil::io::CanLogRecord r;
   mapper.on_connection(0, true, 1);
   int64_t t0 = -1, last_us = 0;
   int checked = 0;
@@ -121,8 +121,8 @@ TEST_CASE("the bridge reads a replayed capture as if it were the car, and re-ope
     return;
   }
   const auto def = rise::panels::parse_panel_definition(definition_text(d.dbc), "y.yaml");
-  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
-  buses.push_back(rise::io::open_can_bus("replay://" + d.log + "?speed=8"));  // 7.2 s of traffic in 0.9 s
+  std::vector<std::unique_ptr<rise::hil::io::CanBus>> buses;
+  buses.push_back(rise::hil::io::open_can_bus("replay://" + d.log + "?speed=8"));  // 7.2 s of traffic in 0.9 s
   rise::hil::test::Published published;
   rise::hil::Bridge bridge(def, std::move(buses), [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();

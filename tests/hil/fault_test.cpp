@@ -193,8 +193,8 @@ TEST_CASE("offset, drift, noise and intermittent faults change an axis as specif
 TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all trips the failsafe at the timeout",
           "[hil]") {
   const std::string url = "mem://fault-drop";
-  auto console_side = rise::io::open_can_bus(url);
-  rise::io::FaultyCanBus bus(rise::io::open_can_bus(url));
+  auto console_side = rise::hil::io::open_can_bus(url);
+  rise::hil::io::FaultyCanBus bus(rise::hil::io::open_can_bus(url));
   PanelMapper mapper(console());
   Firmware fw;
   int64_t t = kT0;
@@ -202,14 +202,14 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
   const auto cycle = [&] {
     t += kCycle;
     fw.cycle(t, [&](const fp::WireFrame& w) {
-      rise::io::CanFrame f;
+      rise::hil::io::CanFrame f;
       f.id = w.can_id;
       f.len = static_cast<uint8_t>(w.data.size());
       std::copy(w.data.begin(), w.data.end(), f.data.begin());
-      REQUIRE(console_side->send(f) == rise::io::IoStatus::Ok);
+      REQUIRE(console_side->send(f) == rise::hil::io::IoStatus::Ok);
     });
-    rise::io::CanFrame f;
-    while (bus.receive(f, 0) == rise::io::IoStatus::Ok) rise::hil::apply_can_frame(mapper, 0, f, t);
+    rise::hil::io::CanFrame f;
+    while (bus.receive(f, 0) == rise::hil::io::IoStatus::Ok) rise::hil::apply_can_frame(mapper, 0, f, t);
     return mapper.evaluate(t);
   };
   for (int i = 0; i < 10; ++i) cycle();
@@ -217,7 +217,7 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
   REQUIRE(mapper.evaluate(t).sources[0].frames_bad() == 0);
 
   SECTION("half the frames lost: skipped alive counters are counted") {
-    bus.inject({"drop", rise::io::WireFaultKind::CanDrop, 0.5, 0, 3, 0, 0});
+    bus.inject({"drop", rise::hil::io::WireFaultKind::CanDrop, 0.5, 0, 3, 0, 0});
     for (int i = 0; i < 100; ++i) cycle();
     CHECK(bus.dropped() > 150);
     CHECK(mapper.evaluate(t).sources[0].frames_bad() > 0);
@@ -226,7 +226,7 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
   }
   SECTION("every frame lost: failsafe once the source timeout has passed, healthy after the clear") {
     const int64_t last_good = t;
-    bus.inject({"drop", rise::io::WireFaultKind::CanDrop, 1.0, 0, 3, 0, 0});
+    bus.inject({"drop", rise::hil::io::WireFaultKind::CanDrop, 1.0, 0, 3, 0, 0});
     const int64_t timeout_us = mapper.definition().sources[0].timeout_ms * 1000;
     while (t + kCycle < last_good + timeout_us) CHECK_FALSE(cycle().failsafe);
     t = last_good + timeout_us;
@@ -238,56 +238,56 @@ TEST_CASE("CAN drop on the wire raises the bad-frame count, and dropping all tri
     CHECK_FALSE(mapper.evaluate(t).failsafe);
   }
   SECTION("corrupted frames fail their CRC") {
-    bus.inject({"c", rise::io::WireFaultKind::CanCorrupt, 1.0, 0, 3, 0, 0});
+    bus.inject({"c", rise::hil::io::WireFaultKind::CanCorrupt, 1.0, 0, 3, 0, 0});
     const PanelSnapshot s = cycle();
     CHECK(bus.corrupted() == 5);
     CHECK(s.sources[0].errors[static_cast<std::size_t>(fp::DecodeError::BadCrc)] == 5);
     CHECK(s.failsafe);
   }
   SECTION("bus-off: the controller's error frame, then a restart when it ends") {
-    bus.inject({"off", rise::io::WireFaultKind::CanBusOff, 0, 0, 3, 0, 0});
+    bus.inject({"off", rise::hil::io::WireFaultKind::CanBusOff, 0, 0, 3, 0, 0});
     PanelSnapshot s = cycle();
-    CHECK(s.sources[0].bus_state == rise::io::CanBusState::BusOff);
+    CHECK(s.sources[0].bus_state == rise::hil::io::CanBusState::BusOff);
     CHECK(s.sources[0].bus_offs == 1);
     CHECK(s.failsafe);
     bus.clear("off", rise::msgs::monotonic_us());
     for (int i = 0; i < 10; ++i) s = cycle();
-    CHECK(s.sources[0].bus_state == rise::io::CanBusState::Active);
+    CHECK(s.sources[0].bus_state == rise::hil::io::CanBusState::Active);
     CHECK_FALSE(s.failsafe);
   }
   SECTION("delay holds frames back, in order") {
-    bus.inject({"late", rise::io::WireFaultKind::CanDelay, 0, 200, 3, 0, 0});
-    rise::io::CanFrame f;
+    bus.inject({"late", rise::hil::io::WireFaultKind::CanDelay, 0, 200, 3, 0, 0});
+    rise::hil::io::CanFrame f;
     f.id = 0x123;
     f.len = 1;
     f.data[0] = 1;
     console_side->send(f);
     f.data[0] = 2;
     console_side->send(f);
-    rise::io::CanFrame got;
-    CHECK(bus.receive(got, 0) == rise::io::IoStatus::Timeout);
-    REQUIRE(bus.receive(got, 2000) == rise::io::IoStatus::Ok);
+    rise::hil::io::CanFrame got;
+    CHECK(bus.receive(got, 0) == rise::hil::io::IoStatus::Timeout);
+    REQUIRE(bus.receive(got, 2000) == rise::hil::io::IoStatus::Ok);
     CHECK(got.data[0] == 1);
-    REQUIRE(bus.receive(got, 2000) == rise::io::IoStatus::Ok);
+    REQUIRE(bus.receive(got, 2000) == rise::hil::io::IoStatus::Ok);
     CHECK(got.data[0] == 2);
   }
 }
 
 TEST_CASE("Modbus exception and timeout faults answer in place of the slave and are counted", "[hil]") {
-  rise::io::ModbusServer server("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
+  rise::hil::io::ModbusServer server("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
   REQUIRE(server.port() != 0);
-  rise::io::FaultyModbusLink link(
-      rise::io::open_modbus_link("modbus+tcp://127.0.0.1:" + std::to_string(server.port()) + "?unit=1&timeout_ms=200"));
+  rise::hil::io::FaultyModbusLink link(
+      rise::hil::io::open_modbus_link("modbus+tcp://127.0.0.1:" + std::to_string(server.port()) + "?unit=1&timeout_ms=200"));
   REQUIRE(link.is_open());
   std::array<uint16_t, 4> regs{};
   REQUIRE(link.read_input_registers(0, regs).ok());
-  link.inject({"ex", rise::io::WireFaultKind::ModbusException, 1.0, 0, 1, 0, 0});
+  link.inject({"ex", rise::hil::io::WireFaultKind::ModbusException, 1.0, 0, 1, 0, 0});
   const auto r = link.read_input_registers(0, regs);
-  CHECK(r.status == rise::io::ModbusStatus::Exception);
+  CHECK(r.status == rise::hil::io::ModbusStatus::Exception);
   CHECK(r.exception_code == 4);
   link.clear("", rise::msgs::monotonic_us());
-  link.inject({"to", rise::io::WireFaultKind::ModbusTimeout, 1.0, 0, 1, 0, 0});
-  CHECK(link.read_input_registers(0, regs).status == rise::io::ModbusStatus::Timeout);
+  link.inject({"to", rise::hil::io::WireFaultKind::ModbusTimeout, 1.0, 0, 1, 0, 0});
+  CHECK(link.read_input_registers(0, regs).status == rise::hil::io::ModbusStatus::Timeout);
   CHECK(link.counters().exceptions == 1);
   CHECK(link.counters().timeouts == 1);
   link.clear("to", rise::msgs::monotonic_us());
@@ -296,9 +296,9 @@ TEST_CASE("Modbus exception and timeout faults answer in place of the slave and 
 
 TEST_CASE("the fault injector sends each kind to its layer and refuses what is not the daemon's", "[hil]") {
   PanelMapper probe(console());
-  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
-  auto faulty = std::make_unique<rise::io::FaultyCanBus>(rise::io::open_can_bus("mem://fault-injector"));
-  rise::io::FaultyCanBus* wire = faulty.get();
+  std::vector<std::unique_ptr<rise::hil::io::CanBus>> buses;
+  auto faulty = std::make_unique<rise::hil::io::FaultyCanBus>(rise::hil::io::open_can_bus("mem://fault-injector"));
+  rise::hil::io::FaultyCanBus* wire = faulty.get();
   buses.push_back(std::move(faulty));
   rise::hil::Bridge bridge(console(), std::move(buses), [](const PanelSnapshot&) {});
   rise::hil::TransportFaults transport;

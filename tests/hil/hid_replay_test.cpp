@@ -36,8 +36,8 @@ std::string temp_path(const std::string& name) {
 
 const std::vector<uint8_t> gravis(std::begin(rise::test::gravis_descriptor), std::end(rise::test::gravis_descriptor));
 
-rise::io::HidIdentity gravis_identity() {
-  rise::io::HidIdentity id;
+rise::hil::io::HidIdentity gravis_identity() {
+  rise::hil::io::HidIdentity id;
   id.name = "Gravis GamePad Pro (emulated)";
   id.bus = 3;
   id.vendor_id = 0x0428;
@@ -80,7 +80,7 @@ TEST_CASE("bridge over a HID replay shows the recorded values at their times, th
   const std::string path = temp_path("timed.hid");
   {
     // hid_report.hpp's worked example at 0.2 s, its mirror at 0.4 s, the end at 0.6 s.
-    rise::io::HidRecordingWriter w(path, "pad");
+    rise::hil::io::HidRecordingWriter w(path, "pad");
     const int64_t t0 = 1'700'000'000'000'000;
     w.plug(t0, gravis, gravis_identity());
     w.report(t0 + 10'000, std::vector<uint8_t>{0x7f, 0x7f, 0x00, 0x00});
@@ -88,7 +88,7 @@ TEST_CASE("bridge over a HID replay shows the recorded values at their times, th
     w.report(t0 + 400'000, std::vector<uint8_t>{0xff, 0x00, 0x00, 0x00});
     w.end(t0 + 600'000);
   }
-  auto device = std::make_unique<rise::io::HidReplayDevice>("replay://" + path);
+  auto device = std::make_unique<rise::hil::io::HidReplayDevice>("replay://" + path);
   const auto* replay = device.get();
   std::vector<std::unique_ptr<SourceTransport>> transports;
   transports.push_back(std::make_unique<rise::hil::HidSource>(std::move(device), def, 0));
@@ -167,7 +167,7 @@ TEST_CASE("a HID session recorded from a replayed pad verifies, and a changed re
   std::filesystem::remove_all(dir);
   REQUIRE(write_golden_input(input) > 200);
   {
-    rise::hil::test::RecordedHidSession session(def, std::make_unique<rise::io::HidReplayDevice>("replay://" + input),
+    rise::hil::test::RecordedHidSession session(def, std::make_unique<rise::hil::io::HidReplayDevice>("replay://" + input),
                                                 dir);
     // Healthy, then the end of the recording fails it safe for good (after the re-plug).
     REQUIRE(session.published.wait_for([](const PanelSnapshot& s) { return !s.failsafe; }, 5000));
@@ -185,7 +185,7 @@ TEST_CASE("a HID session recorded from a replayed pad verifies, and a changed re
     CHECK(session.recorder().files() == std::vector<std::string>{dir + "/panel_state.lcmlog", dir + "/pad.hid"});
   }
   // The recording has both plugs, the unplug between them, and its own start.
-  rise::io::HidRecordingReader reader(dir + "/pad.hid");
+  rise::hil::io::HidRecordingReader reader(dir + "/pad.hid");
   CHECK(reader.plugs() == 2);
   CHECK(reader.epoch_clock());
   const PanelStateLog golden = read_panel_state_log(dir + "/panel_state.lcmlog");
@@ -240,8 +240,8 @@ TEST_CASE("the recorded HID session replays to its golden PanelState stream", "[
     CHECK(bad.difference->field == "drive_y");
     // The report's time, from the file: the difference is the first message after it.
     {
-      rise::io::HidRecordingReader reader(dir + "/pad.hid");
-      rise::io::HidRecordingRecord r;
+      rise::hil::io::HidRecordingReader reader(dir + "/pad.hid");
+      rise::hil::io::HidRecordingRecord r;
       int64_t changed_us = -1;
       while (reader.next(r))
         if (r.line == changed) changed_us = r.time_us;
@@ -258,6 +258,6 @@ TEST_CASE("the HID golden's input is the emulated pad playing session.txt", "[.g
   const char* out = std::getenv("RISE_HID_GOLDEN_INPUT");
   REQUIRE(out != nullptr);
   CHECK(write_golden_input(out) > 200);
-  rise::io::HidRecordingReader reader(out);
+  rise::hil::io::HidRecordingReader reader(out);
   CHECK(reader.plugs() == 2);
 }

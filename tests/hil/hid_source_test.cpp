@@ -276,7 +276,7 @@ TEST_CASE("panel definition checks hid sources", "[hil]") {
 
 TEST_CASE("hid URLs parse VID:PID and the match options", "[hil]") {
   std::string error;
-  const auto url = rise::io::parse_hid_url("hid://0428:4001?serial=A1&name=GamePad&interface=2", &error);
+  const auto url = rise::hil::io::parse_hid_url("hid://0428:4001?serial=A1&name=GamePad&interface=2", &error);
   REQUIRE(url);
   CHECK(url->vendor_id == 0x0428);
   CHECK(url->product_id == 0x4001);
@@ -286,7 +286,7 @@ TEST_CASE("hid URLs parse VID:PID and the match options", "[hil]") {
   const std::string bad = GENERATE("hid://0428", "hid://0428:40011", "hid://xyz:1", "hid://1:2?colour=red",
                                    "hid://1:2?interface=x", "socketcan://can0");
   INFO(bad);
-  CHECK_FALSE(rise::io::parse_hid_url(bad));
+  CHECK_FALSE(rise::hil::io::parse_hid_url(bad));
 }
 
 TEST_CASE("hid emulator's reports put the mapper's controls at the timeline's values", "[hil]") {

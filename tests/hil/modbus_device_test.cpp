@@ -25,7 +25,7 @@
 
 using namespace rise::hil;
 using rise::hil::test::Published;
-using rise::io::ModbusFunction;
+using rise::hil::io::ModbusFunction;
 using rise::panels::ModbusPoint;
 using rise::panels::ModbusTable;
 
@@ -56,7 +56,7 @@ const std::string kButton = "{name: x, kind: button, signal: discrete_input.1, s
 const std::string kLeds = "leds: [{name: fault, signal: coil.3}]";
 
 // A link that answers nothing and keeps every write it is given.
-class WriteLog final : public rise::io::ModbusLink {
+class WriteLog final : public rise::hil::io::ModbusLink {
  public:
   struct Write {
     ModbusFunction function;
@@ -64,26 +64,26 @@ class WriteLog final : public rise::io::ModbusLink {
     uint16_t value;
   };
   std::vector<Write> writes;
-  rise::io::ModbusResult read_coils(uint16_t, std::span<uint8_t>) override { return error(); }
-  rise::io::ModbusResult read_discrete_inputs(uint16_t, std::span<uint8_t>) override { return error(); }
-  rise::io::ModbusResult read_holding_registers(uint16_t, std::span<uint16_t>) override { return error(); }
-  rise::io::ModbusResult read_input_registers(uint16_t, std::span<uint16_t>) override { return error(); }
-  rise::io::ModbusResult write_coils(uint16_t address, std::span<const uint8_t> bits) override {
+  rise::hil::io::ModbusResult read_coils(uint16_t, std::span<uint8_t>) override { return error(); }
+  rise::hil::io::ModbusResult read_discrete_inputs(uint16_t, std::span<uint8_t>) override { return error(); }
+  rise::hil::io::ModbusResult read_holding_registers(uint16_t, std::span<uint16_t>) override { return error(); }
+  rise::hil::io::ModbusResult read_input_registers(uint16_t, std::span<uint16_t>) override { return error(); }
+  rise::hil::io::ModbusResult write_coils(uint16_t address, std::span<const uint8_t> bits) override {
     for (std::size_t i = 0; i < bits.size(); ++i)
       writes.push_back({ModbusFunction::WriteMultipleCoils, static_cast<uint16_t>(address + i), bits[i]});
     return {};
   }
-  rise::io::ModbusResult write_registers(uint16_t address, std::span<const uint16_t> registers) override {
+  rise::hil::io::ModbusResult write_registers(uint16_t address, std::span<const uint16_t> registers) override {
     for (std::size_t i = 0; i < registers.size(); ++i)
       writes.push_back({ModbusFunction::WriteMultipleRegisters, static_cast<uint16_t>(address + i), registers[i]});
     return {};
   }
   bool is_open() const override { return true; }
-  rise::io::ModbusStatus reopen() override { return rise::io::ModbusStatus::Ok; }
+  rise::hil::io::ModbusStatus reopen() override { return rise::hil::io::ModbusStatus::Ok; }
   void close() override {}
 
  private:
-  static rise::io::ModbusResult error() { return {rise::io::ModbusStatus::Error, 0}; }
+  static rise::hil::io::ModbusResult error() { return {rise::hil::io::ModbusStatus::Error, 0}; }
 };
 
 std::string temp_dir(const std::string& name) {
@@ -374,10 +374,10 @@ TEST_CASE("the bridge polls a third-party Modbus device over TCP, writes its fee
           "away and recovers when it returns, and the recorded session verifies",
           "[hil]") {
   const auto def = plc_panel();
-  const rise::io::ModbusTableSizes sizes{16, 16, 16, 16};
-  auto device = std::make_unique<rise::io::ModbusServer>("modbus+tcp-listen://127.0.0.1:0?unit=1", sizes);
+  const rise::hil::io::ModbusTableSizes sizes{16, 16, 16, 16};
+  auto device = std::make_unique<rise::hil::io::ModbusServer>("modbus+tcp-listen://127.0.0.1:0?unit=1", sizes);
   const uint16_t port = device->port();
-  auto serve = [&](rise::io::ModbusServer& d, int16_t drive_y) {
+  auto serve = [&](rise::hil::io::ModbusServer& d, int16_t drive_y) {
     d.set_input_registers(0, std::vector<uint16_t>{0, static_cast<uint16_t>(drive_y), 0, 0, 0, 0});
     d.set_discrete_inputs(0, std::vector<uint8_t>{1, 0});
     d.set_holding_registers(3, std::vector<uint16_t>{1});
@@ -442,7 +442,7 @@ TEST_CASE("the bridge polls a third-party Modbus device over TCP, writes its fee
                              before));
 
     // Back on the same port, with fresh tables: reconnected and written again.
-    device = std::make_unique<rise::io::ModbusServer>("modbus+tcp-listen://127.0.0.1:" + std::to_string(port) + "?unit=1",
+    device = std::make_unique<rise::hil::io::ModbusServer>("modbus+tcp-listen://127.0.0.1:" + std::to_string(port) + "?unit=1",
                                                       sizes);
     serve(*device, -600);
     const std::size_t lost_at = published.size();

@@ -35,14 +35,14 @@ struct Played {
 // A live bridge on replay://TRACE?OPTIONS.
 struct ReplayRun {
   rise::panels::PanelDefinition def = rise::panels::load_panel_definition(kPanel);
-  rise::io::ReplayModbusLink* link = nullptr;
+  rise::hil::io::ReplayModbusLink* link = nullptr;
   Played played;
   test::Published published;
   std::unique_ptr<Bridge> bridge;
   int64_t started_us = 0;
 
   explicit ReplayRun(const std::string& options) {
-    auto replay = rise::io::open_modbus_replay("replay://" + kSession + "/console.modbus.log" + options);
+    auto replay = rise::hil::io::open_modbus_replay("replay://" + kSession + "/console.modbus.log" + options);
     link = replay.get();
     std::vector<std::unique_ptr<rise::hil::SourceTransport>> transports;
     transports.push_back(std::make_unique<rise::hil::ModbusSource>(std::move(replay), def, 0));

@@ -386,20 +386,20 @@ TEST_CASE("a CAN bus-off makes the source failsafe until the controller reports 
   fw.cycle(kT0);
   REQUIRE_FALSE(mapper.evaluate(kT0 + 1000).failsafe);
 
-  rise::io::CanErrorReport report;
+  rise::hil::io::CanErrorReport report;
   SECTION("error-warning and error-passive are reported, the panel stays usable") {
     report.classes = 0x004;
-    report.state = rise::io::CanBusState::Passive;
+    report.state = rise::hil::io::CanBusState::Passive;
     CHECK(mapper.on_bus_error(0, report, kT0 + 2000));
     CHECK_FALSE(mapper.on_bus_error(0, report, kT0 + 2500));  // no change
     const auto s = mapper.evaluate(kT0 + 3000);
     CHECK_FALSE(s.failsafe);
-    CHECK(s.sources[0].bus_state == rise::io::CanBusState::Passive);
+    CHECK(s.sources[0].bus_state == rise::hil::io::CanBusState::Passive);
     CHECK(s.sources[0].error_frames == 2);
   }
   SECTION("bus-off holds through valid frames and ends at the restart") {
     report.classes = 0x040;
-    report.state = rise::io::CanBusState::BusOff;
+    report.state = rise::hil::io::CanBusState::BusOff;
     CHECK(mapper.on_bus_error(0, report, kT0 + 2000));
     auto s = mapper.evaluate(kT0 + 3000);
     CHECK(s.failsafe);
@@ -410,7 +410,7 @@ TEST_CASE("a CAN bus-off makes the source failsafe until the controller reports 
     CHECK(mapper.evaluate(kT0 + 55'000).failsafe);
 
     report.classes = 0x100;  // CAN_ERR_RESTARTED
-    report.state = rise::io::CanBusState::Active;
+    report.state = rise::hil::io::CanBusState::Active;
     CHECK(mapper.on_bus_error(0, report, kT0 + 56'000));
     s = mapper.evaluate(kT0 + 57'000);
     INFO(s.failsafe_reason);
@@ -423,7 +423,7 @@ TEST_CASE("a CAN bus-off makes the source failsafe until the controller reports 
     const auto s = mapper.evaluate(kT0 + 3000);
     CHECK_FALSE(s.failsafe);
     CHECK(s.sources[0].error_frames == 1);
-    CHECK(s.sources[0].bus_state == rise::io::CanBusState::Active);
+    CHECK(s.sources[0].bus_state == rise::hil::io::CanBusState::Active);
   }
 }
 

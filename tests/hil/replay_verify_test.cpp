@@ -39,7 +39,7 @@ void write_lines(const std::string& path, const std::vector<std::string>& lines)
 }
 
 int64_t line_time(const std::string& line) {
-  return rise::io::parse_log_time(line, nullptr).value_or(-1);
+  return rise::hil::io::parse_log_time(line, nullptr).value_or(-1);
 }
 
 // A scratch copy of one recorded session whose files a test may change.
@@ -70,15 +70,15 @@ struct SessionCopy {
 };
 
 // "(t) console 130#AABBCCDDEEFF0011 R" → its frame.
-rise::io::CanFrame frame_of(const std::string& line) { return rise::io::parse_candump_line(line).record.frame; }
+rise::hil::io::CanFrame frame_of(const std::string& line) { return rise::hil::io::parse_candump_line(line).record.frame; }
 
-std::string with_frame(const std::string& line, const rise::io::CanFrame& f) {
-  return rise::io::format_candump_line(f, rise::io::parse_candump_line(line).record.interface,
-                                       rise::io::CandumpDirection::Received);
+std::string with_frame(const std::string& line, const rise::hil::io::CanFrame& f) {
+  return rise::hil::io::format_candump_line(f, rise::hil::io::parse_candump_line(line).record.interface,
+                                       rise::hil::io::CandumpDirection::Received);
 }
 
 bool received(const std::string& line, uint32_t id) {
-  const auto p = rise::io::parse_candump_line(line);
+  const auto p = rise::hil::io::parse_candump_line(line);
   return p.ok() && !p.record.tx && p.record.frame.id == id;
 }
 

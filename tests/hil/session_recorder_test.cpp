@@ -66,7 +66,7 @@ TEST_CASE("a session recorded from a live bridge replays to the PanelState strea
     CHECK(recorder.files() == std::vector<std::string>{dir + "/panel_state.lcmlog", dir + "/console.log"});
   }
   // Both directions are in the candump log: the console's frames and the bridge's feedback.
-  const auto records = rise::io::read_can_log(dir + "/console.log");
+  const auto records = rise::hil::io::read_can_log(dir + "/console.log");
   CHECK(records.size() == frames_seen);
   CHECK(std::any_of(records.begin(), records.end(), [](const auto& r) { return r.tx; }));
   CHECK(std::any_of(records.begin(), records.end(), [](const auto& r) { return !r.tx; }));

@@ -16,10 +16,10 @@
 
 using rise::hil::PanelSnapshot;
 using namespace rise::hil::test;
-using rise::io::test::FakeAdapter;
-using rise::io::test::FakeAdapterOptions;
-using rise::io::test::SocatPtys;
-using rise::io::test::TempDir;
+using rise::hil::io::test::FakeAdapter;
+using rise::hil::io::test::FakeAdapterOptions;
+using rise::hil::io::test::SocatPtys;
+using rise::hil::io::test::TempDir;
 
 namespace {
 
@@ -32,10 +32,10 @@ constexpr const char* kMemUrl = "mem://slcan_chain";
 // the mem:// bus to the bridge as slcan text.
 class AdapterOnMemBus {
  public:
-  explicit AdapterOnMemBus(const std::string& pty_path) : mem_(rise::io::open_can_bus(kMemUrl)) {
+  explicit AdapterOnMemBus(const std::string& pty_path) : mem_(rise::hil::io::open_can_bus(kMemUrl)) {
     FakeAdapterOptions options;
     options.on_frame_line = [this](const std::string& line) {
-      if (const auto frame = rise::io::test::parse_slcan_text(line)) mem_->send(*frame);
+      if (const auto frame = rise::hil::io::test::parse_slcan_text(line)) mem_->send(*frame);
     };
     adapter_ = std::make_unique<FakeAdapter>(pty_path, std::move(options));
     thread_ = std::thread([this] { run(); });
@@ -50,15 +50,15 @@ class AdapterOnMemBus {
 
  private:
   void run() {
-    rise::io::CanFrame f;
+    rise::hil::io::CanFrame f;
     while (running_) {
       // Like the real adapter: frames reach the host only while the channel is open.
-      if (mem_->receive(f, 5) == rise::io::IoStatus::Ok && adapter_->channel_open()) {
-        adapter_->write(rise::io::test::slcan_text(f) + "\r");
+      if (mem_->receive(f, 5) == rise::hil::io::IoStatus::Ok && adapter_->channel_open()) {
+        adapter_->write(rise::hil::io::test::slcan_text(f) + "\r");
       }
     }
   }
-  std::unique_ptr<rise::io::CanBus> mem_;
+  std::unique_ptr<rise::hil::io::CanBus> mem_;
   std::unique_ptr<FakeAdapter> adapter_;
   std::atomic<bool> running_{true};
   std::thread thread_;
@@ -71,7 +71,7 @@ class AdapterOnMemBus {
 TEST_CASE("the bridge drives the emulated console over slcan through a pty pair, goes failsafe when the "
           "adapter is unplugged and recovers when it comes back",
           "[hil]") {
-  if (!rise::io::test::have_socat()) {
+  if (!rise::hil::io::test::have_socat()) {
     WARN("/usr/bin/socat is absent (Debian package socat): skip");
     return;
   }
@@ -87,8 +87,8 @@ TEST_CASE("the bridge drives the emulated console over slcan through a pty pair,
   emulator->apply(set(def, "drive_y", 0.6f, false));
 
   Published published;
-  std::vector<std::unique_ptr<rise::io::CanBus>> buses;
-  buses.push_back(rise::io::open_can_bus("slcan://" + ptys->a() + "?bitrate=500000"));
+  std::vector<std::unique_ptr<rise::hil::io::CanBus>> buses;
+  buses.push_back(rise::hil::io::open_can_bus("slcan://" + ptys->a() + "?bitrate=500000"));
   REQUIRE(buses.back()->is_open());
   rise::hil::Bridge bridge(def, std::move(buses), [&](const PanelSnapshot& s) { published.add(s); });
   bridge.start();
@@ -108,7 +108,7 @@ TEST_CASE("the bridge drives the emulated console over slcan through a pty pair,
     const auto fb = emulator->feedback();
     return fb.displays.count(0) == 1 && fb.displays.at(0).raw == 125 && (fb.leds_on & 1u) != 0;
   };
-  CHECK(rise::io::test::wait_until(shows_speed, std::chrono::seconds(3)));
+  CHECK(rise::hil::io::test::wait_until(shows_speed, std::chrono::seconds(3)));
   CHECK(emulator->feedback().bad_frames == 0);
 
   // Unplug the adapter: socat ends, the tty hangs up.

@@ -17,7 +17,7 @@
 #include "hil/io/can_log.hpp"
 #include "hil/io/candump_log.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 namespace {
 

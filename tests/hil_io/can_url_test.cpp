@@ -6,7 +6,7 @@
 #include "hil/io/can_bus.hpp"
 #include "hil/io/can_url.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 TEST_CASE("socketcan URLs give the interface and its raw filters", "[hil_io]") {
   SECTION("a plain interface has no filters") {

@@ -5,7 +5,7 @@
 
 #include "hil/io/candump_log.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 TEST_CASE("candump log lines of every frame kind are read as can-utils writes them", "[hil_io]") {
   SECTION("classic") {
@@ -73,7 +73,7 @@ TEST_CASE("every line of the real ICSim capture reads and writes back unchanged"
 }
 
 TEST_CASE("a candump line's direction reads back as written: R received, T sent, none received", "[hil_io]") {
-  const auto f = rise::io::parse_candump_line("(1.000001) can0 123#DEADBEEF").record.frame;
+  const auto f = rise::hil::io::parse_candump_line("(1.000001) can0 123#DEADBEEF").record.frame;
   const auto [direction, text, tx] = GENERATE(table<CandumpDirection, std::string, bool>({
       {CandumpDirection::None, "(1.000001) can0 123#DEADBEEF", false},
       {CandumpDirection::Received, "(1.000001) can0 123#DEADBEEF R", false},

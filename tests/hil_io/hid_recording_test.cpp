@@ -20,7 +20,7 @@
 #include "hil/io/hid_recording.hpp"
 #include "tests/hid_test_devices.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 using Kind = HidRecordingRecord::Kind;
 
 namespace {

@@ -4,9 +4,9 @@
 
 #include "hil/io/host_port.hpp"
 
-using rise::io::format_host_port;
-using rise::io::HostPortRules;
-using rise::io::parse_host_port;
+using rise::hil::io::format_host_port;
+using rise::hil::io::HostPortRules;
+using rise::hil::io::parse_host_port;
 
 TEST_CASE("HOST:PORT parsing takes a host and a port 1..65535 written in digits", "[hil_io]") {
   struct Good {

@@ -7,9 +7,9 @@
 #include "hil/io/mem_bus.hpp"
 #include "test_support.hpp"
 
-using namespace rise::io;
-using rise::io::test::make_fd_frame;
-using rise::io::test::make_frame;
+using namespace rise::hil::io;
+using rise::hil::io::test::make_fd_frame;
+using rise::hil::io::test::make_frame;
 
 TEST_CASE("mem buses of one name see each other's frames but not their own", "[hil_io]") {
   auto a = open_can_bus("mem://wire1");
@@ -89,7 +89,7 @@ TEST_CASE("a mem bus wakes a receiver blocked in another thread", "[hil_io]") {
     started = true;
     status = b->receive(got, 10'000);
   });
-  REQUIRE(rise::io::test::wait_until([&] { return started.load(); }));
+  REQUIRE(rise::hil::io::test::wait_until([&] { return started.load(); }));
   REQUIRE(a->send(make_frame(0x77, {7})) == IoStatus::Ok);
   receiver.join();
   CHECK(status == IoStatus::Ok);

@@ -19,9 +19,9 @@
 extern char** environ;
 
 namespace {
-using rise::io::ModbusServer;
-using rise::io::ModbusStatus;
-using rise::io::test::wait_until;
+using rise::hil::io::ModbusServer;
+using rise::hil::io::ModbusStatus;
+using rise::hil::io::test::wait_until;
 
 // Fills the server with a recognisable block.
 void fill(ModbusServer& server) {
@@ -36,31 +36,31 @@ std::string tcp_url(const ModbusServer& server, int timeout_ms = 200) {
 }  // namespace
 
 TEST_CASE("modbus URLs parse into their address and reject mistakes", "[hil_io]") {
-  using rise::io::ModbusAddress;
+  using rise::hil::io::ModbusAddress;
   SECTION("good URLs") {
-    const auto tcp = rise::io::parse_modbus_url("modbus+tcp://10.0.0.5:1502?unit=7&timeout_ms=30");
+    const auto tcp = rise::hil::io::parse_modbus_url("modbus+tcp://10.0.0.5:1502?unit=7&timeout_ms=30");
     CHECK(tcp.kind == ModbusAddress::Kind::Tcp);
     CHECK(tcp.host == "10.0.0.5");
     CHECK(tcp.port == 1502);
     CHECK(tcp.unit == 7);
     CHECK(tcp.timeout_ms == 30);
     CHECK_FALSE(tcp.listen);
-    const auto rtu = rise::io::parse_modbus_url("modbus+rtu:///dev/ttyUSB0?baud=115200&parity=N&data=8&stop=2&unit=3");
+    const auto rtu = rise::hil::io::parse_modbus_url("modbus+rtu:///dev/ttyUSB0?baud=115200&parity=N&data=8&stop=2&unit=3");
     CHECK(rtu.kind == ModbusAddress::Kind::Rtu);
     CHECK(rtu.device == "/dev/ttyUSB0");
     CHECK(rtu.baud == 115200);
     CHECK(rtu.parity == 'N');
     CHECK(rtu.stop_bits == 2);
     CHECK(rtu.unit == 3);
-    CHECK(rise::io::parse_modbus_url("modbus+tcp-listen://127.0.0.1:0").listen);
-    CHECK(rise::io::is_modbus_url("modbus+rtu-listen:///dev/pts/4"));
-    CHECK_FALSE(rise::io::is_modbus_url("socketcan://can0"));
+    CHECK(rise::hil::io::parse_modbus_url("modbus+tcp-listen://127.0.0.1:0").listen);
+    CHECK(rise::hil::io::is_modbus_url("modbus+rtu-listen:///dev/pts/4"));
+    CHECK_FALSE(rise::hil::io::is_modbus_url("socketcan://can0"));
   }
   SECTION("bad URLs") {
     const auto bad = GENERATE(as<std::string>{}, "modbus+udp://h:1", "modbus+tcp://:502", "modbus+tcp://h:0",
                               "modbus+tcp://h:1?unit=300", "modbus+tcp://h:1?baud=9600", "modbus+rtu://dev",
                               "modbus+rtu:///dev/x?parity=X", "modbus+tcp://h:1?unit");
-    CHECK_THROWS_AS(rise::io::parse_modbus_url(bad), std::invalid_argument);
+    CHECK_THROWS_AS(rise::hil::io::parse_modbus_url(bad), std::invalid_argument);
   }
 }
 
@@ -69,14 +69,14 @@ TEST_CASE("modbus TCP URLs reject the ports HOST:PORT parsing rejects, naming th
   for (const std::string scheme : {"modbus+tcp", "modbus+tcp-listen"}) {
     const std::string url = scheme + "://127.0.0.1:" + port + "?unit=1";
     CAPTURE(url);
-    CHECK_THROWS_WITH(rise::io::parse_modbus_url(url),
+    CHECK_THROWS_WITH(rise::hil::io::parse_modbus_url(url),
                       Catch::Contains("'" + url + "': port '" + port + "' is not a number"));
   }
   SECTION("port 0 is any free port for a server only; no port is 502") {
-    CHECK(rise::io::parse_modbus_url("modbus+tcp-listen://127.0.0.1:0").port == 0);
-    CHECK_THROWS_WITH(rise::io::parse_modbus_url("modbus+tcp://127.0.0.1:0"),
+    CHECK(rise::hil::io::parse_modbus_url("modbus+tcp-listen://127.0.0.1:0").port == 0);
+    CHECK_THROWS_WITH(rise::hil::io::parse_modbus_url("modbus+tcp://127.0.0.1:0"),
                       Catch::Contains("port '0' is not a number 1..65535"));
-    CHECK(rise::io::parse_modbus_url("modbus+tcp://10.0.0.5?unit=2").port == 502);
+    CHECK(rise::hil::io::parse_modbus_url("modbus+tcp://10.0.0.5?unit=2").port == 502);
   }
 }
 
@@ -87,7 +87,7 @@ TEST_CASE("a second modbus TCP server on a busy address fails with 'address in u
   fill(first);
   const std::string address = "127.0.0.1:" + std::to_string(first.port());
   CHECK_THROWS_WITH(ModbusServer("modbus+tcp-listen://" + address + "?unit=1", {}), address + ": address in use");
-  auto link = rise::io::open_modbus_link(tcp_url(first));
+  auto link = rise::hil::io::open_modbus_link(tcp_url(first));
   std::array<uint16_t, 18> regs{};
   REQUIRE(link->read_input_registers(0, regs).ok());
   CHECK(regs[0] == 0x1000);
@@ -98,7 +98,7 @@ TEST_CASE("a libmodbus TCP client reads the inputs our server holds and writes i
   ModbusServer server("modbus+tcp-listen://127.0.0.1:0?unit=1", {});
   REQUIRE(server.port() != 0);
   fill(server);
-  auto link = rise::io::open_modbus_link(tcp_url(server));
+  auto link = rise::hil::io::open_modbus_link(tcp_url(server));
   REQUIRE(link->is_open());
 
   SECTION("reads") {
@@ -137,7 +137,7 @@ TEST_CASE("a libmodbus TCP client reads the inputs our server holds and writes i
     CHECK(link->is_open());  // an exception is an answer: the link stays up
   }
   SECTION("two clients are served at once") {
-    auto second = rise::io::open_modbus_link(tcp_url(server));
+    auto second = rise::hil::io::open_modbus_link(tcp_url(server));
     std::array<uint16_t, 2> a{}, b{};
     CHECK(link->read_input_registers(0, a).ok());
     CHECK(second->read_input_registers(1, b).ok());
@@ -147,10 +147,10 @@ TEST_CASE("a libmodbus TCP client reads the inputs our server holds and writes i
 
 TEST_CASE("a modbus link to a server that went away reports Disconnected and reopens when it is back",
           "[hil_io]") {
-  auto server = std::make_unique<ModbusServer>("modbus+tcp-listen://127.0.0.1:0?unit=1", rise::io::ModbusTableSizes{});
+  auto server = std::make_unique<ModbusServer>("modbus+tcp-listen://127.0.0.1:0?unit=1", rise::hil::io::ModbusTableSizes{});
   const uint16_t port = server->port();
   fill(*server);
-  auto link = rise::io::open_modbus_link(tcp_url(*server));
+  auto link = rise::hil::io::open_modbus_link(tcp_url(*server));
   std::array<uint16_t, 18> regs{};
   REQUIRE(link->read_input_registers(0, regs).ok());
 
@@ -164,7 +164,7 @@ TEST_CASE("a modbus link to a server that went away reports Disconnected and reo
   CHECK(link->read_input_registers(0, regs).status == ModbusStatus::Disconnected);
 
   server = std::make_unique<ModbusServer>("modbus+tcp-listen://127.0.0.1:" + std::to_string(port) + "?unit=1",
-                                          rise::io::ModbusTableSizes{});
+                                          rise::hil::io::ModbusTableSizes{});
   fill(*server);
   REQUIRE(link->reopen() == ModbusStatus::Ok);
   CHECK(link->read_input_registers(0, regs).ok());
@@ -211,7 +211,7 @@ TEST_CASE("a libmodbus RTU client reads our RTU server across a socat pty pair",
 
   ModbusServer server("modbus+rtu-listen://" + server_end + "?baud=115200&unit=5", {});
   fill(server);
-  auto link = rise::io::open_modbus_link("modbus+rtu://" + client_end + "?baud=115200&unit=5&timeout_ms=500");
+  auto link = rise::hil::io::open_modbus_link("modbus+rtu://" + client_end + "?baud=115200&unit=5&timeout_ms=500");
   REQUIRE(link->is_open());
   std::array<uint16_t, 18> regs{};
   REQUIRE(link->read_input_registers(0, regs).ok());
@@ -223,7 +223,7 @@ TEST_CASE("a libmodbus RTU client reads our RTU server across a socat pty pair",
 
   SECTION("another unit's request gets no answer: Timeout") {
     link->close();  // one opener of the pty end at a time
-    auto other = rise::io::open_modbus_link("modbus+rtu://" + client_end + "?baud=115200&unit=6&timeout_ms=100");
+    auto other = rise::hil::io::open_modbus_link("modbus+rtu://" + client_end + "?baud=115200&unit=6&timeout_ms=100");
     REQUIRE(other->is_open());
     CHECK(other->read_input_registers(0, regs).status == ModbusStatus::Timeout);
   }
@@ -233,9 +233,9 @@ TEST_CASE("a libmodbus RTU client reads our RTU server across a socat pty pair",
 TEST_CASE("a modbus TCP peer that accepts but never answers is a Timeout, and the link restarts clean",
           "[hil_io]") {
   uint16_t port = 0;
-  const int listener = rise::io::test::listen_loopback(port);
+  const int listener = rise::hil::io::test::listen_loopback(port);
   REQUIRE(listener >= 0);
-  auto link = rise::io::open_modbus_link("modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=30");
+  auto link = rise::hil::io::open_modbus_link("modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=30");
   REQUIRE(link->is_open());  // the kernel completes the handshake from the backlog
   std::array<uint16_t, 18> regs{};
   CHECK(link->read_input_registers(0, regs).status == ModbusStatus::Timeout);

@@ -15,7 +15,7 @@
 #include "hil/io/recording_modbus_link.hpp"
 #include "tests/hil_io/test_support.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 namespace {
 std::string temp_dir(const std::string& name) {

@@ -20,8 +20,8 @@
 
 extern char** environ;
 
-using namespace rise::io;
-using rise::io::test::make_frame;
+using namespace rise::hil::io;
+using rise::hil::io::test::make_frame;
 
 namespace {
 
@@ -110,7 +110,7 @@ TEST_CASE("python-can's socketcand client talks to the listen server both ways",
   {
     Child probe({kPython, "-c", "import can"}, output);
     REQUIRE(probe.started());
-    REQUIRE(rise::io::test::wait_until([&] { return probe.poll_exit(); }, std::chrono::seconds(30)));
+    REQUIRE(rise::hil::io::test::wait_until([&] { return probe.poll_exit(); }, std::chrono::seconds(30)));
     if (probe.exit_code() != 0) {
       WARN("skipped: python-can is not importable by " << kPython << ": " << read_file(output));
       return;

@@ -9,7 +9,7 @@
 #include "hil/io/recording_bus.hpp"
 #include "msgs/clock.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 TEST_CASE("a recorded bus writes every frame it sends and receives as a candump log that reads and replays back",
           "[hil_io]") {

@@ -16,7 +16,7 @@
 #include "hil/io/candump_log.hpp"
 #include "hil/io/replay_bus.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 namespace {
 

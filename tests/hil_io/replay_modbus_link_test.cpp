@@ -16,7 +16,7 @@
 #include "hil/io/replay_modbus_link.hpp"
 #include "msgs/clock.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 namespace {
 

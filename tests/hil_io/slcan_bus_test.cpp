@@ -12,14 +12,14 @@
 #include "tests/hil_io/slcan_test_support.hpp"
 #include "tests/hil_io/test_support.hpp"
 
-using namespace rise::io;
-using rise::io::test::FakeAdapter;
-using rise::io::test::FakeAdapterOptions;
-using rise::io::test::make_fd_frame;
-using rise::io::test::make_frame;
-using rise::io::test::SocatPtys;
-using rise::io::test::TempDir;
-using rise::io::test::wait_until;
+using namespace rise::hil::io;
+using rise::hil::io::test::FakeAdapter;
+using rise::hil::io::test::FakeAdapterOptions;
+using rise::hil::io::test::make_fd_frame;
+using rise::hil::io::test::make_frame;
+using rise::hil::io::test::SocatPtys;
+using rise::hil::io::test::TempDir;
+using rise::hil::io::test::wait_until;
 
 namespace {
 
@@ -47,7 +47,7 @@ CanFrame remote_frame(uint32_t id, uint8_t len, bool extended) {
 
 #define REQUIRE_SOCAT()                                              \
   do {                                                               \
-    if (!rise::io::test::have_socat()) {                             \
+    if (!rise::hil::io::test::have_socat()) {                             \
       WARN("/usr/bin/socat is absent (Debian package socat): skip"); \
       return;                                                        \
     }                                                                \

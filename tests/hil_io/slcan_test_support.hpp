@@ -27,7 +27,7 @@
 #include "hil/io/can_frame.hpp"
 #include "tests/hil_io/test_support.hpp"
 
-namespace rise::io::test {
+namespace rise::hil::io::test {
 
 constexpr const char* kSocat = "/usr/bin/socat";
 
@@ -255,4 +255,4 @@ inline std::optional<CanFrame> parse_slcan_text(const std::string& line) {
   return f;
 }
 
-}  // namespace rise::io::test
+}  // namespace rise::hil::io::test

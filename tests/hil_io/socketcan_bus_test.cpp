@@ -8,7 +8,7 @@
 
 #include "hil/io/can_bus.hpp"
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 namespace {
 

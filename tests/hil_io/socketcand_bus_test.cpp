@@ -12,10 +12,10 @@
 #include "hil/io/socketcand_server.hpp"
 #include "test_support.hpp"
 
-using namespace rise::io;
-using rise::io::test::make_fd_frame;
-using rise::io::test::make_frame;
-using rise::io::test::wait_until;
+using namespace rise::hil::io;
+using rise::hil::io::test::make_fd_frame;
+using rise::hil::io::test::make_frame;
+using rise::hil::io::test::wait_until;
 
 namespace {
 

@@ -7,10 +7,10 @@
 #include "hil/io/socketcand_wire.hpp"
 #include "test_support.hpp"
 
-using namespace rise::io;
-using namespace rise::io::socketcand;
-using rise::io::test::make_fd_frame;
-using rise::io::test::make_frame;
+using namespace rise::hil::io;
+using namespace rise::hil::io::socketcand;
+using rise::hil::io::test::make_fd_frame;
+using rise::hil::io::test::make_frame;
 
 namespace {
 

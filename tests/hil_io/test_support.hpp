@@ -19,7 +19,7 @@
 
 #include "hil/io/can_frame.hpp"
 
-namespace rise::io::test {
+namespace rise::hil::io::test {
 
 inline CanFrame make_frame(uint32_t id, std::initializer_list<uint8_t> bytes, bool extended = false) {
   CanFrame f;
@@ -110,4 +110,4 @@ inline std::string read_until(int fd, std::string_view needle, int timeout_ms) {
   return got;
 }
 
-}  // namespace rise::io::test
+}  // namespace rise::hil::io::test

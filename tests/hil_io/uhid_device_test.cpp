@@ -10,7 +10,7 @@
 
 #include "hil/io/uhid_device.hpp"
 
-namespace io = rise::io;
+namespace io = rise::hil::io;
 
 namespace {
 io::UhidSettings settings() {

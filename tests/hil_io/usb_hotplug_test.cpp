@@ -10,7 +10,7 @@
 #include "hil/io/hid_device.hpp"
 #include "hil/io/usb_hotplug.hpp"
 
-namespace io = rise::io;
+namespace io = rise::hil::io;
 using Clock = std::chrono::steady_clock;
 
 namespace {

@@ -96,7 +96,7 @@ std::vector<rise_msgs::PanelState> read_states(const std::string& path) {
 // python_can_read_log.py's layout. It knows only the bus-error class of error
 // frames as errors (without channel or data); other error classes come out
 // as 29-bit frames whose id is the class.
-std::string python_can_view(const rise::io::CanLogRecord& r) {
+std::string python_can_view(const rise::hil::io::CanLogRecord& r) {
   const auto& f = r.frame;
   char head[96];
   const double ts = static_cast<double>(f.timestamp_us) * 1e-6;
@@ -124,7 +124,7 @@ void check_python_can_reads(const std::string& log, const std::string& dir) {
                        dir + "/python-view.txt"},
                       dir + "/python.log");
   REQUIRE(python.wait_for(30000) == 0);
-  const auto ours = rise::io::read_can_log(log);
+  const auto ours = rise::hil::io::read_can_log(log);
   std::ifstream in(dir + "/python-view.txt");
   std::vector<std::string> theirs;
   for (std::string l; std::getline(in, l);) theirs.push_back(l);
@@ -253,12 +253,12 @@ TEST_CASE("python-can's log reader reads every frame kind of a candump log we wr
   TempDir dir("rise-pycan-log");
   const std::string path = dir.path + "/console.log";
   {
-    rise::io::RecordingBus recorded(rise::io::open_can_bus("mem://pycan_log"), path, "console");
-    auto peer = rise::io::open_can_bus("mem://pycan_log");
-    std::vector<rise::io::CanFrame> frames;
+    rise::hil::io::RecordingBus recorded(rise::hil::io::open_can_bus("mem://pycan_log"), path, "console");
+    auto peer = rise::hil::io::open_can_bus("mem://pycan_log");
+    std::vector<rise::hil::io::CanFrame> frames;
     frames.reserve(16);  // add() hands out pointers into it
     auto add = [&](uint32_t id, std::vector<uint8_t> data) {
-      rise::io::CanFrame f;
+      rise::hil::io::CanFrame f;
       f.id = id;
       f.len = static_cast<uint8_t>(data.size());
       std::copy(data.begin(), data.end(), f.data.begin());
@@ -281,15 +281,15 @@ TEST_CASE("python-can's log reader reads every frame kind of a candump log we wr
     bus_error->error = true;
     for (std::size_t i = 0; i < frames.size(); ++i) {
       if (i % 2) {
-        REQUIRE(recorded.send(frames[i]) == rise::io::IoStatus::Ok);
+        REQUIRE(recorded.send(frames[i]) == rise::hil::io::IoStatus::Ok);
       } else {
-        REQUIRE(peer->send(frames[i]) == rise::io::IoStatus::Ok);
-        rise::io::CanFrame got;
-        REQUIRE(recorded.receive(got, 1000) == rise::io::IoStatus::Ok);
+        REQUIRE(peer->send(frames[i]) == rise::hil::io::IoStatus::Ok);
+        rise::hil::io::CanFrame got;
+        REQUIRE(recorded.receive(got, 1000) == rise::hil::io::IoStatus::Ok);
       }
     }
   }
-  REQUIRE(rise::io::read_can_log(path).size() == 7);
+  REQUIRE(rise::hil::io::read_can_log(path).size() == 7);
   check_python_can_reads(path, dir.path);
 }
 
@@ -317,11 +317,11 @@ TEST_CASE("rise-hild plays a HID recording as its device (replay://), records th
   // The daemon read the golden's reports, byte for byte and in order, at the
   // golden's plugs (times are its own).
   auto reports = [](const std::string& path) {
-    rise::io::HidRecordingReader reader(path);
+    rise::hil::io::HidRecordingReader reader(path);
     std::vector<std::vector<uint8_t>> out;
-    rise::io::HidRecordingRecord r;
+    rise::hil::io::HidRecordingRecord r;
     while (reader.next(r))
-      if (r.kind != rise::io::HidRecordingRecord::Kind::Unplug) out.push_back(r.bytes);
+      if (r.kind != rise::hil::io::HidRecordingRecord::Kind::Unplug) out.push_back(r.bytes);
     return out;
   };
   const auto expected = reports(golden);

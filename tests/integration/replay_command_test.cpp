@@ -28,16 +28,16 @@ TEST_CASE("rise-panel replay plays a capture onto socketcand and python-can rece
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-replay-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   // 200 frames, 2.5 ms apart (0.5 s), ids and payloads varied per frame.
-  std::vector<rise::io::CanFrame> sent;
+  std::vector<rise::hil::io::CanFrame> sent;
   {
     std::ofstream log(dir + "/capture.log");
     for (int i = 0; i < 200; ++i) {
-      rise::io::CanFrame f;
+      rise::hil::io::CanFrame f;
       f.id = static_cast<uint32_t>(0x100 + (i * 37) % 0x600);
       f.len = static_cast<uint8_t>(i % 9);
       for (uint8_t b = 0; b < f.len; ++b) f.data[b] = static_cast<uint8_t>(i * 7 + b);
       f.timestamp_us = 1'700'000'000'000'000 + int64_t{i} * 2500;
-      log << rise::io::format_candump_line(f, "can0") << "\n";
+      log << rise::hil::io::format_candump_line(f, "can0") << "\n";
       sent.push_back(f);
     }
   }
@@ -52,9 +52,9 @@ TEST_CASE("rise-panel replay plays a capture onto socketcand and python-can rece
   CHECK(replay.wait_for(10000) == 0);  // it ends at the end of the capture
 
   std::ifstream in(dir + "/received.log");
-  std::vector<rise::io::CanFrame> received;
+  std::vector<rise::hil::io::CanFrame> received;
   for (std::string line; std::getline(in, line);) {
-    const auto parsed = rise::io::parse_candump_line(line);
+    const auto parsed = rise::hil::io::parse_candump_line(line);
     INFO(line);
     REQUIRE(parsed.ok());
     received.push_back(parsed.record.frame);

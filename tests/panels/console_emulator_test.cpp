@@ -31,12 +31,12 @@ struct Wire {
 };
 
 Wire run(ConsoleEmulator& emulator, uint8_t node, int64_t& now_us) {
-  rise::io::MemBus console("mem://loop", "loop"), host("mem://loop", "loop");
+  rise::hil::io::MemBus console("mem://loop", "loop"), host("mem://loop", "loop");
   fp::Decoder decoder(node);
   Wire wire;
   for (int i = 0; i < 100; ++i, now_us += 1000) emulator.tick(console, now_us);
-  rise::io::CanFrame f;
-  while (host.receive(f, 0) == rise::io::IoStatus::Ok) {
+  rise::hil::io::CanFrame f;
+  while (host.receive(f, 0) == rise::hil::io::IoStatus::Ok) {
     ++wire.frames;
     const auto r = decoder.decode(f.id, std::span<const uint8_t>(f.data.data(), f.len));
     if (!r.ok()) {

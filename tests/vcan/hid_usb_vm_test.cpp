@@ -35,7 +35,7 @@
 #include "panels/panel_definition.hpp"
 #include "tests/hid_test_devices.hpp"
 
-namespace io = rise::io;
+namespace io = rise::hil::io;
 namespace fs = std::filesystem;
 using rise::hil::Bridge;
 using rise::hil::PanelSnapshot;

@@ -37,7 +37,7 @@
 #include "tests/hid_test_devices.hpp"
 #include "tests/hil/hid_session_support.hpp"
 
-namespace io = rise::io;
+namespace io = rise::hil::io;
 using rise::hil::Bridge;
 using rise::hil::PanelSnapshot;
 using rise::test::gravis_descriptor;
@@ -575,12 +575,12 @@ TEST_CASE("a live uhid pad recorded as rise-hild --record records it verifies, a
     reports = c.hid_reports;
   }
   // The device as the kernel names it, at both plugs.
-  rise::io::HidRecordingReader reader(dir + "/pad.hid");
+  rise::hil::io::HidRecordingReader reader(dir + "/pad.hid");
   CHECK(reader.plugs() == 2);
   CHECK(reader.reports() == reports);
-  rise::io::HidRecordingRecord first;
+  rise::hil::io::HidRecordingRecord first;
   REQUIRE(reader.next(first));
-  CHECK(first.kind == rise::io::HidRecordingRecord::Kind::Plug);
+  CHECK(first.kind == rise::hil::io::HidRecordingRecord::Kind::Plug);
   CHECK(first.bytes == std::vector<uint8_t>(std::begin(led_pad_descriptor), std::end(led_pad_descriptor)));
   CHECK(first.identity.name == "rise LED test pad (uhid)");
   CHECK(first.identity.bus == 5);  // uhid's default, Bluetooth

@@ -42,7 +42,7 @@
 
 extern char** environ;
 
-using namespace rise::io;
+using namespace rise::hil::io;
 
 namespace {
 
