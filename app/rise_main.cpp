@@ -109,122 +109,127 @@ struct ChildProcessGuard {
   rise::process::ChildProcess child;
 };
 
-int run_demo(const DemoOptions& o) {
-  using rise::process::ChildProcess;
+// The station id of a demo: "demo", or "demo-N" when another demo (or a
+// classroom) on this LCM network uses it, so that none mixes into another's
+// measurements. nullopt when LCM cannot be opened.
+std::optional<std::string> demo_station_id(const DemoOptions& o) {
+  if (!o.id.empty()) return o.id;
+  lcm::LCM probe(o.lcm_url);
+  if (!probe.good()) return std::nullopt;
+  const auto busy = busy_station_ids(probe, rise::msgs::kProbeMs);
+  std::string id = "demo";
+  for (int n = 2; busy.count(id) > 0; ++n) id = "demo-" + std::to_string(n);
+  if (id != "demo") std::printf("rise demo: station 'demo' is in use, taking '%s'\n", id.c_str());
+  return id;
+}
+
+// rise-sim, rise-hild and the console emulator of one demo, each logging into log_dir.
+std::vector<rise::process::ChildProcess> start_demo_chain(const DemoOptions& o, const std::string& id,
+                                                          const std::string& bus, const std::string& log_dir) {
   const std::string bin = rise::process::executable_dir();
-  const std::string log_dir =
-      o.log_dir.empty() ? "/tmp/rise-demo-" + std::to_string(::getpid()) : o.log_dir;
-  std::filesystem::create_directories(log_dir);
-  const uint16_t port = o.port ? o.port : free_tcp_port();
-  const std::string bus = "127.0.0.1:" + std::to_string(port) + "/can0";
+  std::vector<rise::process::ChildProcess> children;
+  children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", id, "--lcm", o.lcm_url, "--robot",
+                                                 rise::panels::find_data_file(o.robot)},
+                        log_dir + "/rise-sim.log");
+  std::vector<std::string> hild{bin + "/rise-hild", "--panel", rise::panels::find_data_file(o.panel),
+                                "--can", "socketcand://" + bus, "--id", id, "--lcm", o.lcm_url};
+  if (!o.record_dir.empty()) hild.insert(hild.end(), {"--record", o.record_dir});
+  children.emplace_back(hild, log_dir + "/rise-hild.log");
+  children.emplace_back(
+      std::vector<std::string>{bin + "/rise-panel", "emulate", "--panel", rise::panels::find_data_file(o.panel),
+                               "--can", "socketcand+listen://" + bus, "--script",
+                               rise::panels::find_data_file(o.script), "--hold", "--start-on-feedback"},
+      log_dir + "/rise-panel.log");
+  return children;
+}
 
-  // A station id of its own: another demo (or a classroom) on this LCM
-  // network must not mix into this one's measurements.
-  std::string id = o.id;
-  if (id.empty()) {
-    lcm::LCM probe(o.lcm_url);
-    if (!probe.good()) {
-      std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
-      return 2;
+// One demo run: the chain's children and the monitor that measures them.
+class DemoRun {
+ public:
+  DemoRun(const DemoOptions& o, std::string id, std::string log_dir, std::vector<rise::process::ChildProcess> children,
+          rise::process::ChainMonitor& monitor)
+      : o_(o), id_(std::move(id)), log_dir_(std::move(log_dir)), children_(std::move(children)), monitor_(monitor) {}
+
+  /// Until the chain publishes a healthy panel and the robot: 0, or the exit code.
+  int wait_until_up() {
+    const auto up_since = std::chrono::steady_clock::now();
+    bool ready = false;
+    while (!ready && !g_stop) {
+      ready = monitor_.wait_until(
+          [](const rise::process::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; }, 50);
+      if (!ready && child_died()) return 1;
+      if (!ready && std::chrono::steady_clock::now() - up_since > std::chrono::seconds(15)) {
+        std::fprintf(stderr, "rise demo: the chain did not come up within 15 s: %s\n", monitor_.live_line().c_str());
+        return 1;
+      }
     }
-    const auto busy = busy_station_ids(probe, rise::msgs::kProbeMs);
-    id = "demo";
-    for (int n = 2; busy.count(id) > 0; ++n) id = "demo-" + std::to_string(n);
-    if (id != "demo") std::printf("rise demo: station 'demo' is in use, taking '%s'\n", id.c_str());
+    return g_stop ? 130 : 0;
   }
-  rise::process::ChainMonitor monitor(o.lcm_url, id);
-  if (!monitor.good()) {
-    std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
-    return 2;
-  }
-  std::printf("rise demo: station '%s', LCM %s, console on socketcand://%s, logs in %s\n",
-              id.c_str(), o.lcm_url.c_str(), bus.c_str(), log_dir.c_str());
 
-  std::vector<ChildProcess> children;
-  try {
-    children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", id, "--lcm", o.lcm_url,
-                                                   "--robot", rise::panels::find_data_file(o.robot)},
-                          log_dir + "/rise-sim.log");
-    std::vector<std::string> hild{bin + "/rise-hild", "--panel", rise::panels::find_data_file(o.panel),
-                                  "--can", "socketcand://" + bus, "--id", id, "--lcm", o.lcm_url};
-    if (!o.record_dir.empty()) hild.insert(hild.end(), {"--record", o.record_dir});
-    children.emplace_back(hild, log_dir + "/rise-hild.log");
-    children.emplace_back(
-        std::vector<std::string>{bin + "/rise-panel", "emulate", "--panel",
-                                 rise::panels::find_data_file(o.panel), "--can",
-                                 "socketcand+listen://" + bus, "--script",
-                                 rise::panels::find_data_file(o.script), "--hold", "--start-on-feedback"},
-        log_dir + "/rise-panel.log");
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "rise demo: %s\n", e.what());
-    return 2;
+  /// Plays the script until both stops are measured: 0, or the exit code.
+  int play() {
+    const auto start = std::chrono::steady_clock::now();
+    auto next_line = start;
+    int rc = 0;
+    while (true) {
+      if (g_stop) {
+        std::printf("\nrise demo: interrupted, stopping every child\n");
+        rc = 130;
+        break;
+      }
+      const auto now = std::chrono::steady_clock::now();
+      const double t = std::chrono::duration<double>(now - start).count();
+      if (now >= next_line) {
+        std::printf("t=%5.1fs %s\n", t, monitor_.live_line().c_str());
+        std::fflush(stdout);
+        next_line += std::chrono::milliseconds(500);
+      }
+      const auto v = monitor_.view();
+      if (v.loss_stop.stopped && v.deadman_stop.stopped) break;
+      if (child_died()) {
+        rc = 1;
+        break;
+      }
+      if (t > o_.timeout_s) {
+        std::fprintf(stderr, "rise demo: timed out after %.0f s\n", o_.timeout_s);
+        rc = 1;
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    for (auto& c : children_) c.stop(2000);
+    return rc;
   }
-  std::vector<int32_t> pids;
-  for (const auto& c : children) {
-    std::printf("  started %-10s pid %d\n", c.name().c_str(), c.pid());
-    pids.push_back(c.pid());
-  }
-  monitor.accept_only(pids);
 
+  /// The summary of the measurements: 0 when both stops kept their bounds.
+  int summary() const;
+
+ private:
   // A child that ends is reported at once, with why (its log's last lines).
-  const auto child_died = [&] {
+  bool child_died() {
     bool died = false;
-    for (auto& c : children) {
+    for (auto& c : children_) {
       if (c.running()) continue;
       const int status = c.wait_for(0);
       std::fprintf(stderr, "rise demo: %s exited with status %d; the end of %s/%s.log:\n%s", c.name().c_str(), status,
-                   log_dir.c_str(), c.name().c_str(), last_lines(log_dir + "/" + c.name() + ".log", 6).c_str());
+                   log_dir_.c_str(), c.name().c_str(), last_lines(log_dir_ + "/" + c.name() + ".log", 6).c_str());
       died = true;
     }
     return died;
-  };
-  const auto up_since = std::chrono::steady_clock::now();
-  bool ready = false;
-  while (!ready && !g_stop) {
-    ready = monitor.wait_until(
-        [](const rise::process::ChainView& v) { return v.have_robot && v.have_panel && !v.panel.failsafe; }, 50);
-    if (!ready && child_died()) return 1;
-    if (!ready && std::chrono::steady_clock::now() - up_since > std::chrono::seconds(15)) {
-      std::fprintf(stderr, "rise demo: the chain did not come up within 15 s: %s\n", monitor.live_line().c_str());
-      return 1;
-    }
   }
-  if (g_stop) return 130;
-  std::printf("rise demo: chain up, playing %s\n", o.script.c_str());
 
-  const auto start = std::chrono::steady_clock::now();
-  auto next_line = start;
+  const DemoOptions& o_;
+  std::string id_;
+  std::string log_dir_;
+  std::vector<rise::process::ChildProcess> children_;
+  rise::process::ChainMonitor& monitor_;
+};
+
+int DemoRun::summary() const {
+  const DemoOptions& o = o_;
+  const std::string& id = id_;
   int rc = 0;
-  while (true) {
-    if (g_stop) {
-      std::printf("\nrise demo: interrupted, stopping every child\n");
-      rc = 130;
-      break;
-    }
-    const auto now = std::chrono::steady_clock::now();
-    const double t = std::chrono::duration<double>(now - start).count();
-    if (now >= next_line) {
-      std::printf("t=%5.1fs %s\n", t, monitor.live_line().c_str());
-      std::fflush(stdout);
-      next_line += std::chrono::milliseconds(500);
-    }
-    const auto v = monitor.view();
-    if (v.loss_stop.stopped && v.deadman_stop.stopped) break;
-    if (child_died()) {
-      rc = 1;
-      break;
-    }
-    if (t > o.timeout_s) {
-      std::fprintf(stderr, "rise demo: timed out after %.0f s\n", o.timeout_s);
-      rc = 1;
-      break;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  for (auto& c : children) c.stop(2000);
-  if (rc == 130) return rc;
-
-  const auto v = monitor.view();
+  const auto v = monitor_.view();
   const double yaw =
       std::atan2(2.0 * (v.robot.orientation_wxyz[0] * v.robot.orientation_wxyz[3] +
                         v.robot.orientation_wxyz[1] * v.robot.orientation_wxyz[2]),
@@ -271,7 +276,6 @@ int run_demo(const DemoOptions& o) {
       std::printf("%-21s not measured (%s)\n", what, s.triggered ? "robot never stopped" : "no event seen");
   };
   report("dead-man release", v.deadman_stop, 0.0, "");
-  // A console gone silent is noticed after its timeout; a closed transport at once.
   const bool silent = v.loss_causes.has(rise::msgs::FailsafeCause::SourceStale);
   report("source loss", v.loss_stop, silent ? source_timeout_s : 0.0, silent ? "source timeout + " : "");
   if (!v.loss_reason.empty()) std::printf("source loss seen as   %s\n", v.loss_reason.c_str());
@@ -281,6 +285,46 @@ int run_demo(const DemoOptions& o) {
   if (!v.deadman_stop.stopped || !v.loss_stop.stopped || exceeded) rc = 1;
   std::printf("result                %s\n", rc == 0 ? "ok" : "FAILED");
   return rc;
+}
+
+int run_demo(const DemoOptions& o) {
+  const std::string log_dir = o.log_dir.empty() ? "/tmp/rise-demo-" + std::to_string(::getpid()) : o.log_dir;
+  std::filesystem::create_directories(log_dir);
+  const uint16_t port = o.port ? o.port : free_tcp_port();
+  const std::string bus = "127.0.0.1:" + std::to_string(port) + "/can0";
+  const std::optional<std::string> id = demo_station_id(o);
+  if (!id) {
+    std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
+    return 2;
+  }
+  rise::process::ChainMonitor monitor(o.lcm_url, *id);
+  if (!monitor.good()) {
+    std::fprintf(stderr, "rise demo: cannot open LCM at %s\n", o.lcm_url.c_str());
+    return 2;
+  }
+  std::printf("rise demo: station '%s', LCM %s, console on socketcand://%s, logs in %s\n",
+              id->c_str(), o.lcm_url.c_str(), bus.c_str(), log_dir.c_str());
+  std::vector<rise::process::ChildProcess> children;
+  try {
+    children = start_demo_chain(o, *id, bus, log_dir);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "rise demo: %s\n", e.what());
+    return 2;
+  }
+  std::vector<int32_t> pids;
+  for (const auto& c : children) {
+    std::printf("  started %-10s pid %d\n", c.name().c_str(), c.pid());
+    pids.push_back(c.pid());
+  }
+  monitor.accept_only(pids);
+  DemoRun run(o, *id, log_dir, std::move(children), monitor);
+  if (const int rc = run.wait_until_up(); rc != 0) return rc;
+  std::printf("rise demo: chain up, playing %s\n", o.script.c_str());
+  // The summary is printed after a failed run too: what was measured, and why not the rest.
+  const int played = run.play();
+  if (played == 130) return played;
+  const int summarized = run.summary();
+  return played != 0 ? played : summarized;
 }
 }  // namespace
 

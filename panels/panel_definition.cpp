@@ -233,6 +233,171 @@ std::size_t resolve_source(const Context& ctx, const PanelDefinition& def, const
   return *index;
 }
 
+// A dbc source's control: MESSAGE.SIGNAL of the source's DBC, an axis' range
+// from the DBC unless given.
+void parse_dbc_binding(const Context& ctx, const SourceDefinition& source, const YAML::Node& node,
+                       const std::string& where, ControlDefinition& c) {
+  const auto text = ctx.require<std::string>(node, "signal", where);
+  const auto dot = text.find('.');
+  const firmware_protocol::DbcMessage* message =
+      dot == std::string::npos ? nullptr : source.dbc->find(std::string_view(text).substr(0, dot));
+  const firmware_protocol::DbcSignal* signal =
+      message ? message->signal(std::string_view(text).substr(dot + 1)) : nullptr;
+  if (!signal)
+    ctx.fail(node["signal"], where + ".signal",
+             "no signal '" + text + "' (MESSAGE.SIGNAL) in " + source.dbc_file);
+  if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a dbc source");
+  c.dbc_message = message;
+  c.dbc_signal = signal;
+  if (c.kind == ControlKind::Axis) {
+    if (const YAML::Node range = node["range"]) {
+      read_range(ctx, range, where, c);
+    } else {
+      c.range_min = signal->minimum;
+      c.range_max = signal->maximum;
+    }
+    if (!(c.range_max > c.range_min))
+      ctx.fail(node["range"] ? node["range"] : node, where + ".range",
+               "needs min < max (the DBC gives none for " + text + ")");
+  }
+}
+
+// A hid source's control: the name of a report signal.
+void parse_hid_binding(const Context& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+  c.hid_signal = ctx.require<std::string>(node, "signal", where);
+  if (c.hid_signal.empty()) ctx.fail(node["signal"], where + ".signal", "must not be empty");
+  if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a hid source");
+  // Axes arrive normalised by the report decoder (-1..1 or 0..1).
+  c.range_min = -1.0;
+  c.range_max = 1.0;
+}
+
+// A switch read from several button inputs: no switch signal of its own.
+void parse_switch_bits(const Context& ctx, const YAML::Node& node, const YAML::Node& bits, const std::string& where,
+                       ControlDefinition& c) {
+  if (c.kind != ControlKind::Switch) ctx.fail(bits, where + ".bits", "only a switch can be read from bits");
+  if (node["signal"]) ctx.fail(node["signal"], where + ".signal", "give either signal or bits, not both");
+  if (!bits.IsSequence() || bits.size() < 1 || bits.size() > 8)
+    ctx.fail(bits, where + ".bits", "expected a list of 1..8 button signals");
+  for (const auto& b : bits) {
+    const auto text = ctx.as<std::string>(b, where + ".bits");
+    const auto ref = parse_signal(text);
+    if (!ref || ref->kind != SignalRef::Kind::Button)
+      ctx.fail(b, where + ".bits", "'" + text + "' is not a button signal (button.0-31)");
+    c.bits.push_back(ref->index);
+  }
+  const auto encoding = ctx.get<std::string>(node, "encoding", where, "binary");
+  if (encoding == "binary") c.encoding = BitsEncoding::Binary;
+  else if (encoding == "one_hot") c.encoding = BitsEncoding::OneHot;
+  else ctx.fail(node["encoding"], where + ".encoding", "unknown encoding '" + encoding + "' (binary, one_hot)");
+  c.signal = SignalRef{SignalRef::Kind::Button, c.bits.front()};
+}
+
+// The protocol signal (axis.N, button.N, switch.N) and whether it fits the control's kind.
+void parse_protocol_signal(const Context& ctx, const YAML::Node& node, const std::string& where, bool named_signals,
+                           const std::string& kind, ControlDefinition& c) {
+  const auto signal_text = named_signals ? std::string("axis.0")
+                           : c.bits.empty() ? ctx.require<std::string>(node, "signal", where)
+                                            : to_string(c.signal);
+  const auto signal = parse_signal(signal_text);
+  if (!signal)
+    ctx.fail(node["signal"], where + ".signal",
+             "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
+  c.signal = *signal;
+  const bool kind_matches = !c.bits.empty() || named_signals ||
+      (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
+      (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
+      (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
+  if (!kind_matches)
+    ctx.fail(node["signal"], where + ".signal",
+             "signal '" + signal_text + "' does not fit a control of kind " + kind);
+}
+
+// The dead-man or e-stop role, and whether the control moves the robot. Returns the role's name.
+std::string parse_role(const Context& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+  const auto role = ctx.get<std::string>(node, "role", where, "none");
+  if (role == "none") c.role = ControlRole::None;
+  else if (role == "deadman") c.role = ControlRole::Deadman;
+  else if (role == "estop") c.role = ControlRole::Estop;
+  else ctx.fail(node["role"], where + ".role", "unknown role '" + role + "' (deadman, estop)");
+  if (c.role != ControlRole::None && c.kind != ControlKind::Button)
+    ctx.fail(node["role"], where + ".role", "only a button can be the " + role);
+
+  c.motion = ctx.get<bool>(node, "motion", where, false);
+  if (c.motion && c.role != ControlRole::None)
+    ctx.fail(node["motion"], where + ".motion", "the " + role + " cannot be a motion control");
+  return role;
+}
+
+void parse_axis_settings(const Context& ctx, const YAML::Node& node, const YAML::Node& safe, const std::string& where,
+                         ControlDefinition& c) {
+  c.safe_axis = ctx.as<float>(safe, where + ".safe");
+  if (!(c.safe_axis >= -1.0f && c.safe_axis <= 1.0f))
+    ctx.fail(safe, where + ".safe", "an axis' safe value must be in -1..1");
+  c.deadband = ctx.get<float>(node, "deadband", where, 0.0f);
+  if (!(c.deadband >= 0.0f && c.deadband < 0.5f))
+    ctx.fail(node["deadband"], where + ".deadband", "must be in 0..0.5");
+  c.invert = ctx.get<bool>(node, "invert", where, false);
+  c.scale = ctx.get<float>(node, "scale", where, 1.0f);
+  if (!(c.scale > 0.0f && c.scale <= 1.0f))
+    ctx.fail(node["scale"], where + ".scale", "must be in (0, 1]");
+  c.expo = ctx.get<float>(node, "expo", where, 0.0f);
+  if (!(c.expo >= 0.0f && c.expo <= 1.0f)) ctx.fail(node["expo"], where + ".expo", "must be in 0..1");
+  c.lowpass_ms = ctx.get<float>(node, "lowpass_ms", where, 0.0f);
+  if (!(c.lowpass_ms >= 0.0f && c.lowpass_ms <= 10000.0f))
+    ctx.fail(node["lowpass_ms"], where + ".lowpass_ms", "must be in 0..10000");
+  for (const char* k : {"mode", "debounce_ms", "long_press_ms", "pulse_ms", "positions"})
+    if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on an axis");
+}
+
+void parse_button_settings(const Context& ctx, const YAML::Node& node, const YAML::Node& safe,
+                           const std::string& where, const std::string& role, ControlDefinition& c) {
+  c.safe_button = ctx.as<bool>(safe, where + ".safe");
+  for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "positions"})
+    if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a button");
+  const auto mode = ctx.get<std::string>(node, "mode", where, "direct");
+  if (mode == "direct") c.behaviour = ButtonBehaviour::Direct;
+  else if (mode == "toggle") c.behaviour = ButtonBehaviour::Toggle;
+  else if (mode == "long_press") c.behaviour = ButtonBehaviour::LongPress;
+  else if (mode == "edge") c.behaviour = ButtonBehaviour::Edge;
+  else ctx.fail(node["mode"], where + ".mode", "unknown mode '" + mode + "' (direct, toggle, long_press, edge)");
+  if (c.role != ControlRole::None && c.behaviour != ButtonBehaviour::Direct)
+    ctx.fail(node["mode"], where + ".mode", "the " + role + " must be mode: direct");
+  const auto ms = [&](const char* key, int fallback) {
+    const int v = ctx.get<int>(node, key, where, fallback);
+    if (v < 0 || v > 60000) ctx.fail(node[key], where + "." + key, "must be 0..60000");
+    return static_cast<uint32_t>(v);
+  };
+  c.debounce_ms = ms("debounce_ms", 0);
+  c.long_press_ms = ms("long_press_ms", 800);
+  c.pulse_ms = ms("pulse_ms", 100);
+}
+
+void parse_switch_settings(const Context& ctx, const YAML::Node& node, const YAML::Node& safe,
+                           const std::string& where, ControlDefinition& c) {
+  const YAML::Node positions = node["positions"];
+  if (!positions || !positions.IsSequence() || positions.size() < 2)
+    ctx.fail(positions ? positions : node, where + ".positions",
+             "a switch needs a list of at least two position labels");
+  for (const auto& p : positions) c.positions.push_back(ctx.as<std::string>(p, where + ".positions"));
+  const auto safe_label = ctx.as<std::string>(safe, where + ".safe");
+  bool found = false;
+  for (std::size_t k = 0; k < c.positions.size(); ++k)
+    if (c.positions[k] == safe_label) {
+      c.safe_switch = static_cast<uint8_t>(k);
+      found = true;
+    }
+  if (!found)
+    ctx.fail(safe, where + ".safe", "'" + safe_label + "' is not one of the positions");
+  for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "mode", "debounce_ms",
+                        "long_press_ms", "pulse_ms"})
+    if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a switch");
+  if (c.encoding == BitsEncoding::Binary && !c.bits.empty() && (1u << c.bits.size()) < c.positions.size())
+    ctx.fail(node["bits"], where + ".bits", "too few bits for " + std::to_string(c.positions.size()) + " positions");
+  if (c.encoding == BitsEncoding::OneHot && c.bits.size() != c.positions.size())
+    ctx.fail(node["bits"], where + ".bits", "one_hot needs one bit per position");
+}
+
 ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
                                 const YAML::Node& node, std::size_t i) {
   std::string where = "controls[" + std::to_string(i) + "]";
@@ -257,163 +422,29 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
   // Sources whose controls bind names of the device, not axis.N / button.N / switch.N.
   const bool named_signals = source.is_dbc() || source.is_hid() || source.is_generic_modbus();
   if (source.is_dbc()) {
-    // MESSAGE.SIGNAL of the source's DBC.
-    const auto text = ctx.require<std::string>(node, "signal", where);
-    const auto dot = text.find('.');
-    const firmware_protocol::DbcMessage* message =
-        dot == std::string::npos ? nullptr : source.dbc->find(std::string_view(text).substr(0, dot));
-    const firmware_protocol::DbcSignal* signal =
-        message ? message->signal(std::string_view(text).substr(dot + 1)) : nullptr;
-    if (!signal)
-      ctx.fail(node["signal"], where + ".signal",
-               "no signal '" + text + "' (MESSAGE.SIGNAL) in " + source.dbc_file);
-    if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a dbc source");
-    c.dbc_message = message;
-    c.dbc_signal = signal;
-    if (c.kind == ControlKind::Axis) {
-      if (const YAML::Node range = node["range"]) {
-        read_range(ctx, range, where, c);
-      } else {
-        c.range_min = signal->minimum;
-        c.range_max = signal->maximum;
-      }
-      if (!(c.range_max > c.range_min))
-        ctx.fail(node["range"] ? node["range"] : node, where + ".range",
-                 "needs min < max (the DBC gives none for " + text + ")");
-    }
+    parse_dbc_binding(ctx, source, node, where, c);
   } else if (node["range"] && !source.is_generic_modbus()) {
     ctx.fail(node["range"], where + ".range", "only for controls of a dbc or modbus source");
   }
   if (source.is_generic_modbus()) parse_modbus_binding(ctx, node, where, c);
   else if (node["type"]) ctx.fail(node["type"], where + ".type", "only for controls of a modbus source");
-  if (source.is_hid()) {
-    c.hid_signal = ctx.require<std::string>(node, "signal", where);
-    if (c.hid_signal.empty()) ctx.fail(node["signal"], where + ".signal", "must not be empty");
-    if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a hid source");
-    // Axes arrive normalised by the report decoder (-1..1 or 0..1).
-    c.range_min = -1.0;
-    c.range_max = 1.0;
-  }
+  if (source.is_hid()) parse_hid_binding(ctx, node, where, c);
   if (named_signals) {
     // no protocol signal to parse
   } else if (const YAML::Node bits = node["bits"]) {
-    // A switch read from several button inputs: no switch signal of its own.
-    if (c.kind != ControlKind::Switch) ctx.fail(bits, where + ".bits", "only a switch can be read from bits");
-    if (node["signal"]) ctx.fail(node["signal"], where + ".signal", "give either signal or bits, not both");
-    if (!bits.IsSequence() || bits.size() < 1 || bits.size() > 8)
-      ctx.fail(bits, where + ".bits", "expected a list of 1..8 button signals");
-    for (const auto& b : bits) {
-      const auto text = ctx.as<std::string>(b, where + ".bits");
-      const auto ref = parse_signal(text);
-      if (!ref || ref->kind != SignalRef::Kind::Button)
-        ctx.fail(b, where + ".bits", "'" + text + "' is not a button signal (button.0-31)");
-      c.bits.push_back(ref->index);
-    }
-    const auto encoding = ctx.get<std::string>(node, "encoding", where, "binary");
-    if (encoding == "binary") c.encoding = BitsEncoding::Binary;
-    else if (encoding == "one_hot") c.encoding = BitsEncoding::OneHot;
-    else ctx.fail(node["encoding"], where + ".encoding", "unknown encoding '" + encoding + "' (binary, one_hot)");
-    c.signal = SignalRef{SignalRef::Kind::Button, c.bits.front()};
+    parse_switch_bits(ctx, node, bits, where, c);
   } else if (node["encoding"]) {
     ctx.fail(node["encoding"], where + ".encoding", "only with bits");
   }
-  const auto signal_text = named_signals ? std::string("axis.0")
-                           : c.bits.empty() ? ctx.require<std::string>(node, "signal", where)
-                                            : to_string(c.signal);
-  const auto signal = parse_signal(signal_text);
-  if (!signal)
-    ctx.fail(node["signal"], where + ".signal",
-             "unknown signal '" + signal_text + "' (axis.0-5, button.0-31, switch.0-5)");
-  c.signal = *signal;
-  const bool kind_matches = !c.bits.empty() || named_signals ||
-      (c.kind == ControlKind::Axis && signal->kind == SignalRef::Kind::Axis) ||
-      (c.kind == ControlKind::Button && signal->kind == SignalRef::Kind::Button) ||
-      (c.kind == ControlKind::Switch && signal->kind == SignalRef::Kind::Switch);
-  if (!kind_matches)
-    ctx.fail(node["signal"], where + ".signal",
-             "signal '" + signal_text + "' does not fit a control of kind " + kind);
-
-  const auto role = ctx.get<std::string>(node, "role", where, "none");
-  if (role == "none") c.role = ControlRole::None;
-  else if (role == "deadman") c.role = ControlRole::Deadman;
-  else if (role == "estop") c.role = ControlRole::Estop;
-  else ctx.fail(node["role"], where + ".role", "unknown role '" + role + "' (deadman, estop)");
-  if (c.role != ControlRole::None && c.kind != ControlKind::Button)
-    ctx.fail(node["role"], where + ".role", "only a button can be the " + role);
-
-  c.motion = ctx.get<bool>(node, "motion", where, false);
-  if (c.motion && c.role != ControlRole::None)
-    ctx.fail(node["motion"], where + ".motion", "the " + role + " cannot be a motion control");
+  parse_protocol_signal(ctx, node, where, named_signals, kind, c);
+  const std::string role = parse_role(ctx, node, where, c);
 
   const YAML::Node safe = node["safe"];
   if (!safe) ctx.fail(node, where + ".safe", "missing: every control declares its safe value");
   switch (c.kind) {
-    case ControlKind::Axis: {
-      c.safe_axis = ctx.as<float>(safe, where + ".safe");
-      if (!(c.safe_axis >= -1.0f && c.safe_axis <= 1.0f))
-        ctx.fail(safe, where + ".safe", "an axis' safe value must be in -1..1");
-      c.deadband = ctx.get<float>(node, "deadband", where, 0.0f);
-      if (!(c.deadband >= 0.0f && c.deadband < 0.5f))
-        ctx.fail(node["deadband"], where + ".deadband", "must be in 0..0.5");
-      c.invert = ctx.get<bool>(node, "invert", where, false);
-      c.scale = ctx.get<float>(node, "scale", where, 1.0f);
-      if (!(c.scale > 0.0f && c.scale <= 1.0f))
-        ctx.fail(node["scale"], where + ".scale", "must be in (0, 1]");
-      c.expo = ctx.get<float>(node, "expo", where, 0.0f);
-      if (!(c.expo >= 0.0f && c.expo <= 1.0f)) ctx.fail(node["expo"], where + ".expo", "must be in 0..1");
-      c.lowpass_ms = ctx.get<float>(node, "lowpass_ms", where, 0.0f);
-      if (!(c.lowpass_ms >= 0.0f && c.lowpass_ms <= 10000.0f))
-        ctx.fail(node["lowpass_ms"], where + ".lowpass_ms", "must be in 0..10000");
-      for (const char* k : {"mode", "debounce_ms", "long_press_ms", "pulse_ms", "positions"})
-        if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on an axis");
-      break;
-    }
-    case ControlKind::Button: {
-      c.safe_button = ctx.as<bool>(safe, where + ".safe");
-      for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "positions"})
-        if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a button");
-      const auto mode = ctx.get<std::string>(node, "mode", where, "direct");
-      if (mode == "direct") c.behaviour = ButtonBehaviour::Direct;
-      else if (mode == "toggle") c.behaviour = ButtonBehaviour::Toggle;
-      else if (mode == "long_press") c.behaviour = ButtonBehaviour::LongPress;
-      else if (mode == "edge") c.behaviour = ButtonBehaviour::Edge;
-      else ctx.fail(node["mode"], where + ".mode", "unknown mode '" + mode + "' (direct, toggle, long_press, edge)");
-      if (c.role != ControlRole::None && c.behaviour != ButtonBehaviour::Direct)
-        ctx.fail(node["mode"], where + ".mode", "the " + role + " must be mode: direct");
-      const auto ms = [&](const char* key, int fallback) {
-        const int v = ctx.get<int>(node, key, where, fallback);
-        if (v < 0 || v > 60000) ctx.fail(node[key], where + "." + key, "must be 0..60000");
-        return static_cast<uint32_t>(v);
-      };
-      c.debounce_ms = ms("debounce_ms", 0);
-      c.long_press_ms = ms("long_press_ms", 800);
-      c.pulse_ms = ms("pulse_ms", 100);
-      break;
-    }
-    case ControlKind::Switch: {
-      const YAML::Node positions = node["positions"];
-      if (!positions || !positions.IsSequence() || positions.size() < 2)
-        ctx.fail(positions ? positions : node, where + ".positions",
-                 "a switch needs a list of at least two position labels");
-      for (const auto& p : positions) c.positions.push_back(ctx.as<std::string>(p, where + ".positions"));
-      const auto safe_label = ctx.as<std::string>(safe, where + ".safe");
-      bool found = false;
-      for (std::size_t k = 0; k < c.positions.size(); ++k)
-        if (c.positions[k] == safe_label) {
-          c.safe_switch = static_cast<uint8_t>(k);
-          found = true;
-        }
-      if (!found)
-        ctx.fail(safe, where + ".safe", "'" + safe_label + "' is not one of the positions");
-      for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "mode", "debounce_ms",
-                            "long_press_ms", "pulse_ms"})
-        if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on a switch");
-      if (c.encoding == BitsEncoding::Binary && !c.bits.empty() && (1u << c.bits.size()) < c.positions.size())
-        ctx.fail(node["bits"], where + ".bits", "too few bits for " + std::to_string(c.positions.size()) + " positions");
-      if (c.encoding == BitsEncoding::OneHot && c.bits.size() != c.positions.size())
-        ctx.fail(node["bits"], where + ".bits", "one_hot needs one bit per position");
-      break;
-    }
+    case ControlKind::Axis: parse_axis_settings(ctx, node, safe, where, c); break;
+    case ControlKind::Button: parse_button_settings(ctx, node, safe, where, role, c); break;
+    case ControlKind::Switch: parse_switch_settings(ctx, node, safe, where, c); break;
   }
   return c;
 }
