@@ -23,7 +23,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # test, and to run the instructor console's browser tests), zlib for the
 # gzip'd CARMEN logs, cpp-httplib for the instructor's web server, Node.js
 # + npm to build its pages from the locked npm packages in instructor/web
-# (three.js, esbuild, playwright-core) at set-up. Installing
+# (three.js, esbuild, playwright-core) at set-up, universal-ctags for the
+# function-size check. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -37,6 +38,7 @@ packages=(
   libpcl-dev libopencv-dev libceres-dev libopen3d-dev liboctomap-dev
   libjsoncpp-dev chromium zlib1g-dev
   libssl-dev libcpp-httplib-dev nodejs npm
+  universal-ctags
 )
 
 setup() {

@@ -1,7 +1,7 @@
 #pragma once
 
 // The daemon's fault switchboard: takes an instructor's fault (already
-// verified, panels/command_auth.hpp) and applies it where it belongs —
+// verified, msgs/command_auth.hpp) and applies it where it belongs —
 // input faults to the PanelMapper through the Bridge (hil/input_fault.hpp),
 // wire faults to the source's decorated transport (hil/io/wire_fault.hpp),
 // transport faults to the PanelState publisher (TransportFaults below).

@@ -1,6 +1,6 @@
 #pragma once
 
-// PanelSnapshot ⇄ the LCM contract (panels/lcmtypes).
+// PanelSnapshot ⇄ the LCM contract (msgs/lcmtypes).
 
 #include <string>
 

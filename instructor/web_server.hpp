@@ -34,7 +34,7 @@ struct WebServerSettings {
   /// Request threads: every open page holds one for its SSE stream and one
   /// for its keep-alive requests (cpp-httplib's default pool is 8).
   std::size_t http_threads = 64;
-  std::string instructor_key_file;  ///< "" → fault buttons answer 503 (panels/command_auth.hpp)
+  std::string instructor_key_file;  ///< "" → fault buttons answer 503 (msgs/command_auth.hpp)
   std::string issuer = "instructor";  ///< FaultCommand.issuer
   /// Scenario control: the *.yaml scenario files offered (instructor/scenario.hpp)
   /// and the program that runs one (`rise-instructor scenario FILE --trainee ID`,

@@ -260,7 +260,7 @@ class StatePublisher {
   int64_t rejected_until_us_ = 0;
 };
 
-// Signed FaultCommands (panels/command_auth.hpp): verified, then applied
+// Signed FaultCommands (msgs/command_auth.hpp): verified, then applied
 // to the daemon's layers; sim kinds are rise-sim's and ignored here.
 class FaultCommands {
  public:

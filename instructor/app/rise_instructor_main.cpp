@@ -1,6 +1,6 @@
 // rise-instructor: the instructor station. Lists trainees, injects and
 // clears faults, runs fault scenarios and starts/stops tasks over signed
-// LCM commands (panels/command_auth.hpp), prints the trainer's reports.
+// LCM commands (msgs/command_auth.hpp), prints the trainer's reports.
 
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>

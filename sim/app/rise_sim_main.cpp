@@ -93,7 +93,7 @@ struct ControlListener {
   }
 };
 
-// Signed instructor commands (panels/command_auth.hpp) of every robot's
+// Signed instructor commands (msgs/command_auth.hpp) of every robot's
 // channels, in arrival order, verified and applied between steps.
 struct InstructorListener {
   std::vector<std::pair<std::size_t, rise_msgs::FaultCommand>>* faults = nullptr;
