@@ -575,17 +575,10 @@ void SimNode::publish_events_and_cues() {
 
 void SimNode::answer(std::size_t robot, const rise_msgs::SimControl& c, const std::string& kind,
                      const std::string& what) {
-  const Station& st = *stations_[robot];
-  rise_msgs::SimEvent msg;
-  msg.utime = rise::msgs::wall_us();
-  msg.sim_time_s = sim_->time_s();
-  msg.robot_id = st.spec.id;
-  msg.kind = kind;
-  msg.a = c.issuer;
-  msg.detail = "seq " + std::to_string(c.seq) + (what.empty() ? "" : ": " + what);
-  spdlog::info("sim_control {:.3f} s: {} from '{}' on {} {}", msg.sim_time_s, kind, c.issuer, st.control_channel,
-               msg.detail);
-  lcm_.publish(st.event_channel, &msg);
+  const std::string detail = "seq " + std::to_string(c.seq) + (what.empty() ? "" : ": " + what);
+  spdlog::info("sim_control {:.3f} s: {} from '{}' on {} {}", sim_->time_s(), kind, c.issuer,
+               stations_[robot]->control_channel, detail);
+  tell(robot, kind, c.issuer, "", detail);
 }
 
 void SimNode::apply(std::size_t robot, const rise_msgs::SimControl& c) {
@@ -620,7 +613,7 @@ void SimNode::apply(std::size_t robot, const rise_msgs::SimControl& c) {
   paced_steps_ = 0;
 }
 
-// A SimEvent on the robot's sim_event channel, logged.
+// A SimEvent on the robot's sim_event channel.
 void SimNode::tell(std::size_t robot, const std::string& kind, const std::string& a, const std::string& b,
                    const std::string& detail) {
   const Station& st = *stations_[robot];
