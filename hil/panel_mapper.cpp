@@ -57,21 +57,21 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
   }
   for (const auto& c : definition_.controls) {
     if (c.dbc_signal) {
-      DbcBinding b;
+      SignalBinding b;
       b.message = c.dbc_message;
       b.signal = c.dbc_signal;
       if (c.dbc_signal->is_multiplexed)
         for (const auto& other : c.dbc_message->signals)
           if (other.is_multiplexer) b.multiplexer = &other;
-      binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
-      sources_[c.source].dbc.push_back(b);
+      binding_of_control_.push_back(static_cast<int>(sources_[c.source].bindings.size()));
+      sources_[c.source].bindings.push_back(b);
     } else if (!c.hid_signal.empty() || c.modbus_point) {
-      DbcBinding b;
+      SignalBinding b;
       b.hid_raw = c.kind == ControlKind::Switch;
       b.modbus = c.modbus_point;
       b.modbus_type = c.modbus_type;
-      binding_of_control_.push_back(static_cast<int>(sources_[c.source].dbc.size()));
-      sources_[c.source].dbc.push_back(b);
+      binding_of_control_.push_back(static_cast<int>(sources_[c.source].bindings.size()));
+      sources_[c.source].bindings.push_back(b);
     } else {
       binding_of_control_.push_back(-1);
       sources_[c.source].needs_type[type_index(frame_type_for(c.signal))] = true;
@@ -88,7 +88,7 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
 bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data,
                                int64_t now_us) {
   bool matched = false, changed = false, bad = false;
-  for (DbcBinding& b : s.dbc) {
+  for (SignalBinding& b : s.bindings) {
     if (b.message->id != can_id || b.message->extended != extended) continue;
     matched = true;
     if (!fp::signal_fits(*b.signal, data.size()) ||
@@ -159,7 +159,7 @@ bool PanelMapper::attach_hid(std::size_t source, std::span<const uint8_t> descri
       return fail("control '" + c.name + "': the device has no signal '" + c.hid_signal +
                   "' (it has: " + fp::hid_signal_names(decoder->signals()) + ")");
     }
-    DbcBinding& b = s.dbc[static_cast<std::size_t>(binding_of_control_[i])];
+    SignalBinding& b = s.bindings[static_cast<std::size_t>(binding_of_control_[i])];
     b.hid_signal = index;
     b.last_us = 0;
   }
@@ -184,7 +184,7 @@ bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> rep
       return false;
   }
   bool changed = false;
-  for (DbcBinding& b : s.dbc) {
+  for (SignalBinding& b : s.bindings) {
     const fp::HidSignalValue& v = s.hid_values[b.hid_signal];
     const double value = b.hid_raw ? static_cast<double>(v.raw) : v.value;
     changed = changed || b.last_us == 0 || value != b.value;
@@ -198,7 +198,7 @@ bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> rep
   return changed;
 }
 
-bool PanelMapper::take(DbcBinding& b, double value, int64_t now_us) {
+bool PanelMapper::take(SignalBinding& b, double value, int64_t now_us) {
   const bool changed = b.last_us == 0 || value != b.value;
   b.value = value;
   b.last_us = now_us;
@@ -212,7 +212,7 @@ bool PanelMapper::on_modbus_poll(std::size_t source, const ModbusPoll& poll, int
   s.status.frames_ok++;
   s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
   bool changed = false;
-  for (DbcBinding& b : s.dbc)
+  for (SignalBinding& b : s.bindings)
     if (const std::optional<uint16_t> raw = b.modbus ? poll.value(*b.modbus) : std::nullopt)
       changed = take(b, b.modbus->is_bit() ? *raw : panels::modbus_number(*raw, b.modbus_type), now_us) || changed;
   return changed;
@@ -328,7 +328,7 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
   // A transport opened afresh (interface up again) starts error-active.
   if (connected) s.status.bus_state = io::CanBusState::Active;
   if (!connected) {
-    for (auto& b : s.dbc) b.last_us = 0;
+    for (auto& b : s.bindings) b.last_us = 0;
     s.hid_last_us = 0;
     s.poll_last_us = 0;
     s.decoder.reset();
@@ -375,7 +375,7 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const Sour
   if (def.is_dbc()) {
     // A DBC device has no heartbeat or status of ours: every bound message
     // must keep arriving, and its frames must fit the DBC.
-    for (const auto& b : s.dbc) {
+    for (const auto& b : s.bindings) {
       if (b.last_us == 0) return trouble(FailsafeCause::SourceStale, "no " + b.message->name + " frame yet");
       const int64_t age_us = now_us - b.last_us;
       if (age_us > timeout_us) return stale(b.message->name + " frame", age_us);
@@ -435,7 +435,7 @@ void PanelMapper::map_axis(std::size_t i, const SourceState& s, int64_t now_us, 
   float unit = 0.0f;
   if (const int b = binding_of_control_[i]; b >= 0) {
     // A DBC signal's physical range [min, max] maps linearly to -1..1.
-    const double value = s.dbc[static_cast<std::size_t>(b)].value;
+    const double value = s.bindings[static_cast<std::size_t>(b)].value;
     unit = static_cast<float>(2.0 * (value - c.range_min) / (c.range_max - c.range_min) - 1.0);
   } else {
     const int16_t raw = s.axes[c.signal.index];
@@ -466,7 +466,7 @@ void PanelMapper::map_axis(std::size_t i, const SourceState& s, int64_t now_us, 
 void PanelMapper::map_button(std::size_t i, const SourceState& s, int64_t now_us, ControlValue& v, Failsafe& why) const {
   const auto& c = definition_.controls[i];
   const int b = binding_of_control_[i];
-  bool raw = b >= 0 ? s.dbc[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
+  bool raw = b >= 0 ? s.bindings[static_cast<std::size_t>(b)].value != 0.0 : ((s.buttons >> c.signal.index) & 1u) != 0;
   if (!input_faults_.empty() && apply_button_faults(input_faults_, i, now_us, raw) == FaultEffect::Lost) {
     set_safe(c, v);
     why.add(msgs::FailsafeCause::InputFault, c.name + ": disconnected (fault)");
@@ -514,7 +514,7 @@ void PanelMapper::map_switch(std::size_t i, const SourceState& s, int64_t now_us
   uint8_t position = s.switches[c.signal.index];
   if (const int b = binding_of_control_[i]; b >= 0) {
     // A DBC signal's value is the position index (its VAL_ table names them).
-    const double value = s.dbc[static_cast<std::size_t>(b)].value;
+    const double value = s.bindings[static_cast<std::size_t>(b)].value;
     position = value >= 0.0 && value < 255.0 ? static_cast<uint8_t>(std::lround(value)) : fp::kSwitchInvalid;
     if (c.modbus_point && position >= c.positions.size()) {
       // A register's number: no "not available" value.

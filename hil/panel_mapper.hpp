@@ -163,8 +163,9 @@ class PanelMapper {
   const std::vector<InputFault>& input_faults() const { return input_faults_; }
 
  private:
-  // One bound signal of a dbc source.
-  struct DbcBinding {
+  // One control's signal of a dbc, hid or modbus source: the DBC signal it decodes, the HID
+  // report signal it reads, or the Modbus point it polls, and the value last taken.
+  struct SignalBinding {
     const firmware_protocol::DbcMessage* message = nullptr;
     const firmware_protocol::DbcSignal* signal = nullptr;
     const firmware_protocol::DbcSignal* multiplexer = nullptr;  // set for multiplexed signals
@@ -177,7 +178,7 @@ class PanelMapper {
   };
   struct SourceState {
     explicit SourceState(firmware_protocol::Decoder d) : decoder(d) {}
-    std::vector<DbcBinding> dbc;  // dbc and hid sources
+    std::vector<SignalBinding> bindings;  // dbc, hid and modbus sources
     std::unique_ptr<firmware_protocol::HidReportDecoder> hid;  // hid sources, once attached
     std::vector<firmware_protocol::HidSignalValue> hid_values;
     std::string hid_error;  // why the last attach failed
@@ -200,7 +201,7 @@ class PanelMapper {
 
   void count_valid(SourceState& s);
   // A bound signal's value at now_us; true when it changed (or came first since a loss).
-  static bool take(DbcBinding& b, double value, int64_t now_us);
+  static bool take(SignalBinding& b, double value, int64_t now_us);
   // Why a source's controls cannot be trusted now; nullopt while they can.
   struct SourceTrouble {
     msgs::FailsafeCause cause;
@@ -229,7 +230,7 @@ class PanelMapper {
     std::optional<uint8_t> last_position;
   };
   mutable std::vector<ControlFilter> filters_;
-  std::vector<int> binding_of_control_;  // index into the source's dbc bindings, -1 if none
+  std::vector<int> binding_of_control_;  // index into the source's bindings, -1 if none
   std::vector<InputFault> input_faults_;  // injection order
 
   bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);

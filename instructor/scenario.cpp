@@ -8,12 +8,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "sim/yaml_reader.hpp"
+#include "panels/yaml_reader.hpp"
 
 namespace rise::instructor {
 namespace {
 
-Trigger parse_trigger(const sim::YamlReader& r, const YAML::Node& item, const std::string& where, bool clear) {
+Trigger parse_trigger(const panels::YamlReader& r, const YAML::Node& item, const std::string& where, bool clear) {
   Trigger t;
   const char* at_key = "at";
   const YAML::Node node = clear ? item["clear_on"] : item;
@@ -69,7 +69,7 @@ const std::vector<std::string>& fault_kinds() {
 }
 
 Scenario parse_scenario(const std::string& text, const std::string& file) {
-  sim::YamlReader r(file);
+  panels::YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root || root.IsNull()) throw std::runtime_error(file + ":1: empty scenario");
   r.only_keys(root, "", {"scenario", "seed", "faults"});

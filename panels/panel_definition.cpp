@@ -3,17 +3,14 @@
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <map>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/dbc.hpp"
+#include "panels/yaml_reader.hpp"
 
 #include <filesystem>
 
@@ -22,75 +19,10 @@ namespace {
 
 namespace fp = rise::firmware_protocol;
 
-// Every message reads "file:line: key: what", so a user can jump to it.
-class Context {
- public:
-  explicit Context(std::string file) : file_(std::move(file)) {}
-
-  [[noreturn]] void fail(const YAML::Node& node, const std::string& key,
-                         const std::string& what) const {
-    std::ostringstream out;
-    out << file_ << ':' << (node.Mark().line >= 0 ? node.Mark().line + 1 : 0) << ": ";
-    if (!key.empty()) out << key << ": ";
-    out << what;
-    throw std::runtime_error(out.str());
-  }
-
-  // Rejects keys not in `allowed`: a typo must not silently become a default.
-  void only_keys(const YAML::Node& map, const std::string& where,
-                 std::initializer_list<const char*> allowed) const {
-    if (!map.IsMap()) fail(map, where, "expected a mapping");
-    for (const auto& kv : map) {
-      const auto key = kv.first.as<std::string>();
-      bool ok = false;
-      for (const char* a : allowed) ok = ok || key == a;
-      if (!ok) fail(kv.first, join(where, key), "unknown key");
-    }
-  }
-
-  template <typename T>
-  T get(const YAML::Node& map, const char* key, const std::string& where, T fallback) const {
-    const YAML::Node node = map[key];
-    if (!node) return fallback;
-    return as<T>(node, join(where, key));
-  }
-
-  template <typename T>
-  T require(const YAML::Node& map, const char* key, const std::string& where) const {
-    const YAML::Node node = map[key];
-    if (!node) fail(map, join(where, key), "missing");
-    return as<T>(node, join(where, key));
-  }
-
-  template <typename T>
-  T as(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar()) fail(node, key, "expected a value, not a list or mapping");
-    try {
-      return node.as<T>();
-    } catch (const YAML::Exception&) {
-      fail(node, key, "cannot read '" + node.Scalar() + "' as " + type_name<T>());
-    }
-  }
-
-  static std::string join(const std::string& a, const std::string& b) {
-    return a.empty() ? b : a + "." + b;
-  }
-
- private:
-  template <typename T>
-  static const char* type_name() {
-    if constexpr (std::is_same_v<T, bool>) return "true/false";
-    else if constexpr (std::is_integral_v<T>) return "an integer";
-    else if constexpr (std::is_floating_point_v<T>) return "a number";
-    else return "text";
-  }
-  std::string file_;
-};
-
 std::string control_key(const std::string& name) { return "controls." + name; }
 
 // range: [min, max] of an axis' raw value, which maps to -1..1.
-void read_range(const Context& ctx, const YAML::Node& range, const std::string& where, ControlDefinition& c) {
+void read_range(const YamlReader& ctx, const YAML::Node& range, const std::string& where, ControlDefinition& c) {
   if (!range.IsSequence() || range.size() != 2) ctx.fail(range, where + ".range", "expected [min, max]");
   c.range_min = ctx.as<double>(range[0], where + ".range");
   c.range_max = ctx.as<double>(range[1], where + ".range");
@@ -100,14 +32,14 @@ const char* const kModbusSignals =
     "input_register.N, holding_register.N, discrete_input.N, coil.N, input_register.N.bit.B, "
     "holding_register.N.bit.B; N 0..65535, B 0..15";
 
-ModbusPoint read_modbus_point(const Context& ctx, const YAML::Node& node, const std::string& where) {
+ModbusPoint read_modbus_point(const YamlReader& ctx, const YAML::Node& node, const std::string& where) {
   const auto text = ctx.require<std::string>(node, "signal", where);
   const auto point = parse_modbus_point(text);
   if (!point) ctx.fail(node["signal"], where + ".signal", "unknown signal '" + text + "' (" + kModbusSignals + ")");
   return *point;
 }
 
-ModbusValueType read_modbus_type(const Context& ctx, const YAML::Node& node, const std::string& where) {
+ModbusValueType read_modbus_type(const YamlReader& ctx, const YAML::Node& node, const std::string& where) {
   const auto type = ctx.get<std::string>(node, "type", where, "uint16");
   if (type == "uint16") return ModbusValueType::UInt16;
   if (type == "int16") return ModbusValueType::Int16;
@@ -116,7 +48,7 @@ ModbusValueType read_modbus_type(const Context& ctx, const YAML::Node& node, con
 
 // A control of a "modbus" source: the point it reads; a whole register's
 // number type; an axis' range of that number.
-void parse_modbus_binding(const Context& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+void parse_modbus_binding(const YamlReader& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
   if (node["bits"])
     ctx.fail(node["bits"], where + ".bits", "not for a modbus source: bind the register whose value is the position");
   const ModbusPoint point = read_modbus_point(ctx, node, where);
@@ -150,7 +82,7 @@ void parse_modbus_binding(const Context& ctx, const YAML::Node& node, const std:
              text + " is one bit: two positions at most (a register holds more)");
 }
 
-SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::size_t i, const std::string& file) {
+SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std::size_t i, const std::string& file) {
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
                 {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit",
@@ -220,7 +152,7 @@ SourceDefinition parse_source(const Context& ctx, const YAML::Node& node, std::s
   return s;
 }
 
-std::size_t resolve_source(const Context& ctx, const PanelDefinition& def, const YAML::Node& node,
+std::size_t resolve_source(const YamlReader& ctx, const PanelDefinition& def, const YAML::Node& node,
                            const std::string& where) {
   const YAML::Node src = node["source"];
   if (!src) {
@@ -235,7 +167,7 @@ std::size_t resolve_source(const Context& ctx, const PanelDefinition& def, const
 
 // A dbc source's control: MESSAGE.SIGNAL of the source's DBC, an axis' range
 // from the DBC unless given.
-void parse_dbc_binding(const Context& ctx, const SourceDefinition& source, const YAML::Node& node,
+void parse_dbc_binding(const YamlReader& ctx, const SourceDefinition& source, const YAML::Node& node,
                        const std::string& where, ControlDefinition& c) {
   const auto text = ctx.require<std::string>(node, "signal", where);
   const auto dot = text.find('.');
@@ -263,7 +195,7 @@ void parse_dbc_binding(const Context& ctx, const SourceDefinition& source, const
 }
 
 // A hid source's control: the name of a report signal.
-void parse_hid_binding(const Context& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+void parse_hid_binding(const YamlReader& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
   c.hid_signal = ctx.require<std::string>(node, "signal", where);
   if (c.hid_signal.empty()) ctx.fail(node["signal"], where + ".signal", "must not be empty");
   if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a hid source");
@@ -273,7 +205,7 @@ void parse_hid_binding(const Context& ctx, const YAML::Node& node, const std::st
 }
 
 // A switch read from several button inputs: no switch signal of its own.
-void parse_switch_bits(const Context& ctx, const YAML::Node& node, const YAML::Node& bits, const std::string& where,
+void parse_switch_bits(const YamlReader& ctx, const YAML::Node& node, const YAML::Node& bits, const std::string& where,
                        ControlDefinition& c) {
   if (c.kind != ControlKind::Switch) ctx.fail(bits, where + ".bits", "only a switch can be read from bits");
   if (node["signal"]) ctx.fail(node["signal"], where + ".signal", "give either signal or bits, not both");
@@ -294,7 +226,7 @@ void parse_switch_bits(const Context& ctx, const YAML::Node& node, const YAML::N
 }
 
 // The protocol signal (axis.N, button.N, switch.N) and whether it fits the control's kind.
-void parse_protocol_signal(const Context& ctx, const YAML::Node& node, const std::string& where, bool named_signals,
+void parse_protocol_signal(const YamlReader& ctx, const YAML::Node& node, const std::string& where, bool named_signals,
                            const std::string& kind, ControlDefinition& c) {
   const auto signal_text = named_signals ? std::string("axis.0")
                            : c.bits.empty() ? ctx.require<std::string>(node, "signal", where)
@@ -314,7 +246,7 @@ void parse_protocol_signal(const Context& ctx, const YAML::Node& node, const std
 }
 
 // The dead-man or e-stop role, and whether the control moves the robot. Returns the role's name.
-std::string parse_role(const Context& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+std::string parse_role(const YamlReader& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
   const auto role = ctx.get<std::string>(node, "role", where, "none");
   if (role == "none") c.role = ControlRole::None;
   else if (role == "deadman") c.role = ControlRole::Deadman;
@@ -329,7 +261,7 @@ std::string parse_role(const Context& ctx, const YAML::Node& node, const std::st
   return role;
 }
 
-void parse_axis_settings(const Context& ctx, const YAML::Node& node, const YAML::Node& safe, const std::string& where,
+void parse_axis_settings(const YamlReader& ctx, const YAML::Node& node, const YAML::Node& safe, const std::string& where,
                          ControlDefinition& c) {
   c.safe_axis = ctx.as<float>(safe, where + ".safe");
   if (!(c.safe_axis >= -1.0f && c.safe_axis <= 1.0f))
@@ -350,7 +282,7 @@ void parse_axis_settings(const Context& ctx, const YAML::Node& node, const YAML:
     if (node[k]) ctx.fail(node[k], where + "." + k, "not allowed on an axis");
 }
 
-void parse_button_settings(const Context& ctx, const YAML::Node& node, const YAML::Node& safe,
+void parse_button_settings(const YamlReader& ctx, const YAML::Node& node, const YAML::Node& safe,
                            const std::string& where, const std::string& role, ControlDefinition& c) {
   c.safe_button = ctx.as<bool>(safe, where + ".safe");
   for (const char* k : {"deadband", "invert", "scale", "expo", "lowpass_ms", "positions"})
@@ -373,7 +305,7 @@ void parse_button_settings(const Context& ctx, const YAML::Node& node, const YAM
   c.pulse_ms = ms("pulse_ms", 100);
 }
 
-void parse_switch_settings(const Context& ctx, const YAML::Node& node, const YAML::Node& safe,
+void parse_switch_settings(const YamlReader& ctx, const YAML::Node& node, const YAML::Node& safe,
                            const std::string& where, ControlDefinition& c) {
   const YAML::Node positions = node["positions"];
   if (!positions || !positions.IsSequence() || positions.size() < 2)
@@ -398,7 +330,7 @@ void parse_switch_settings(const Context& ctx, const YAML::Node& node, const YAM
     ctx.fail(node["bits"], where + ".bits", "one_hot needs one bit per position");
 }
 
-ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
+ControlDefinition parse_control(const YamlReader& ctx, const PanelDefinition& def,
                                 const YAML::Node& node, std::size_t i) {
   std::string where = "controls[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
@@ -451,7 +383,7 @@ ControlDefinition parse_control(const Context& ctx, const PanelDefinition& def,
 
 // What a modbus source's LED or display writes: a coil (LEDs only) or a
 // whole holding register, each written by one of them only.
-ModbusPoint read_written_point(const Context& ctx, const YAML::Node& n, const std::string& where, bool led,
+ModbusPoint read_written_point(const YamlReader& ctx, const YAML::Node& n, const std::string& where, bool led,
                                std::set<std::pair<std::size_t, ModbusPoint>>& written, std::size_t source) {
   const ModbusPoint point = read_modbus_point(ctx, n, where);
   const bool coil = point.table == ModbusTable::Coils;
@@ -466,7 +398,7 @@ ModbusPoint read_written_point(const Context& ctx, const YAML::Node& n, const st
 
 // A feedback output of a hid source: `signal:` names an output signal of the
 // device's descriptor, bound once per source.
-std::string hid_output_signal(const Context& ctx, const YAML::Node& n, const std::string& where, std::size_t source,
+std::string hid_output_signal(const YamlReader& ctx, const YAML::Node& n, const std::string& where, std::size_t source,
                               std::set<std::pair<std::size_t, std::string>>& bound, const char* what) {
   std::string signal = ctx.require<std::string>(n, "signal", where);
   if (signal.empty()) ctx.fail(n["signal"], where + ".signal", "must not be empty");
@@ -475,7 +407,7 @@ std::string hid_output_signal(const Context& ctx, const YAML::Node& n, const std
   return signal;
 }
 
-void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& node) {
+void parse_feedback(const YamlReader& ctx, PanelDefinition& def, const YAML::Node& node) {
   ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer", "rumble"});
   std::set<std::string> names;
   std::set<std::pair<std::size_t, ModbusPoint>> written;  // modbus sources' points
@@ -587,7 +519,7 @@ void parse_feedback(const Context& ctx, PanelDefinition& def, const YAML::Node& 
 // Application Protocol V1.1b3 §6.1-6.4: 2000 bits, 125 registers). A
 // modbus source is healthy while its polls are answered: it needs a point
 // to poll.
-void check_modbus_points(const Context& ctx, const PanelDefinition& def, const YAML::Node& root) {
+void check_modbus_points(const YamlReader& ctx, const PanelDefinition& def, const YAML::Node& root) {
   const YAML::Node controls = root["controls"];
   for (std::size_t s = 0; s < def.sources.size(); ++s)
     if (def.sources[s].is_generic_modbus() &&
@@ -665,13 +597,8 @@ std::string to_string(const SignalRef& signal) {
 }
 
 PanelDefinition parse_panel_definition(const std::string& text, const std::string& file) {
-  const Context ctx(file);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw std::runtime_error(file + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  const YamlReader ctx(file, ValueWording::NameType);
+  YAML::Node root = ctx.load_text(text);
   if (!root || !root.IsMap()) ctx.fail(root, "", "expected a mapping with panel, sources, controls");
   ctx.only_keys(root, "", {"panel", "publish_hz", "sources", "controls", "feedback"});
 
@@ -742,11 +669,7 @@ PanelDefinition parse_panel_definition(const std::string& text, const std::strin
 }
 
 PanelDefinition load_panel_definition(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_panel_definition(text.str(), path);
+  return parse_panel_definition(read_text_file(path), path);
 }
 
 }  // namespace rise::panels

@@ -1,10 +1,9 @@
 #include "panels/timeline.hpp"
 
+#include "panels/yaml_reader.hpp"
+
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
@@ -135,11 +134,7 @@ Timeline parse_timeline(const std::string& text, const std::string& file,
 }
 
 Timeline load_timeline(const std::string& path, const PanelDefinition& definition) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::stringstream text;
-  text << in.rdbuf();
-  return parse_timeline(text.str(), path, definition);
+  return parse_timeline(read_text_file(path), path, definition);
 }
 
 }  // namespace rise::panels

@@ -1,6 +1,7 @@
 #include "process/chain_monitor.hpp"
 
 #include "msgs/channels.hpp"
+#include "msgs/panel_state_controls.hpp"
 #include "msgs/publisher_session.hpp"
 
 #include <poll.h>
@@ -21,18 +22,6 @@ double yaw_deg(const rise_msgs::RobotState& r) {
 bool at_standstill(const rise_msgs::RobotState& r) {
   return std::hypot(r.linear_velocity_mps[0], r.linear_velocity_mps[1]) < kStandstillSpeedMps &&
          std::fabs(r.angular_velocity_radps[2]) < kStandstillTurnRadps;
-}
-
-float axis(const rise_msgs::PanelState& p, const std::string& name) {
-  for (const auto& a : p.axes)
-    if (a.name == name) return a.value;
-  return 0.0f;
-}
-
-std::string switch_label(const rise_msgs::PanelState& p, const std::string& name) {
-  for (const auto& s : p.switches)
-    if (s.name == name) return s.label;
-  return "-";
 }
 }  // namespace
 
@@ -157,8 +146,9 @@ std::string ChainMonitor::live_line() const {
                 "panel %-8s deadman=%d drive=(%+.2f,%+.2f) speed=%-6s | robot x=%+6.2f y=%+6.2f "
                 "yaw=%+7.1f° v=%.2f m/s %s",
                 !view_.have_panel ? "waiting" : p.failsafe ? "FAILSAFE" : "ok", p.deadman ? 1 : 0,
-                static_cast<double>(axis(p, "drive_x")), static_cast<double>(axis(p, "drive_y")),
-                switch_label(p, "speed").c_str(), r.position_m[0], r.position_m[1],
+                static_cast<double>(msgs::find_axis(p, "drive_x").value_or(0.0f)),
+                static_cast<double>(msgs::find_axis(p, "drive_y").value_or(0.0f)),
+                msgs::find_switch_label(p, "speed").value_or("-").c_str(), r.position_m[0], r.position_m[1],
                 view_.have_robot ? yaw_deg(r) : 0.0, view_.speed_mps,
                 view_.have_robot && !r.motors_enabled ? ("[stopped: " + r.stop_reason + "]").c_str() : "");
   std::string line = buf;

@@ -2,16 +2,15 @@
 
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <tuple>
-#include <sstream>
-#include <cerrno>
-#include <cstring>
 
 #include "sim/urdf_robot.hpp"
-#include "sim/yaml_reader.hpp"
+#include "panels/yaml_reader.hpp"
 
 namespace rise::sim {
+
+using panels::YamlReader;
+
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
@@ -396,14 +395,6 @@ void parse_control(const YamlReader& r, const YAML::Node& root,
 
 }  // namespace
 
-std::string read_text_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 RobotDescription parse_robot_description(const std::string& text, const std::string& file) {
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
@@ -464,7 +455,7 @@ const char* to_string(SoundTrigger trigger) {
 }
 
 RobotDescription load_robot_description(const std::string& path) {
-  return parse_robot_description(read_text_file(path), path);
+  return parse_robot_description(panels::read_text_file(path), path);
 }
 
 }  // namespace rise::sim

@@ -6,9 +6,12 @@
 #include <set>
 #include <sstream>
 
-#include "sim/yaml_reader.hpp"
+#include "panels/yaml_reader.hpp"
 
 namespace rise::sim {
+
+using panels::YamlReader;
+
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
@@ -305,7 +308,7 @@ WorldDescription parse_world_description(const std::string& text, const std::str
 }
 
 WorldDescription load_world_description(const std::string& path) {
-  return parse_world_description(read_text_file(path), path);
+  return parse_world_description(panels::read_text_file(path), path);
 }
 
 }  // namespace rise::sim

@@ -43,7 +43,7 @@
 #include "sim/training/report.hpp"
 #include "sim/training/task_executor.hpp"
 #include "sim/training/training_graph.hpp"
-#include "sim/yaml_reader.hpp"
+#include "panels/yaml_reader.hpp"
 
 namespace {
 namespace tr = rise::sim::training;
@@ -631,7 +631,7 @@ int check(const std::string& file) {
   try {
     // A training file has a top-level `training:` key, a task file `task:`.
     static const std::regex training_key("(^|\n)training:");
-    if (std::regex_search(rise::sim::read_text_file(file), training_key)) {
+    if (std::regex_search(rise::panels::read_text_file(file), training_key)) {
       const auto g = tr::load_training_graph(file);
       std::printf("%s: training %s, %zu nodes, %zu transitions: ok\n", file.c_str(), g.name.c_str(), g.nodes.size(),
                   g.transitions.size());

@@ -4,9 +4,12 @@
 #include <filesystem>
 #include <set>
 
-#include "sim/yaml_reader.hpp"
+#include "panels/yaml_reader.hpp"
 
 namespace rise::sim::training {
+
+using panels::YamlReader;
+
 namespace {
 
 struct KindName {
@@ -146,7 +149,7 @@ std::optional<TaskEventKind> task_event_kind(const std::string& name) {
 }
 
 TaskDescription load_task_description(const std::string& path) {
-  return parse_task_description(read_text_file(path), path);
+  return parse_task_description(panels::read_text_file(path), path);
 }
 
 TaskDescription parse_task_description(const std::string& text, const std::string& file) {

@@ -8,9 +8,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "sim/yaml_reader.hpp"
+#include "panels/yaml_reader.hpp"
 
 namespace rise::sim::training {
+
+using panels::YamlReader;
+
 namespace {
 
 struct OpName {
@@ -238,7 +241,7 @@ const TrainingNode* TrainingGraph::node(const std::string& n) const {
 }
 
 TrainingGraph load_training_graph(const std::string& path, bool load_tasks) {
-  return parse_training_graph(read_text_file(path), path, load_tasks);
+  return parse_training_graph(panels::read_text_file(path), path, load_tasks);
 }
 
 TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks) {

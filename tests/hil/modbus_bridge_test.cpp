@@ -3,10 +3,6 @@
 
 #include <catch2/catch.hpp>
 
-#include <poll.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -24,14 +20,14 @@
 #include "msgs/failsafe.hpp"
 #include "panels/console_emulator.hpp"
 #include "tests/hil/bridge_test_support.hpp"
-
-extern char** environ;
+#include "tests/socat_ptys.hpp"
 
 namespace fp = rise::firmware_protocol;
 using rise::hil::PanelSnapshot;
 using rise::hil::test::Published;
 using rise::hil::test::set;
 using rise::hil::test::ModbusEmulatorThread;
+using rise::test::SocatPtys;
 
 namespace {
 
@@ -68,60 +64,6 @@ std::vector<std::unique_ptr<rise::hil::SourceTransport>> modbus_transport(const 
                                                                           uint16_t port) {
   return modbus_transport(def, "modbus+tcp://127.0.0.1:" + std::to_string(port) + "?unit=1&timeout_ms=50");
 }
-
-// socat linking a pty pair at two paths, stopped by PID. With -d -d it
-// says "starting data transfer loop" once both ptys (and their links)
-// exist: ready() reads its stderr for that line.
-class Socat {
- public:
-  Socat(const std::string& a, const std::string& b) : a_(a), b_(b) {
-    const std::string left = "pty,raw,echo=0,link=" + a, right = "pty,raw,echo=0,link=" + b;
-    std::vector<char*> argv = {const_cast<char*>("/usr/bin/socat"), const_cast<char*>("-d"), const_cast<char*>("-d"),
-                               const_cast<char*>(left.c_str()), const_cast<char*>(right.c_str()), nullptr};
-    int fds[2];
-    if (::pipe(fds) != 0) return;
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_adddup2(&actions, fds[1], STDERR_FILENO);
-    posix_spawn_file_actions_addclose(&actions, fds[0]);
-    if (::posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-    ::close(fds[1]);
-    log_ = fds[0];  // kept open to the end: socat's later notices must not meet a closed pipe
-  }
-  ~Socat() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);  // as a crash: no goodbye on the ptys
-      ::waitpid(pid_, nullptr, 0);
-    }
-    if (log_ >= 0) ::close(log_);
-    std::filesystem::remove(a_);
-    std::filesystem::remove(b_);
-  }
-  Socat(const Socat&) = delete;
-  Socat& operator=(const Socat&) = delete;
-  // Waits (5 s at most) for socat to say both links are up.
-  bool ready() const {
-    if (pid_ <= 0 || log_ < 0) return false;
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
-    std::string said;
-    while (said.find("starting data transfer loop") == std::string::npos) {
-      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-      pollfd p{log_, POLLIN, 0};
-      if (left.count() <= 0 || ::poll(&p, 1, static_cast<int>(left.count())) <= 0) return false;
-      char buf[512];
-      const ssize_t n = ::read(log_, buf, sizeof buf);
-      if (n <= 0) return false;  // socat exited
-      said.append(buf, static_cast<size_t>(n));
-    }
-    return std::filesystem::exists(a_) && std::filesystem::exists(b_);
-  }
-
- private:
-  std::string a_, b_;
-  pid_t pid_ = -1;
-  int log_ = -1;
-};
 
 }  // namespace
 
@@ -228,7 +170,7 @@ TEST_CASE("a Modbus console whose registers freeze goes stale after timeout_ms, 
 TEST_CASE("the bridge polls a Modbus RTU console across a socat pty pair, fails safe when socat dies and "
           "recovers when it returns",
           "[hil]") {
-  if (!std::filesystem::exists("/usr/bin/socat")) {
+  if (!rise::test::have_socat()) {
     WARN("socat not installed: RTU bridge test skipped");
     return;
   }
@@ -237,7 +179,7 @@ TEST_CASE("the bridge polls a Modbus RTU console across a socat pty pair, fails 
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-rtu-bridge-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string console_end = dir + "/console", host_end = dir + "/host";
-  auto socat = std::make_unique<Socat>(console_end, host_end);
+  auto socat = std::make_unique<SocatPtys>(console_end, host_end, dir + "/socat.log");
   REQUIRE(socat->ready());
 
   ModbusEmulatorThread emulator(def, "modbus+rtu-listen://" + console_end + "?baud=115200&unit=3");
@@ -252,14 +194,14 @@ TEST_CASE("the bridge polls a Modbus RTU console across a socat pty pair, fails 
               .has_value());
 
   const std::size_t before = published.size();
-  socat.reset();
+  socat->crash();  // no goodbye on the ptys
   const auto lost = published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 3000, before);
   REQUIRE(lost.has_value());
   CHECK(lost->controls[drive_y].axis == 0.0f);
   CHECK(lost->sources[0].last_frame_age_us <= 1000 * def.sources[0].timeout_ms + def.publish_period_us() + 15000);
 
   const std::size_t lost_at = published.size();
-  socat = std::make_unique<Socat>(console_end, host_end);
+  socat = std::make_unique<SocatPtys>(console_end, host_end, dir + "/socat.log");
   REQUIRE(socat->ready());
   const auto back = published.wait_for([](const PanelSnapshot& s) { return !s.failsafe; }, 8000, lost_at);
   REQUIRE(back.has_value());

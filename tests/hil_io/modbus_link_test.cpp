@@ -3,9 +3,6 @@
 
 #include <catch2/catch.hpp>
 
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -15,13 +12,11 @@
 #include "hil/io/modbus_link.hpp"
 #include "hil/io/modbus_server.hpp"
 #include "tests/hil_io/test_support.hpp"
-
-extern char** environ;
+#include "tests/socat_ptys.hpp"
 
 namespace {
 using rise::hil::io::ModbusServer;
 using rise::hil::io::ModbusStatus;
-using rise::hil::io::test::wait_until;
 
 // Fills the server with a recognisable block.
 void fill(ModbusServer& server) {
@@ -172,42 +167,16 @@ TEST_CASE("a modbus link to a server that went away reports Disconnected and reo
   CHECK(link->counters().reopens == 1);
 }
 
-namespace {
-// socat linking a pty pair, stopped by PID.
-class Socat {
- public:
-  Socat(const std::string& a, const std::string& b) {
-    const std::string left = "pty,raw,echo=0,link=" + a, right = "pty,raw,echo=0,link=" + b;
-    std::vector<char*> argv = {const_cast<char*>("/usr/bin/socat"), const_cast<char*>(left.c_str()),
-                               const_cast<char*>(right.c_str()), nullptr};
-    if (::posix_spawn(&pid_, argv[0], nullptr, nullptr, argv.data(), environ) != 0) pid_ = -1;
-  }
-  ~Socat() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGTERM);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  Socat(const Socat&) = delete;
-  Socat& operator=(const Socat&) = delete;
-  bool started() const { return pid_ > 0; }
-
- private:
-  pid_t pid_ = -1;
-};
-}  // namespace
-
 TEST_CASE("a libmodbus RTU client reads our RTU server across a socat pty pair", "[hil_io]") {
-  if (!std::filesystem::exists("/usr/bin/socat")) {
+  if (!rise::test::have_socat()) {
     WARN("socat not installed: RTU test skipped");
     return;
   }
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-rtu-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string server_end = dir + "/server", client_end = dir + "/client";
-  Socat socat(server_end, client_end);
-  REQUIRE(socat.started());
-  REQUIRE(wait_until([&] { return std::filesystem::exists(server_end) && std::filesystem::exists(client_end); }));
+  rise::test::SocatPtys socat(server_end, client_end, dir + "/socat.log");
+  REQUIRE(socat.ready());
 
   ModbusServer server("modbus+rtu-listen://" + server_end + "?baud=115200&unit=5", {});
   fill(server);

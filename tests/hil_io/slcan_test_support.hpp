@@ -1,15 +1,12 @@
 #pragma once
 
-// Helpers for the slcan tests: a real pty pair made by Debian's socat, and a
-// fake Lawicel adapter ("the firmware") on the other end of it. The fake
-// parses and formats slcan text itself, independently of hil/io/slcan_bus.
+// Helpers for the slcan tests: a real pty pair made by Debian's socat
+// (tests/socat_ptys.hpp), and a fake Lawicel adapter ("the firmware") on the
+// other end of it. The fake parses and formats slcan text itself,
+// independently of hil/io/slcan_bus.
 
 #include <fcntl.h>
 #include <poll.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -26,12 +23,12 @@
 
 #include "hil/io/can_frame.hpp"
 #include "tests/hil_io/test_support.hpp"
+#include "tests/socat_ptys.hpp"
 
 namespace rise::hil::io::test {
 
-constexpr const char* kSocat = "/usr/bin/socat";
-
-inline bool have_socat() { return ::access(kSocat, X_OK) == 0; }
+using rise::test::have_socat;
+using rise::test::SocatPtys;
 
 /// A fresh directory under /tmp, removed with its content.
 class TempDir {
@@ -50,65 +47,6 @@ class TempDir {
 
  private:
   std::string path_;
-};
-
-/// `socat -d -d pty,raw,echo=0,link=DIR/a pty,raw,echo=0,link=DIR/b`: the
-/// bus under test opens a(), the fake adapter b(). socat's log goes to
-/// DIR/socat.log. Stopped by PID (SIGTERM; socat then removes the links).
-class SocatPtys {
- public:
-  explicit SocatPtys(const std::string& dir) : a_(dir + "/a"), b_(dir + "/b") {
-    const std::string log = dir + "/socat.log";
-    const std::string left = "pty,raw,echo=0,link=" + a_;
-    const std::string right = "pty,raw,echo=0,link=" + b_;
-    posix_spawn_file_actions_t actions;
-    ::posix_spawn_file_actions_init(&actions);
-    ::posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    ::posix_spawn_file_actions_addopen(&actions, 2, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    char* argv[] = {const_cast<char*>("socat"), const_cast<char*>("-d"), const_cast<char*>("-d"),
-                    const_cast<char*>(left.c_str()), const_cast<char*>(right.c_str()), nullptr};
-    if (::posix_spawn(&pid_, kSocat, &actions, nullptr, argv, environ) != 0) pid_ = -1;
-    ::posix_spawn_file_actions_destroy(&actions);
-    if (pid_ < 0) return;
-    // Readiness: both links resolve to their pty, or socat gave up.
-    struct stat info {};
-    ready_ = wait_until([&] {
-      return (::stat(a_.c_str(), &info) == 0 && ::stat(b_.c_str(), &info) == 0) || exited();
-    }) && !exited();
-  }
-  ~SocatPtys() { stop(); }
-  SocatPtys(const SocatPtys&) = delete;
-  SocatPtys& operator=(const SocatPtys&) = delete;
-
-  /// True once both links exist and socat is running.
-  bool ready() const { return ready_; }
-  const std::string& a() const { return a_; }
-  const std::string& b() const { return b_; }
-
-  /// Ends socat (the pty masters close: both ends hang up) and reaps it.
-  void stop() {
-    if (pid_ <= 0) return;
-    if (!reaped_) {
-      ::kill(pid_, SIGTERM);
-      int status = 0;
-      ::waitpid(pid_, &status, 0);
-    }
-    pid_ = -1;
-    ready_ = false;
-  }
-
- private:
-  bool exited() {
-    int status = 0;
-    if (!reaped_ && ::waitpid(pid_, &status, WNOHANG) == pid_) reaped_ = true;
-    return reaped_;
-  }
-
-  std::string a_;
-  std::string b_;
-  pid_t pid_ = -1;
-  bool reaped_ = false;
-  bool ready_ = false;
 };
 
 /// How the fake adapter behaves.

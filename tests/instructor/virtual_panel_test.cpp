@@ -7,6 +7,7 @@
 #include <algorithm>
 
 #include "instructor/virtual_panel.hpp"
+#include "msgs/panel_state_controls.hpp"
 #include "panels/panel_definition.hpp"
 
 namespace {
@@ -18,22 +19,19 @@ rise::panels::PanelDefinition console() {
 }
 
 float axis(const rise_msgs::PanelState& m, const std::string& name) {
-  for (const auto& a : m.axes)
-    if (a.name == name) return a.value;
-  FAIL("no axis " << name);
-  return 0.0f;
+  const auto value = rise::msgs::find_axis(m, name);
+  if (!value) FAIL("no axis " << name);
+  return *value;
 }
 bool button(const rise_msgs::PanelState& m, const std::string& name) {
-  for (const auto& b : m.buttons)
-    if (b.name == name) return b.pressed;
-  FAIL("no button " << name);
-  return false;
+  const auto pressed = rise::msgs::find_button(m, name);
+  if (!pressed) FAIL("no button " << name);
+  return *pressed;
 }
 std::string label(const rise_msgs::PanelState& m, const std::string& name) {
-  for (const auto& s : m.switches)
-    if (s.name == name) return s.label;
-  FAIL("no switch " << name);
-  return "";
+  const auto position = rise::msgs::find_switch_label(m, name);
+  if (!position) FAIL("no switch " << name);
+  return *position;
 }
 
 VirtualControls driving() {

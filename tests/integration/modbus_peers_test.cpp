@@ -26,6 +26,7 @@
 #include "firmware_protocol/console_modbus.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/panel_state_controls.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
@@ -100,16 +101,13 @@ struct PanelStates {
   }
 };
 
+// A missing control reads as a value no assertion expects.
 float axis(const rise_msgs::PanelState& m, const std::string& name) {
-  for (const auto& a : m.axes)
-    if (a.name == name) return a.value;
-  return 99.0f;
+  return rise::msgs::find_axis(m, name).value_or(99.0f);
 }
 
 std::string switch_label(const rise_msgs::PanelState& m, const std::string& name) {
-  for (const auto& s : m.switches)
-    if (s.name == name) return s.label;
-  return "?";
+  return rise::msgs::find_switch_label(m, name).value_or("?");
 }
 
 bool pymodbus_available() {

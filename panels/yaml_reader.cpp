@@ -1,0 +1,57 @@
+#include "panels/yaml_reader.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace rise::panels {
+
+void YamlReader::fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
+  const int line = node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
+  throw std::runtime_error(file_ + ":" + std::to_string(line) + ": " + (key.empty() ? "" : key + ": ") + what);
+}
+
+void YamlReader::only_keys(const YAML::Node& map, const std::string& where,
+                           std::initializer_list<const char*> allowed) const {
+  if (!map.IsMap()) fail(map, where, "expected a mapping");
+  for (const auto& kv : map) {
+    const auto key = kv.first.as<std::string>();
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || key == a;
+    if (!ok) fail(kv.first, join(where, key), "unknown key");
+  }
+}
+
+double YamlReader::positive(const YAML::Node& map, const char* key, const std::string& where, double fallback,
+                            bool allow_zero) const {
+  const YAML::Node n = map[key];
+  if (!n) return fallback;
+  const std::string k = where + "." + key;
+  const double v = as<double>(n, k);
+  if (!(allow_zero ? v >= 0.0 : v > 0.0)) fail(n, k, allow_zero ? "must be >= 0" : "must be > 0");
+  return v;
+}
+
+YAML::Node YamlReader::load_text(const std::string& text) const {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw std::runtime_error(file_ + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
+
+const char* YamlReader::not_a_value() const {
+  return wording_ == ValueWording::NameType ? "expected a value, not a list or mapping" : "expected a value";
+}
+
+std::string read_text_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+}  // namespace rise::panels
