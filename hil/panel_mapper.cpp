@@ -385,10 +385,11 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const Sour
   }
   for (std::size_t t = 0; t < fp::kFrameTypeCount; ++t) {
     if (!s.needs_type[t]) continue;
-    const std::string type = fp::to_string(static_cast<fp::FrameType>(t));
-    if (s.last_valid_us[t] == 0) return trouble(FailsafeCause::SourceStale, "no " + type + " frame yet");
+    // The type's name only on the way out: this runs at every evaluation.
+    const auto type = [t] { return std::string(fp::to_string(static_cast<fp::FrameType>(t))); };
+    if (s.last_valid_us[t] == 0) return trouble(FailsafeCause::SourceStale, "no " + type() + " frame yet");
     const int64_t age_us = now_us - s.last_valid_us[t];
-    if (age_us > timeout_us) return stale("valid " + type + " frame", age_us);
+    if (age_us > timeout_us) return stale("valid " + type() + " frame", age_us);
   }
   if (!s.status.heartbeat_seen) return trouble(FailsafeCause::SourceStale, "no heartbeat yet");
   if (now_us - s.last_valid_us[type_index(fp::FrameType::Heartbeat)] > heartbeat_timeout_us(def))
