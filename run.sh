@@ -28,7 +28,7 @@ build=${RISE_BUILD_DIR:-$root/build}
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
-  cmake ninja-build g++ pkg-config git
+  cmake ninja-build g++ binutils pkg-config git
   libode-dev liblcm-dev liblcm-bin libeigen3-dev libyaml-cpp-dev libcli11-dev libspdlog-dev catch2 liburdfdom-dev
   python3 python3-can socat
   clang libclang-rt-14-dev
