@@ -128,6 +128,38 @@ uint32_t le32(std::string_view b, size_t at) {
   return v;
 }
 
+// PCL 1.13's header parser reads on past DATA while the next "line" starts
+// with a header keyword, and then throws, allocates without bound or crashes
+// (found by tests/fuzz/pcd_fuzz.cpp): such data is refused here, though a
+// float's bytes spell a keyword only by chance. Ascii data too: without
+// POINTS and WIDTH its lines are not read below, yet PCL reads them.
+void refuse_header_keywords_in_data(const std::string& path, std::string_view text, const PcdHeader& h) {
+  const size_t at = h.data_offset;
+  static const char* keywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                   "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  // PCL's loop skips blank lines and '#' comments before it looks for a
+  // keyword at the start of a (whitespace-trimmed) line, so do the same.
+  std::string_view data = text.substr(std::min(at, text.size()));
+  size_t line_at = at;
+  while (!data.empty()) {
+    const size_t eol = data.find('\n');
+    std::string_view line = data.substr(0, eol);
+    const size_t first = line.find_first_not_of(" \t\r\v\f");
+    line = first == std::string_view::npos ? std::string_view{} : line.substr(first);
+    if (!line.empty() && line.front() != '#') {
+      for (const char* k : keywords)
+        if (line.starts_with(k))
+          fail_byte(path, line_at,
+                    std::string(h.data == "ascii" ? "ascii" : "binary") + " data has a line beginning with '" +
+                        std::string(k) + "', which PCL's reader takes for a header line");
+      break;
+    }
+    if (eol == std::string_view::npos) break;
+    data.remove_prefix(eol + 1);
+    line_at += eol + 1;
+  }
+}
+
 void check_pcd_data(const std::string& path, std::string_view text, const PcdHeader& h) {
   uint64_t point_bytes = 0;
   size_t values = 0;
@@ -138,34 +170,7 @@ void check_pcd_data(const std::string& path, std::string_view text, const PcdHea
   const uint64_t need = point_bytes * h.points;
   const size_t at = h.data_offset;
   const size_t have = text.size() > at ? text.size() - at : 0;
-  if (h.data != "ascii") {
-    // PCL 1.13's header parser reads on past DATA while the next "line"
-    // starts with a header keyword, and then throws, allocates without
-    // bound or crashes (found by tests/fuzz/pcd_fuzz.cpp): such data is
-    // refused here, though a float's bytes spell a keyword only by chance.
-    static const char* keywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
-                                     "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
-    // PCL's loop skips blank lines and '#' comments before it looks for a
-    // keyword at the start of a (whitespace-trimmed) line, so do the same.
-    std::string_view data = text.substr(std::min(at, text.size()));
-    size_t line_at = at;
-    while (!data.empty()) {
-      const size_t eol = data.find('\n');
-      std::string_view line = data.substr(0, eol);
-      const size_t first = line.find_first_not_of(" \t\r\v\f");
-      line = first == std::string_view::npos ? std::string_view{} : line.substr(first);
-      if (!line.empty() && line.front() != '#') {
-        for (const char* k : keywords)
-          if (line.starts_with(k))
-            fail_byte(path, line_at,
-                      "binary data has a line beginning with '" + std::string(k) + "', which PCL's reader takes for a header line");
-        break;
-      }
-      if (eol == std::string_view::npos) break;
-      data.remove_prefix(eol + 1);
-      line_at += eol + 1;
-    }
-  }
+  refuse_header_keywords_in_data(path, text, h);
   if (h.data == "binary") {
     if (need > have)
       fail_byte(path, text.size(), "binary data truncated: " + std::to_string(h.points) + " points need " +

@@ -247,6 +247,11 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     // it looks for a keyword, then allocates what a POINTS line says.
     CHECK_THAT(error_of("t.pcd", pcd_head + "DATA binary\n# comment\n\n  POINTS 99999999999\n" + std::string(16, '\0')),
                Catch::Contains("t.pcd: byte 132: binary data has a line beginning with 'POINTS'"));
+    // Found by the fuzzer: ascii data without POINTS or WIDTH whose first line
+    // starts with a keyword; PCL read it as a header line and allocated ~100 TB.
+    CHECK_THAT(error_of("t.pcd", "VERSION .5\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n\nDATA ascii\nCOUNT0.01349 0.0407" +
+                                     std::string(5, '\0') + "0 0.086298 " + std::string(11, '\0') + "337\n"),
+               Catch::Contains("t.pcd: byte 58: ascii data has a line beginning with 'COUNT'"));
     // 1.2 GB announced by a 4-byte LZF block: refused before PCL allocates.
     const std::string huge = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100000000\nHEIGHT 1\n"
                              "POINTS 100000000\nDATA binary_compressed\n";
