@@ -202,7 +202,7 @@ TEST_CASE("a Modbus replay in real time answers with the latest recorded answer 
       ended_after_us = rise::msgs::monotonic_us() - start;
       break;
     }
-    std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int64_t>(10'000 / speed)));
+    std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int64_t>(10'000 / speed)));  // the poll period, not a sync
   }
   REQUIRE(ended_after_us > 0);
   // 0.70005 s of trace; the last request may come up to one poll late.
