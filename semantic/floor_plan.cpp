@@ -260,11 +260,11 @@ double free_reach(const OccupancyGrid& grid, const Piece& p, double a0, double a
 // a dotted line of cells a laser grazed) for door_jamb_m before g0 and
 // after g1, where the gap's ends are p's (`jamb_before`, `jamb_after`).
 bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, const FloorPlanSettings& s,
-             bool jamb_before = true, bool jamb_after = true) {
+             bool jamb_before = true, bool jamb_after = true, bool beside_corner = false) {
   const double m0 = g0 + (g1 - g0) / 5, m1 = g1 - (g1 - g0) / 5, t = p.thickness / 2, res = grid.resolution_m;
+  const double depth = beside_corner ? s.corner_door_min_depth_m : s.door_min_depth_m;
   if (clear_width(grid, p, (g0 + g1) / 2, s.door_min_width_m) < s.door_min_width_m - res / 2) return false;
-  if (free_reach(grid, p, m0, m1, -1, s.door_min_depth_m) < s.door_min_depth_m - res ||
-      free_reach(grid, p, m0, m1, +1, s.door_min_depth_m) < s.door_min_depth_m - res)
+  if (free_reach(grid, p, m0, m1, -1, depth) < depth - res || free_reach(grid, p, m0, m1, +1, depth) < depth - res)
     return false;
   if (jamb_before && solid_share(grid, p, g0 - s.door_jamb_m, g0 - res / 2) < s.door_jamb_solid) return false;
   if (jamb_after && solid_share(grid, p, g1 + res / 2, g1 + s.door_jamb_m) < s.door_jamb_solid) return false;
@@ -479,11 +479,15 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
     best_dist = 1e300;
   }
   for (const Crossing& c : crossings(p, all, 0.0)) {
-    if ((corner_side != 0 && c.side != corner_side) || !continues(p, all, c.at, outward, s)) continue;
+    // p's line goes on past c, or c ends on p's line (its end is the far
+    // jamb: a gap beside a corner, held to a room's depth, not a niche's).
+    const bool beside_corner = !continues(p, all, c.at, outward, s);
+    if ((corner_side != 0 && c.side != corner_side) || (c.side == 0 && beside_corner)) continue;
     const double gap = outward * (c.at - from) - c.thickness / 2;  // clear width from the end to its face
     if (gap < s.door_min_width_m || gap > s.door_max_width_m + 2 * grid.resolution_m || gap >= best_dist) continue;
     const double g0 = outward > 0 ? from : c.at + c.thickness / 2, g1 = outward > 0 ? c.at - c.thickness / 2 : from;
-    if (!doorway(grid, p, g0, g1, s, outward > 0 && std::isnan(corner), outward < 0 && std::isnan(corner))) continue;
+    if (!doorway(grid, p, g0, g1, s, outward > 0 && std::isnan(corner), outward < 0 && std::isnan(corner), beside_corner))
+      continue;
     best = c.at, best_dist = gap, door = {g0, g1};
   }
   return best;

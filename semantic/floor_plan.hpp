@@ -41,6 +41,7 @@ struct FloorPlanSettings {
   double door_clearance_m = 0.4;       ///< free space checked this deep either side of a doorway
   double door_min_free = 0.5;          ///< ... at least this share of it free
   double door_min_depth_m = 0.5;       ///< ... and free cells this far beyond the wall on both sides
+  double corner_door_min_depth_m = 1.0; ///< ... this far for a gap beside a corner (a niche is no doorway)
   double door_jamb_m = 0.3;            ///< the wall either side of a doorway, this long, ...
   double door_jamb_solid = 0.6;        ///< ... has occupied cells along this share of it
 };

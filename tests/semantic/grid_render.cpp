@@ -124,7 +124,7 @@ int main(int argc, char** argv) try {
       {"collinear_offset_m", &settings.collinear_offset_m}, {"min_direction_share", &settings.min_direction_share},
       {"corner_gap_m", &settings.corner_gap_m},             {"door_clearance_m", &settings.door_clearance_m},
       {"door_min_free", &settings.door_min_free},           {"door_jamb_m", &settings.door_jamb_m},
-      {"door_min_depth_m", &settings.door_min_depth_m},     {"minor_direction_share", &settings.minor_direction_share},
+      {"door_min_depth_m", &settings.door_min_depth_m}, {"corner_door_min_depth_m", &settings.corner_door_min_depth_m},     {"minor_direction_share", &settings.minor_direction_share},
       {"minor_wall_min_length_m", &settings.minor_wall_min_length_m},
       {"door_jamb_solid", &settings.door_jamb_solid}};
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
