@@ -25,6 +25,7 @@
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/failsafe.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
 #include "panels/panel_definition.hpp"
@@ -83,7 +84,7 @@ std::set<std::string> busy_station_ids(lcm::LCM& lcm, int wait_ms) {
       if (slash != std::string::npos) ids.insert(channel.substr(5, slash - 5));
     }
   } heard;
-  auto* sub = lcm.subscribe("rise/[^/]+/(panel_state|robot_state|task_status)", &Heard::on, &heard);
+  auto* sub = lcm.subscribe("rise/[^/]+/(panel_state|robot_state|task_status)", &Heard::on, &heard);  // channels only
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
   while (std::chrono::steady_clock::now() < deadline) lcm.handleTimeout(20);
   lcm.unsubscribe(sub);
@@ -454,7 +455,7 @@ int run_status(const StatusOptions& o) {
     return 2;
   }
   const std::string channel = rise::msgs::panel_state_channel(o.id);
-  lcm.subscribe(channel, &Latest::on, &latest)->setQueueCapacity(200);
+  rise::msgs::subscribe<&Latest::on>(lcm, channel, &latest)->setQueueCapacity(200);
   const auto period = std::chrono::microseconds(static_cast<int64_t>(o.every_s * 1e6));
   auto last_message = std::chrono::steady_clock::now();
   bool last_fresh = false;

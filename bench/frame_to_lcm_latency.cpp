@@ -25,6 +25,7 @@
 #include "hil/io/can_bus.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "process/child_process.hpp"
 #include "rise_msgs/PanelState.hpp"
 
@@ -69,7 +70,7 @@ int main(int argc, char** argv) {
 
   lcm::LCM lcm(lcm_url);
   Listener listener;
-  lcm.subscribe(rise::msgs::panel_state_channel(id), &Listener::on, &listener)->setQueueCapacity(1000);
+  rise::msgs::subscribe<&Listener::on>(lcm, rise::msgs::panel_state_channel(id), &listener)->setQueueCapacity(1000);
 
   const std::string bin = rise::process::executable_dir() + "/../bin/rise-hild";
   rise::process::ChildProcess hild({bin, "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",

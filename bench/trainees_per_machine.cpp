@@ -29,6 +29,7 @@
 
 #include "process/child_process.hpp"
 #include "rise_msgs/RobotState.hpp"
+#include "msgs/lcm_decode.hpp"
 
 namespace {
 
@@ -90,7 +91,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   Listener listener;
-  lcm.subscribe("rise/bench[0-9]+/robot_state", &Listener::on, &listener)->setQueueCapacity(5000);
+  rise::msgs::subscribe<&Listener::on>(lcm, "rise/bench[0-9]+/robot_state", &listener)->setQueueCapacity(5000);
   std::printf("trainees per machine: %u cores (std::thread::hardware_concurrency), LCM %s, window %.0f s\n",
               std::thread::hardware_concurrency(), lcm_url.c_str(), window_s);
   std::printf("each trainee: rise-sim (real-time paced, tracked_eod, building) + rise-trainer run-task (executor + scripted console)\n\n");

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "msgs/channels.hpp"
+#include "msgs/lcm_decode.hpp"
 
 namespace rise::instructor {
 
@@ -11,7 +12,7 @@ bool TraineeDirectory::on_message(const std::string& channel, const void* data, 
   if (!parts) return false;
   const auto& [id, what] = *parts;
   const auto take = [&](auto slot, auto message) {
-    if (message.decode(data, 0, size) < 0) return false;
+    if (!msgs::decode_message(data, size, message)) return false;
     TraineeRow& row = rows_[id];
     row.id = id;
     row.last_seen_us = now_us;

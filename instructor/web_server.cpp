@@ -28,6 +28,7 @@
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/panel_definition.hpp"
 #include "rise_msgs/FaultCommand.hpp"
@@ -46,7 +47,7 @@ namespace {
 template <class Message>
 std::optional<Message> decode(const lcm::ReceiveBuffer* rbuf) {
   Message m;
-  if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) return std::nullopt;
+  if (!msgs::decode_message(rbuf->data, rbuf->data_size, m)) return std::nullopt;
   return m;
 }
 

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "msgs/clock.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "rise_msgs/Publisher.hpp"
 
 namespace rise::msgs {
@@ -90,7 +91,7 @@ class PublisherListener {
       : watch_(own_session_id), on_other_(std::move(on_other)) {}
   /// Listens on `channel` of `lcm` (this object must outlive the subscription).
   void listen(lcm::LCM& lcm, const std::string& channel) {
-    lcm.subscribe(channel, &PublisherListener::on, this)->setQueueCapacity(16);
+    subscribe<&PublisherListener::on>(lcm, channel, this)->setQueueCapacity(16);
   }
   const PublisherWatch& watch() const { return watch_; }
 
@@ -122,7 +123,7 @@ std::optional<ChannelPublisher> probe_channels(lcm::LCM& lcm, const std::vector<
     }
   } probe;
   std::vector<lcm::Subscription*> subs;
-  for (const std::string& channel : channels) subs.push_back(lcm.subscribe(channel, &Probe::on, &probe));
+  for (const std::string& channel : channels) subs.push_back(subscribe<&Probe::on>(lcm, channel, &probe));
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
   for (auto now = std::chrono::steady_clock::now(); !probe.found && now < deadline;
        now = std::chrono::steady_clock::now())

@@ -1,6 +1,7 @@
 #include "process/chain_monitor.hpp"
 
 #include "msgs/channels.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/panel_state_controls.hpp"
 #include "msgs/publisher_session.hpp"
 
@@ -28,8 +29,8 @@ bool at_standstill(const rise_msgs::RobotState& r) {
 ChainMonitor::ChainMonitor(const std::string& lcm_url, const std::string& trainee_id) : lcm_(lcm_url) {
   good_ = lcm_.good();
   if (!good_) return;
-  auto* p = lcm_.subscribe(msgs::panel_state_channel(trainee_id), &ChainMonitor::on_panel, this);
-  auto* r = lcm_.subscribe(msgs::robot_state_channel(trainee_id), &ChainMonitor::on_robot, this);
+  auto* p = msgs::subscribe<&ChainMonitor::on_panel>(lcm_, msgs::panel_state_channel(trainee_id), this);
+  auto* r = msgs::subscribe<&ChainMonitor::on_robot>(lcm_, msgs::robot_state_channel(trainee_id), this);
   // Every message counts for the measurements: a queue deep enough for a
   // second of traffic at 100 + 50 Hz.
   p->setQueueCapacity(200);

@@ -25,6 +25,7 @@
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
 #include "rise_msgs/FaultCommand.hpp"
@@ -269,7 +270,7 @@ class FaultCommands {
       : id_(o.id), channel_(rise::msgs::fault_command_channel(o.id)), verifier_(verifier),
         injector_(injector), publisher_(publisher) {}
 
-  void listen(lcm::LCM& lcm) { lcm.subscribe(channel_, &FaultCommands::on, this)->setQueueCapacity(64); }
+  void listen(lcm::LCM& lcm) { rise::msgs::subscribe<&FaultCommands::on>(lcm, channel_, this)->setQueueCapacity(64); }
 
  private:
   void on(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::FaultCommand* m) {
@@ -359,7 +360,8 @@ void run_until_stopped(lcm::LCM& lcm, rise::hil::Bridge& bridge, const rise::hil
 }
 
 void log_stopped(int64_t messages, const rise::hil::SessionRecorder* recorder) {
-  spdlog::info("rise-hild stopped after {} messages", messages);
+  spdlog::info("rise-hild stopped after {} messages, {} malformed LCM messages dropped", messages,
+               rise::msgs::malformed_messages().load());
   if (!recorder) return;
   const auto c = recorder->counts();
   spdlog::info("recorded {} CAN frames, {} Modbus trace lines, {} HID reports, {} PanelState events into {}",
@@ -411,7 +413,7 @@ int main(int argc, char** argv) {
 
   const std::string feedback_channel = rise::msgs::panel_feedback_channel(o.id);
   FeedbackHandler handler{&bridge};
-  lcm::Subscription* sub = lcm.subscribe(feedback_channel, &FeedbackHandler::on, &handler);
+  lcm::Subscription* sub = rise::msgs::subscribe<&FeedbackHandler::on>(lcm, feedback_channel, &handler);
   sub->setQueueCapacity(4);  // only the newest feedback matters
 
   // Another process publishing on this station's channel: reported once by

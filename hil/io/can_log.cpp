@@ -220,7 +220,7 @@ bool CanLogReader::next_line(std::string_view& line) {
       return true;
     }
     // Keep the partial line, grow for lines longer than a block, read more.
-    std::memmove(block_.data(), begin, left);
+    if (left > 0) std::memmove(block_.data(), begin, left);  // an empty block_'s data() may be null
     block_begin_ = 0;
     block_end_ = left;
     if (block_.size() < left + kBlock) block_.resize(left + kBlock);

@@ -10,15 +10,10 @@
 #include <cerrno>
 #include <cstring>
 
+#include "hil/io/slcan_wire.hpp"
 #include "msgs/clock.hpp"
 
-// Wire format (Lawicel CANUSB manual; the CANable slcan firmware and Linux's
-// drivers/net/can/slcan agree). Every command and every received frame ends
-// with '\r'; the adapter answers a command with '\r' (OK) or '\a' (BELL).
-//   id 0x123, bytes 11 22 33        → "t1233112233\r"
-//   id 0x1ABCDEF0 (29 bit), DE AD   → "T1ABCDEF02DEAD\r"
-//   remote id 0x321, length 2       → "r3212\r"      ("R" + 8 digits for 29 bit)
-//   with Z1, 8000 ms adapter time   → "t12331122331F40\r"  (ms, wraps at 60000)
+// The wire format: slcan_wire.hpp.
 
 namespace rise::hil::io {
 
@@ -26,8 +21,7 @@ using detail::Clock;
 
 namespace {
 
-constexpr char kHex[] = "0123456789ABCDEF";
-constexpr int64_t kStampWrapMs = 60'000;
+constexpr int64_t kStampWrapMs = kSlcanStampWrapMs;
 // Adapter and host clock further apart than this: the adapter was reset or a
 // whole wrap went unseen, so its clock is anchored to the host's again.
 constexpr int64_t kResyncUs = 1'000'000;
@@ -60,26 +54,6 @@ speed_t termios_speed(uint32_t baud) {
 
 // The device is gone (USB adapter unplugged, pty peer closed) rather than broken.
 bool is_gone(int err) { return err == EIO || err == ENXIO || err == ENODEV || err == ENOENT; }
-
-// Value of n hex digits at text; -1 when one is not a hex digit.
-int64_t parse_hex(const char* text, size_t n) {
-  int64_t value = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const char c = text[i];
-    int digit;
-    if (c >= '0' && c <= '9') {
-      digit = c - '0';
-    } else if (c >= 'A' && c <= 'F') {
-      digit = c - 'A' + 10;
-    } else if (c >= 'a' && c <= 'f') {
-      digit = c - 'a' + 10;
-    } else {
-      return -1;
-    }
-    value = value * 16 + digit;
-  }
-  return value;
-}
 
 // write() of all of data to a non-blocking tty, waiting up to timeout_ms for
 // room. written tells an intact stream (0) from a cut line; errno is kept.
@@ -123,23 +97,8 @@ IoStatus SlcanBus::send(const CanFrame& frame) {
   if (frame.fd || frame.error || !is_well_formed(frame)) return IoStatus::Invalid;
   // [0] is a '\r' that ends a line cut by an earlier timeout (the adapter
   // answers it with BELL and drops the fragment).
-  std::array<char, 1 + 1 + 8 + 1 + 16 + 1> line;
-  size_t n = 0;
-  line[n++] = '\r';
-  line[n++] = frame.remote ? (frame.extended ? 'R' : 'r') : (frame.extended ? 'T' : 't');
-  for (int shift = frame.extended ? 28 : 8; shift >= 0; shift -= 4) {
-    line[n++] = kHex[(frame.id >> shift) & 0xFu];
-  }
-  // is_well_formed() bounds a classic frame to 8 bytes; say so to the optimiser too.
-  const size_t len = std::min<size_t>(frame.len, 8);
-  line[n++] = static_cast<char>('0' + len);
-  if (!frame.remote) {
-    for (size_t i = 0; i < len; ++i) {
-      line[n++] = kHex[frame.data[i] >> 4];
-      line[n++] = kHex[frame.data[i] & 0xFu];
-    }
-  }
-  line[n++] = '\r';
+  SlcanLineBuffer line;
+  const size_t n = format_slcan_line(frame, line);
 
   std::lock_guard lock(send_mutex_);
   if (!open_.load()) return IoStatus::Disconnected;
@@ -337,59 +296,18 @@ SlcanBus::Token SlcanBus::next_token_locked() {
 }
 
 bool SlcanBus::parse_line_locked(CanFrame& frame) {
-  const char kind = line_[0];
-  const size_t length = line_length_;
+  const std::string_view line(line_.data(), line_length_);
   // Transmit acknowledgements of CANUSB-like adapters (after t and T).
-  if (length == 1 && (kind == 'z' || kind == 'Z')) return false;
-  if (kind != 't' && kind != 'T' && kind != 'r' && kind != 'R') {
+  if (line == "z" || line == "Z") return false;
+  const std::optional<SlcanLine> parsed = parse_slcan_line(line);
+  if (!parsed) {
     ++garbage_lines_;
     return false;
   }
-  const bool extended = kind == 'T' || kind == 'R';
-  const bool remote = kind == 'r' || kind == 'R';
-  const size_t id_digits = extended ? 8 : 3;
-  if (length < 1 + id_digits + 1) {
-    ++garbage_lines_;
-    return false;
-  }
-  const int64_t id = parse_hex(&line_[1], id_digits);
-  const char dlc = line_[1 + id_digits];
-  if (id < 0 || id > (extended ? 0x1FFFFFFF : 0x7FF) || dlc < '0' || dlc > '8') {
-    ++garbage_lines_;
-    return false;
-  }
-  const size_t len = static_cast<size_t>(dlc - '0');
-  const size_t data_at = 2 + id_digits;
-  const size_t stamp_at = data_at + (remote ? 0 : 2 * len);
-  if (length != stamp_at && length != stamp_at + 4) {
-    ++garbage_lines_;
-    return false;
-  }
-  CanFrame parsed;
-  parsed.id = static_cast<uint32_t>(id);
-  parsed.extended = extended;
-  parsed.remote = remote;
-  parsed.len = static_cast<uint8_t>(len);
-  for (size_t i = 0; i < (remote ? 0 : len); ++i) {
-    const int64_t byte = parse_hex(&line_[data_at + 2 * i], 2);
-    if (byte < 0) {
-      ++garbage_lines_;
-      return false;
-    }
-    parsed.data[i] = static_cast<uint8_t>(byte);
-  }
-  int64_t stamp_ms = -1;
-  if (length == stamp_at + 4) {
-    stamp_ms = parse_hex(&line_[stamp_at], 4);
-    if (stamp_ms < 0 || stamp_ms >= kStampWrapMs) {
-      ++garbage_lines_;
-      return false;
-    }
-  }
-  parsed.timestamp_us = address_.timestamps && stamp_ms >= 0
-                            ? adapter_time_us_locked(static_cast<unsigned>(stamp_ms))
-                            : msgs::wall_us();
-  frame = parsed;
+  frame = parsed->frame;
+  frame.timestamp_us = address_.timestamps && parsed->stamp_ms >= 0
+                           ? adapter_time_us_locked(static_cast<unsigned>(parsed->stamp_ms))
+                           : msgs::wall_us();
   return true;
 }
 

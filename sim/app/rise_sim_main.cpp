@@ -33,6 +33,7 @@
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
 #include "rise_msgs/FaultCommand.hpp"
@@ -427,17 +428,17 @@ void SimNode::subscribe() {
     st.sound_channel = rise::msgs::sound_channel(st.id);
     // Only the newest panel state matters to the physics; a short queue keeps
     // a stalled sim from acting on old sticks.
-    lcm_.subscribe(st.panel_channel, &PanelListener::on, &st.panel)->setQueueCapacity(8);
+    rise::msgs::subscribe<&PanelListener::on>(lcm_, st.panel_channel, &st.panel)->setQueueCapacity(8);
     st.control.pending = &pending_control_;
     st.control.robot = i;
-    lcm_.subscribe(st.control_channel, &ControlListener::on, &st.control)->setQueueCapacity(64);
+    rise::msgs::subscribe<&ControlListener::on>(lcm_, st.control_channel, &st.control)->setQueueCapacity(64);
     st.fault_channel = rise::msgs::fault_command_channel(st.id);
     st.training_channel = rise::msgs::training_control_channel(st.id);
     st.instructor.faults = &pending_faults_;
     st.instructor.training = &pending_training_;
     st.instructor.robot = i;
-    lcm_.subscribe(st.fault_channel, &InstructorListener::on_fault, &st.instructor)->setQueueCapacity(64);
-    lcm_.subscribe(st.training_channel, &InstructorListener::on_training, &st.instructor)->setQueueCapacity(64);
+    rise::msgs::subscribe<&InstructorListener::on_fault>(lcm_, st.fault_channel, &st.instructor)->setQueueCapacity(64);
+    rise::msgs::subscribe<&InstructorListener::on_training>(lcm_, st.training_channel, &st.instructor)->setQueueCapacity(64);
   }
 }
 
@@ -739,8 +740,10 @@ void SimNode::report() const {
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   int64_t panel_states = 0;
   for (const auto& st : stations_) panel_states += st->panel.count;
-  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} robot(s), {} panel states",
-               sim_->time_s(), wall_s, wall_s > 0 ? sim_->time_s() / wall_s : 0.0, stations_.size(), panel_states);
+  spdlog::info("rise-sim stopped: {:.1f} s simulated in {:.1f} s ({:.1f}x real time), {} robot(s), {} panel states, "
+               "{} malformed LCM messages dropped",
+               sim_->time_s(), wall_s, wall_s > 0 ? sim_->time_s() / wall_s : 0.0, stations_.size(), panel_states,
+               rise::msgs::malformed_messages().load());
 }
 
 }  // namespace

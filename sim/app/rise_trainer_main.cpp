@@ -31,6 +31,7 @@
 #include "cli/command_line.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/data_path.hpp"
 #include "process/child_process.hpp"
@@ -205,8 +206,8 @@ struct Router {
 
 void subscribe(lcm::LCM& lcm, const std::string& id, Router& router) {
   // Events come in bursts (a track on step noses); states at 50 Hz.
-  lcm.subscribe(rise::msgs::robot_state_channel(id), &Router::on_state, &router)->setQueueCapacity(500);
-  lcm.subscribe(rise::msgs::sim_event_channel(id), &Router::on_event, &router)->setQueueCapacity(2000);
+  rise::msgs::subscribe<&Router::on_state>(lcm, rise::msgs::robot_state_channel(id), &router)->setQueueCapacity(500);
+  rise::msgs::subscribe<&Router::on_event>(lcm, rise::msgs::sim_event_channel(id), &router)->setQueueCapacity(2000);
 }
 
 // One trainer per station: another process on the channels this one
@@ -609,7 +610,7 @@ int status(const std::string& lcm_url, double every_s, int count, int min_traine
     std::fprintf(stderr, "rise-trainer status: cannot open LCM at %s\n", lcm_url.c_str());
     return 2;
   }
-  lcm.subscribe("rise/.*/task_status", &Latest::on, &latest)->setQueueCapacity(1000);
+  rise::msgs::subscribe<&Latest::on>(lcm, "rise/.*/task_status", &latest)->setQueueCapacity(1000);
   for (int shown = 0; (count <= 0 || shown < count) && !g_stop;) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::microseconds(static_cast<int64_t>(every_s * 1e6));
     while (std::chrono::steady_clock::now() < until && !g_stop) lcm.handleTimeout(50);

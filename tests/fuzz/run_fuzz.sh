@@ -3,7 +3,8 @@
 # inputs from a seed corpus this script writes itself (nothing binary is kept
 # in the repository).
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
-# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd, maps or carmen; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
+# line_protocols, command_auth or configs; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -21,6 +22,18 @@ case "$target" in
   # The CARMEN log reader and grid_from_scans (occupancy_grid.cpp links
   # yaml-cpp, OpenCV and zlib for the other readers there; not sanitized).
   carmen) sources=("$root"/semantic/{cloud,cloud_formats,text_reading,occupancy_grid}.cpp) ;;
+  # The recordings (CAN logs, Modbus traces, hid-recorder files), the
+  # socketcand and slcan line protocols, the signed-command verifier (its
+  # two message types generated here by lcm-gen) and the YAML files users
+  # write (panels, robots with their URDF, worlds, tasks, scenarios).
+  logs) sources=("$root"/hil/io/{can_log,candump_log,can_frame,modbus_trace,hid_recording,record_file}.cpp) ;;
+  line_protocols) sources=("$root"/hil/io/{slcan_wire,socketcand_wire,can_frame}.cpp) ;;
+  command_auth) sources=("$root/msgs/command_auth.cpp") ;;
+  configs)
+    sources=("$root"/panels/{panel_definition,yaml_reader,modbus_point}.cpp "$root"/firmware_protocol/{console_can,dbc}.cpp
+             "$root"/sim/{robot_description,urdf_robot,world_description}.cpp "$root/sim/training/task_description.cpp"
+             "$root/instructor/scenario.cpp")
+    ;;
   *) echo "run_fuzz.sh: unknown target $target" >&2; exit 2 ;;
 esac
 sources+=("$root/tests/fuzz/${target}_fuzz.cpp")
@@ -30,7 +43,7 @@ mkdir -p "$work"
 # Rebuild only when a source or header is newer than the binary.
 rebuild=0
 [ -x "$binary" ] || rebuild=1
-for f in "${sources[@]}" "$root"/firmware_protocol/*.hpp "$root"/semantic/*.hpp; do
+for f in "${sources[@]}" "$root"/{firmware_protocol,semantic,msgs,hil/io,panels,sim,sim/training,instructor}/*.hpp; do
   [ "$f" -nt "$binary" ] && rebuild=1
 done
 if [ $rebuild -eq 1 ]; then
@@ -45,6 +58,15 @@ if [ $rebuild -eq 1 ]; then
     pcd)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/pcl-1.13)
       libs=(-lpcl_io -lpcl_common -lboost_filesystem)
+      ;;
+    command_auth)
+      lcm-gen --cpp --cpp-std c++11 --cpp-hpath "$work/lcmgen" "$root"/msgs/lcmtypes/{FaultCommand,TrainingControl}.lcm
+      flags=(-I"$work/lcmgen")
+      libs=(-lcrypto)
+      ;;
+    configs)
+      flags=(-isystem /usr/include/eigen3)
+      libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge)
       ;;
   esac
   "$clangxx" -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
@@ -136,6 +158,34 @@ case "$target" in
       zcat "$RISE_TEST_DATA/pointclouds/acschaefer_ple/intel-corrected.log.gz" | head -60 >"$corpus/intel.log" || true  # zcat's SIGPIPE
     fi
     ;;
+  logs)
+    # A byte first: the reader (0 candump .log, 1 ASC, 2 TRC, 3 Modbus trace, 4 hid-recorder).
+    if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/can" ]; then
+      for f in "$RISE_TEST_DATA"/can/python-can/*.asc; do { printf '\x01'; head -c 6000 "$f"; } >"$corpus/$(basename "$f")"; done
+      for f in "$RISE_TEST_DATA"/can/python-can/*.trc; do { printf '\x02'; cat "$f"; } >"$corpus/$(basename "$f")"; done
+      { printf '\x00'; head -40 "$RISE_TEST_DATA/can/ICSim/sample-can.log"; } >"$corpus/icsim.log"
+      for f in "$RISE_TEST_DATA"/hid/hid-tools_{AsusGamepad,SaitekGamepad}.hid; do { printf '\x04'; head -c 6000 "$f"; } >"$corpus/$(basename "$f")"; done
+    fi
+    { printf '\x00'; head -40 "$root/tests/data/replay/can/console.log"; } >"$corpus/console.log"
+    { printf '\x03'; head -40 "$root/tests/data/replay/modbus/console.modbus.log"; } >"$corpus/console.modbus.log"
+    { printf '\x04'; head -c 6000 "$root/tests/data/replay/hid/pad.hid"; } >"$corpus/pad.hid"
+    ;;
+  line_protocols)
+    # A byte first: the TCP chunk size - 1; the socketcand messages and slcan lines of their headers' examples.
+    printf '\x10< hi >< ok >< frame 123 1700000000.123456 0A1B2C >< frame 1ABCDEF0 1700000000.123456  >< fdframe 123 01 1700000000.123456 000102030405060708090A0B >< rtr 123 1700000000.123456 4 >< error 004 1700000000.123456 >< send 123 3 0A 1B 2C >< fdsend 123 1 12 00 01 02 03 04 05 06 07 08 09 0A 0B >< sendrtr 123 4 >' >"$corpus/socketcand"
+    printf '\x03t1233112233\rT1ABCDEF02DEAD\rr3212\rt12331122331F40\rz\rR1ABCDEF08\r' >"$corpus/slcan"
+    ;;
+  configs)
+    # A byte first: the parser (0 panel, 1 robot, 2 world, 3 task, 4 scenario); the project's own files
+    # (the tasks, not fig10_training.yaml: a training graph).
+    for spec in "00:$root/panels/definitions/*.yaml" "01:$root/sim/robots/*.yaml" "02:$root/sim/worlds/*.yaml" \
+                "03:$root/sim/training/examples/[anm]*.yaml" "04:$root/instructor/scenarios/*.yaml"; do
+      for f in ${spec#*:}; do
+        { printf "\x${spec%%:*}"; cat "$f"; } >"$corpus/${spec%%:*}-$(basename "$f")"
+      done
+    done
+    ;;
+  # command_auth writes its own seeds (LLVMFuzzerInitialize).
 esac
 
 cd "$work"
