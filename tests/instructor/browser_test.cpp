@@ -286,15 +286,15 @@ bool log_has(const fs::path& log, const std::string& line) {
   return false;
 }
 
-/// The utime of the PanelState that went failsafe last (the first of the
-/// failsafe run the messages end in), or 0 when they do not end failsafe.
-int64_t first_failsafe_utime(const std::vector<rise_msgs::PanelState>& panels) {
-  int64_t first = 0;
-  for (const auto& p : panels) {
-    if (!p.failsafe) first = 0;
-    else if (first == 0) first = p.utime;
+/// The utime of the first PanelState of the failsafe run that holds the one
+/// of `utime` (the one the page showed), or 0 when none has that utime.
+int64_t failsafe_run_start(const std::vector<rise_msgs::PanelState>& panels, int64_t utime) {
+  for (std::size_t i = 0; i < panels.size(); ++i) {
+    if (panels[i].utime != utime) continue;
+    while (i > 0 && panels[i - 1].failsafe) --i;
+    return panels[i].utime;
   }
-  return first;
+  return 0;
 }
 
 /// The HUD's change to FAILSAFE (the page's log entry) against the first
@@ -395,7 +395,7 @@ TEST_CASE("the trainee page's camera follows the robot, its HUD shows the task a
   // The failsafe: rise-hild's first failsafe PanelState after the console
   // went away, to the HUD's text in the page's DOM.
   REQUIRE(stopped_us > 0);
-  const int64_t first = first_failsafe_utime(peer.daemon_panels);
+  const int64_t first = failsafe_run_start(peer.daemon_panels, result["failsafe"]["panel_utime"].asInt64());
   REQUIRE(first > 0);
   const auto& e = result["failsafe"];
   CHECK(result["failsafe_text"].asString().rfind("FAILSAFE", 0) == 0);
@@ -467,7 +467,7 @@ TEST_CASE("the trainee page plays SoundCues at their gain, and shows the virtual
   // The virtual panel: held, then closed → FAILSAFE on the trainee page.
   CHECK(result["virtual_held"].asString() == "OK · dead-man held");
   CHECK(result["virtual_failsafe_text"].asString().rfind("FAILSAFE", 0) == 0);
-  const int64_t first = first_failsafe_utime(peer.panels);
+  const int64_t first = failsafe_run_start(peer.panels, result["virtual_failsafe"]["panel_utime"].asInt64());
   REQUIRE(first > 0);
   const double latency = hud_latency_ms(result["virtual_failsafe"], first);
   WARN("HUD failsafe after the virtual panel closed: PanelState published → DOM " << latency << " ms");

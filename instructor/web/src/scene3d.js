@@ -10,10 +10,18 @@ const KIND_COLOURS = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x
 // only the SimEvents door_opened / door_closed say which doors stand open.
 const DOOR_OPEN_RAD = 80 * Math.PI / 180;
 
+// Whether WebGL runs in software (SwiftShader, llvmpipe: a machine without a
+// GPU), asked of a throwaway context.
+export function softwareWebGL() {
+  const gl = document.createElement('canvas').getContext('webgl2') || document.createElement('canvas').getContext('webgl');
+  const info = gl && gl.getExtension('WEBGL_debug_renderer_info');
+  return !!info && /swiftshader|llvmpipe|software/i.test(gl.getParameter(info.UNMASKED_RENDERER_WEBGL));
+}
+
 // A renderer on `canvas` and a lit, sky-coloured scene. preserveDrawingBuffer:
 // the tests read the pixels back.
-export function createView(canvas) {
-  const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+export function createView(canvas, antialias = true) {
+  const renderer = new THREE.WebGLRenderer({ canvas, antialias, preserveDrawingBuffer: true });
   renderer.setSize(canvas.width, canvas.height, false);
   renderer.setScissorTest(true);
   const scene = new THREE.Scene();

@@ -6,7 +6,7 @@
 // console as beside the virtual panel.
 import * as THREE from 'three';
 import { getJson, stream, ROBOT_COLOUR } from './common.js';
-import { createView, camera, buildWorld, robotMesh, poseRobot, placeObjects, onboardMount, placeOnboard, placeChase,
+import { softwareWebGL, createView, camera, buildWorld, robotMesh, poseRobot, placeObjects, onboardMount, placeOnboard, placeChase,
   setDoorOpen, cameraBlackedOut, renderInto, canvasStats } from './scene3d.js';
 import { SoundPlayer } from './sound.js';
 
@@ -101,7 +101,12 @@ function onUpdate(u) {
 const view = {};
 function setup3d() {
   const canvas = $('view');
-  Object.assign(view, createView(canvas));
+  // In software WebGL a full-window picture at full resolution takes the
+  // main thread long enough to hold up the HUD: half resolution, no
+  // antialiasing there.
+  view.software = softwareWebGL();
+  Object.assign(view, createView(canvas, !view.software));
+  view.renderer.setPixelRatio(view.software ? 0.5 : 1);
   view.onboard = camera(70, 16 / 9);
   view.chase = camera(60, 4 / 3);
   Object.assign(view, buildWorld(view.scene, state.world));
@@ -114,21 +119,20 @@ function setup3d() {
 }
 
 function resize() {
-  const c = $('view');
-  c.width = window.innerWidth; c.height = window.innerHeight;
-  view.renderer.setSize(c.width, c.height, false);
-  view.onboard.aspect = c.width / c.height; view.onboard.updateProjectionMatrix();
+  const w = window.innerWidth, h = window.innerHeight;
+  view.renderer.setSize(w, h, false);  // the drawing buffer: w × h × the pixel ratio
+  view.onboard.aspect = w / h; view.onboard.updateProjectionMatrix();
   state.dirty = true;
 }
 
-// The picture-in-picture's rectangle (canvas pixels, y up): lower right.
+// The picture-in-picture's rectangle (CSS pixels, y up): lower right.
 function pipRect(w, h) {
   const pw = Math.round(w * 0.28), ph = Math.round(pw * 3 / 4);
   return { x: w - pw - 8, y: 28, w: pw, h: ph };
 }
 
 function render3d() {
-  const r = state.robot_state, w = view.renderer.domElement.width, h = view.renderer.domElement.height;
+  const r = state.robot_state, { x: w, y: h } = view.renderer.getSize(new THREE.Vector2());  // CSS pixels
   if (r) { poseRobot(view.robot, r); placeObjects(view.objects, r); }
   else { const s = state.world.robot_start; view.robot.position.set(s[0], s[1], 0.2); view.robot.rotation.set(0, 0, s[2]); }
   placeOnboard(view.onboard, view.mount, view.robot);
@@ -215,6 +219,7 @@ window.riseTrainee = {
   state, thumbnail,
   camera: () => ({ position: view.onboard.position.toArray(), direction: view.onboard.getWorldDirection(new THREE.Vector3()).toArray() }),
   stats: () => canvasStats($('view')),
+  software: () => view.software,
   sound: () => ({ enabled: !!sound.ctx && sound.ctx.state === 'running', level: sound.player ? sound.player.level() : 0,
                   held: sound.player ? sound.player.held : {}, one_shots: sound.player ? sound.player.oneShots : 0,
                   voices: sound.player ? sound.player.voices.size : 0 }),

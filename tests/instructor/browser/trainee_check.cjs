@@ -135,8 +135,10 @@ async function virtualPanel(browser, page, result) {
   await panel.goto(base + '/panel.html' + query);
   await panel.waitForFunction(() => window.risePanel && window.risePanel.sent() > 0, null, { timeout: 10000 });
   await panel.keyboard.down('Space');
-  await page.waitForFunction(() => document.getElementById('hud-panel').textContent === 'OK · dead-man held', null, { timeout: 10000 });
-  result.virtual_held = await page.textContent('#hud-panel');
+  result.virtual_held = await (await page.waitForFunction(() => {
+    const t = document.getElementById('hud-panel').textContent;
+    return t === 'OK · dead-man held' && t;
+  }, null, { timeout: 10000 })).jsonValue();
   const since = await pageNow(page);
   await panel.close();
   result.virtual_failsafe = await failsafeEntry(page, since);
