@@ -7,7 +7,8 @@ import { ROBOT_COLOUR } from './common.js';
 
 const KIND_COLOURS = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x8d8d8d, prop: 0x9775fa };
 // How far an open door is drawn swung: RobotState carries no door angles,
-// only the SimEvents door_opened / door_closed say which doors stand open.
+// only the SimEvents door_opened / door_closed say which doors stand open
+// (and the robot's side says which way it went).
 const DOOR_OPEN_RAD = 80 * Math.PI / 180;
 
 // Whether WebGL runs in software (SwiftShader, llvmpipe: a machine without a
@@ -78,10 +79,15 @@ export function buildWorld(scene, world) {
   return { objects, doors };
 }
 
-// A door drawn open or closed (from the SimEvents door_opened / door_closed).
-export function setDoorOpen(doors, name, open) {
+// A door drawn open or closed (from the SimEvents door_opened / door_closed),
+// swung away from `pusher` (the robot's [x, y]: the door opened as it pushed).
+export function setDoorOpen(doors, name, open, pusher) {
   const d = doors.get(name);
-  if (d) d.rotation.z = d.userData.yaw + (open ? DOOR_OPEN_RAD : 0);
+  if (!d) return;
+  const yaw = d.userData.yaw;
+  // A positive turn swings the door's free end towards the normal (-sin yaw, cos yaw).
+  const side = pusher ? (pusher[0] - d.position.x) * -Math.sin(yaw) + (pusher[1] - d.position.y) * Math.cos(yaw) : -1;
+  d.rotation.z = yaw + (open ? (side > 0 ? -DOOR_OPEN_RAD : DOOR_OPEN_RAD) : 0);
 }
 
 // The movable objects at their positions in RobotState.

@@ -72,7 +72,8 @@ function onEvent(e) {
   if (e.channel_kind === 'task_event') state.task_events.push(e);
   else if (e.kind === 'door_opened' || e.kind === 'door_closed') {
     if (e.kind === 'door_opened') state.open_doors.add(e.a); else state.open_doors.delete(e.a);
-    if (view.doors) setDoorOpen(view.doors, e.a, e.kind === 'door_opened');
+    const r = state.robot_state;
+    if (view.doors) setDoorOpen(view.doors, e.a, e.kind === 'door_opened', r && r.position);
   }
   if (state.task_events.length > 100) state.task_events.shift();
 }
@@ -220,6 +221,7 @@ window.riseTrainee = {
   camera: () => ({ position: view.onboard.position.toArray(), direction: view.onboard.getWorldDirection(new THREE.Vector3()).toArray() }),
   stats: () => canvasStats($('view')),
   software: () => view.software,
+  doors: () => Object.fromEntries([...view.doors].map(([name, d]) => [name, d.rotation.z - d.userData.yaw])),
   sound: () => ({ enabled: !!sound.ctx && sound.ctx.state === 'running', level: sound.player ? sound.player.level() : 0,
                   held: sound.player ? sound.player.held : {}, one_shots: sound.player ? sound.player.oneShots : 0,
                   voices: sound.player ? sound.player.voices.size : 0 }),

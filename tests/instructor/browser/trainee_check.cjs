@@ -3,7 +3,8 @@
 // - drive: the console emulator drives the robot through rise-hild; the
 //   page's onboard camera follows RobotState and its picture changes; the
 //   HUD shows the speed, "OK · dead-man held", the task and its time left;
-//   the picture-in-picture and the minimap switch off and on; then
+//   the picture-in-picture and the minimap switch off and on; the robot
+//   pushes door_ab open and the page draws it swung open; then
 //   "READY failsafe": the test stops the emulator, and the HUD's change to
 //   FAILSAFE is timed by the page (the PanelState's utime, the push's arrival,
 //   the DOM change, the next frame, all on this host's wall clock).
@@ -67,8 +68,14 @@ async function drive(browser, result) {
   }, null, { timeout: 10000 })).jsonValue();
   await page.waitForFunction(() => (window.riseTrainee.state.cues.by_name.wheel_motors || {}).gain > 0, null, { timeout: 10000 });
   result.wheel_cue = await page.evaluate(() => window.riseTrainee.state.cues.by_name.wheel_motors);
-  await page.screenshot({ path: path.join(outDir, 'trainee_page.png') });
   await toggles(page, result);
+  // Driven on, the robot pushes door_ab open (building.yaml): rise-sim's
+  // SimEvent door_opened swings it in the page's world.
+  await page.waitForFunction(() => window.riseTrainee.state.open_doors.has('door_ab'), null, { timeout: 30000 });
+  await page.evaluate(() => new Promise((r) => setTimeout(r, 300)));
+  result.door_after = await page.evaluate(() => window.riseTrainee.doors().door_ab);
+  result.robot_at_door = await page.evaluate(() => window.riseTrainee.state.robot_state.position);
+  await page.screenshot({ path: path.join(outDir, 'trainee_page.png') });
   const since = await pageNow(page);
   say('READY failsafe');
   result.failsafe = await failsafeEntry(page, since);
