@@ -391,8 +391,9 @@ TEST_CASE("the trainee page's camera follows the robot, its HUD shows the task a
   CHECK_FALSE(result["shown_off"]["minimap"].asBool());
   CHECK(result["shown_on"]["pip"].asBool());
   CHECK(result["shown_on"]["minimap"].asBool());
-  // The door the robot pushed open, drawn swung away from it into room B
-  // (a turn of -80° from closed).
+  // The door the robot pushed open, drawn swung the way it drives, into
+  // room B (a turn of -80° from closed), whether the page heard of it as it
+  // happened or from the stream's recent events.
   CHECK(result["door_after"].asDouble() == Approx(-80.0 * M_PI / 180.0));
   CHECK(is_png(st.out_dir() + "/trainee_page.png"));
   // The failsafe: rise-hild's first failsafe PanelState after the console

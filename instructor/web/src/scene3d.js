@@ -8,7 +8,7 @@ import { ROBOT_COLOUR } from './common.js';
 const KIND_COLOURS = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x8d8d8d, prop: 0x9775fa };
 // How far an open door is drawn swung: RobotState carries no door angles,
 // only the SimEvents door_opened / door_closed say which doors stand open
-// (and the robot's side says which way it went).
+// (and the robot's heading says which way it went).
 const DOOR_OPEN_RAD = 80 * Math.PI / 180;
 
 // Whether WebGL runs in software (SwiftShader, llvmpipe: a machine without a
@@ -80,14 +80,18 @@ export function buildWorld(scene, world) {
 }
 
 // A door drawn open or closed (from the SimEvents door_opened / door_closed),
-// swung away from `pusher` (the robot's [x, y]: the door opened as it pushed).
-export function setDoorOpen(doors, name, open, pusher) {
+// swung the way the robot (`robotState`, the one that pushed it) drives, or,
+// while it stands, away from it.
+export function setDoorOpen(doors, name, open, robotState) {
   const d = doors.get(name);
   if (!d) return;
-  const yaw = d.userData.yaw;
-  // A positive turn swings the door's free end towards the normal (-sin yaw, cos yaw).
-  const side = pusher ? (pusher[0] - d.position.x) * -Math.sin(yaw) + (pusher[1] - d.position.y) * Math.cos(yaw) : -1;
-  d.rotation.z = yaw + (open ? (side > 0 ? -DOOR_OPEN_RAD : DOOR_OPEN_RAD) : 0);
+  const yaw = d.userData.yaw, r = robotState;
+  // A positive turn swings the door's free end towards the normal n = (-sin yaw, cos yaw).
+  const n = [-Math.sin(yaw), Math.cos(yaw)];
+  let toward = 1;
+  if (r && Math.abs(r.speed_mps) > 0.05) toward = Math.sign(r.speed_mps) * (Math.cos(r.yaw) * n[0] + Math.sin(r.yaw) * n[1]);
+  else if (r) toward = -((r.position[0] - d.position.x) * n[0] + (r.position[1] - d.position.y) * n[1]);
+  d.rotation.z = yaw + (open ? Math.sign(toward || 1) * DOOR_OPEN_RAD : 0);
 }
 
 // The movable objects at their positions in RobotState.

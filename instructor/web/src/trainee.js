@@ -72,8 +72,7 @@ function onEvent(e) {
   if (e.channel_kind === 'task_event') state.task_events.push(e);
   else if (e.kind === 'door_opened' || e.kind === 'door_closed') {
     if (e.kind === 'door_opened') state.open_doors.add(e.a); else state.open_doors.delete(e.a);
-    const r = state.robot_state;
-    if (view.doors) setDoorOpen(view.doors, e.a, e.kind === 'door_opened', r && r.position);
+    setDoorOpen(view.doors, e.a, e.kind === 'door_opened', state.robot_state);
   }
   if (state.task_events.length > 100) state.task_events.shift();
 }
@@ -111,7 +110,6 @@ function setup3d() {
   view.onboard = camera(70, 16 / 9);
   view.chase = camera(60, 4 / 3);
   Object.assign(view, buildWorld(view.scene, state.world));
-  for (const d of state.open_doors) setDoorOpen(view.doors, d, true);
   view.robot = robotMesh(state.world);
   view.scene.add(view.robot);
   view.mount = onboardMount(state.world);
