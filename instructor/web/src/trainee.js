@@ -184,7 +184,7 @@ function frame(t) {
 
 // ---- sound ------------------------------------------------------------------
 // Browsers start audio only from a user gesture: the button.
-const sound = { ctx: null, player: null };
+const sound = { ctx: null, player: null, level: 0, peak: 0 };
 async function toggleSound() {
   const b = $('sound-toggle');
   if (!sound.ctx) {
@@ -200,9 +200,18 @@ async function toggleSound() {
   b.classList.toggle('on', on);
 }
 
+// The output level, read every 25 ms (the analyser holds the last 46 ms), with
+// the peak since it was last reset: a short one-shot is caught even when the
+// page is slow to look.
+function trackLevel() {
+  if (!sound.player) return;
+  sound.level = sound.player.level();
+  sound.peak = Math.max(sound.peak, sound.level);
+}
+
 function showLevel() {
-  const p = sound.player;
-  $('sound-level').textContent = p && sound.ctx.state === 'running' ? 'level ' + p.level().toFixed(3) : '';
+  const on = sound.player && sound.ctx.state === 'running';
+  $('sound-level').textContent = on ? 'level ' + sound.level.toFixed(3) + ' (peak ' + sound.peak.toFixed(3) + ')' : '';
 }
 
 // ---- what the tests read -----------------------------------------------------
@@ -220,7 +229,9 @@ window.riseTrainee = {
   stats: () => canvasStats($('view')),
   software: () => view.software,
   doors: () => Object.fromEntries([...view.doors].map(([name, d]) => [name, d.rotation.z - d.userData.yaw])),
+  resetPeak: () => { sound.peak = 0; },
   sound: () => ({ enabled: !!sound.ctx && sound.ctx.state === 'running', level: sound.player ? sound.player.level() : 0,
+                  peak: sound.peak,
                   held: sound.player ? sound.player.held : {}, one_shots: sound.player ? sound.player.oneShots : 0,
                   voices: sound.player ? sound.player.voices.size : 0 }),
 };
@@ -241,6 +252,7 @@ function setupControls() {
     if (e.key === 'n' || e.key === 'N') minimap();
   });
   setInterval(() => { renderPanelLine(nowMs()); showLevel(); }, 100);  // a lost panel shows without a push
+  setInterval(trackLevel, 25);
 }
 
 async function main() {

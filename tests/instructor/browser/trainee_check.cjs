@@ -125,10 +125,12 @@ async function sound(browser, result) {
     result.levels.push({ gain: gains[i], rms: await level(page) });
   }
   result.held = await page.evaluate(() => window.riseTrainee.sound().held);
+  // The horn (0.5 s): its peak level as the page tracked it, then silence.
+  await page.evaluate(() => window.riseTrainee.resetPeak());
   say('ONESHOT');
   await page.waitForFunction(() => window.riseTrainee.sound().one_shots > 0, null, { timeout: 10000 });
-  result.one_shot_rms = await level(page);
   await page.evaluate(() => new Promise((r) => setTimeout(r, 800)));
+  result.one_shot_rms = await page.evaluate(() => window.riseTrainee.sound().peak);
   result.after_one_shot_rms = await level(page);
   result.cues_received = await page.evaluate(() => window.riseTrainee.state.cues.received);
   await virtualPanel(browser, page, result);
