@@ -18,6 +18,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <random>
 #include <set>
 #include <thread>
 
@@ -101,7 +102,35 @@ struct DemoOptions {
   std::string record_dir;  ///< passed to rise-hild --record
   uint16_t port = 0;
   double timeout_s = 45.0;
+  bool view = false;  ///< also run rise-instructor serve and print the trainee page's URL
 };
+
+// The web server of `rise demo --view`: loopback, a free port, a fresh token.
+struct DemoView {
+  uint16_t port = 0;
+  std::string token;
+  std::string token_file;
+  std::string url(const std::string& id) const {
+    return "http://127.0.0.1:" + std::to_string(port) + "/trainee.html?id=" + id + "&token=" + token;
+  }
+};
+
+// A token nobody guesses: 128 bits from the kernel's random source, in hex.
+std::string random_token() {
+  std::random_device rd;
+  std::string t;
+  for (int i = 0; i < 4; ++i) t += fmt_text("%08x", static_cast<unsigned>(rd()));
+  return t;
+}
+
+// The view server's port and token; the token goes into a file only its
+// owner reads, so that it is not on the server's command line.
+DemoView make_demo_view(const std::string& log_dir) {
+  DemoView v{free_tcp_port(), random_token(), log_dir + "/view.token"};
+  std::ofstream(v.token_file) << v.token << "\n";
+  std::filesystem::permissions(v.token_file, std::filesystem::perms::owner_read | std::filesystem::perms::owner_write);
+  return v;
+}
 
 // A child that is stopped when the guard goes (an exception, an early return).
 struct ChildProcessGuard {
@@ -124,9 +153,11 @@ std::optional<std::string> demo_station_id(const DemoOptions& o) {
   return id;
 }
 
-// rise-sim, rise-hild and the console emulator of one demo, each logging into log_dir.
+// rise-sim, rise-hild and the console emulator of one demo (and with
+// --view rise-instructor serve), each logging into log_dir.
 std::vector<rise::process::ChildProcess> start_demo_chain(const DemoOptions& o, const std::string& id,
-                                                          const std::string& bus, const std::string& log_dir) {
+                                                          const std::string& bus, const std::string& log_dir,
+                                                          const std::optional<DemoView>& view) {
   const std::string bin = rise::process::executable_dir();
   std::vector<rise::process::ChildProcess> children;
   children.emplace_back(std::vector<std::string>{bin + "/rise-sim", "--id", id, "--lcm", o.lcm_url, "--robot",
@@ -141,6 +172,12 @@ std::vector<rise::process::ChildProcess> start_demo_chain(const DemoOptions& o, 
                                "--can", "socketcand+listen://" + bus, "--script",
                                rise::panels::find_data_file(o.script), "--hold", "--start-on-feedback"},
       log_dir + "/rise-panel.log");
+  if (view)
+    children.emplace_back(
+        std::vector<std::string>{bin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(view->port),
+                                 "--token-file", view->token_file, "--lcm", o.lcm_url, "--robot",
+                                 rise::panels::find_data_file(o.robot)},
+        log_dir + "/rise-instructor.log");
   return children;
 }
 
@@ -306,8 +343,10 @@ int run_demo(const DemoOptions& o) {
   std::printf("rise demo: station '%s', LCM %s, console on socketcand://%s, logs in %s\n",
               id->c_str(), o.lcm_url.c_str(), bus.c_str(), log_dir.c_str());
   std::vector<rise::process::ChildProcess> children;
+  std::optional<DemoView> view;
   try {
-    children = start_demo_chain(o, *id, bus, log_dir);
+    if (o.view) view = make_demo_view(log_dir);
+    children = start_demo_chain(o, *id, bus, log_dir, view);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "rise demo: %s\n", e.what());
     return 2;
@@ -320,6 +359,9 @@ int run_demo(const DemoOptions& o) {
   monitor.accept_only(pids);
   DemoRun run(o, *id, log_dir, std::move(children), monitor);
   if (const int rc = run.wait_until_up(); rc != 0) return rc;
+  // Opens nothing: the URL is for a browser of the user's choice.
+  if (view)
+    std::printf("rise demo: trainee view (camera, HUD, sound) at %s\n", view->url(*id).c_str());
   std::printf("rise demo: chain up, playing %s\n", o.script.c_str());
   // The summary is printed after a failed run too: what was measured, and why not the rest.
   const int played = run.play();
@@ -498,6 +540,9 @@ int main(int argc, char** argv) {
   d->add_option("--port", demo.port, "socketcand TCP port (default: a free one)");
   d->add_option("--log-dir", demo.log_dir, "where the children's logs go (default /tmp/rise-demo-PID)");
   d->add_option("--timeout", demo.timeout_s, "give up after S seconds")->capture_default_str();
+  d->add_flag("--view", demo.view,
+              "also run rise-instructor serve (loopback, a free port, a fresh token) and print the trainee page's URL "
+              "for the demo's robot; opens nothing");
   d->add_option("--record", demo.record_dir,
                 "rise-hild records the session into DIR (rise-hild --record); replay it with "
                 "`rise-hild verify --record-dir DIR`");

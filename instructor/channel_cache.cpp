@@ -22,6 +22,14 @@ void ChannelCache::store_event(const std::string& trainee, const std::string& ki
   changed_.notify_all();
 }
 
+void ChannelCache::store_sound(const std::string& trainee, Json::Value value) {
+  std::lock_guard lock(mutex_);
+  value["trainee"] = trainee;
+  sounds_.emplace_back(++version_, std::move(value));
+  while (sounds_.size() > kRecentSounds) sounds_.pop_front();
+  changed_.notify_all();
+}
+
 std::optional<Json::Value> ChannelCache::changes_since(uint64_t* version, std::chrono::milliseconds wait) {
   std::unique_lock lock(mutex_);
   changed_.wait_for(lock, wait, [&] { return version_ > *version || closed_; });
@@ -38,9 +46,13 @@ std::optional<Json::Value> ChannelCache::changes_since(uint64_t* version, std::c
   Json::Value evs(Json::arrayValue);
   for (const auto& [v, e] : events_)
     if (v > *version) evs.append(e);
+  Json::Value sounds(Json::arrayValue);
+  for (const auto& [v, s] : sounds_)
+    if (v > *version && *version > 0) sounds.append(s);
   Json::Value update;
   update["channels"] = channels;
   update["events"] = evs;
+  update["sounds"] = sounds;
   *version = version_;
   return update;
 }

@@ -24,6 +24,9 @@ class ChannelCache {
  public:
   /// The events kept for streams that fall behind.
   static constexpr std::size_t kRecentEvents = 200;
+  /// The sound cues kept: rise-sim sends each continuous cue at the
+  /// RobotState rate, so a few per cue and push.
+  static constexpr std::size_t kRecentSounds = 400;
 
   /// Replaces `channel`'s latest message (rise/<trainee>/<kind>).
   void store_latest(const std::string& channel, const std::string& trainee, const std::string& kind,
@@ -32,9 +35,15 @@ class ChannelCache {
   /// "trainee" and "channel_kind".
   void store_event(const std::string& trainee, const std::string& kind, Json::Value value);
 
+  /// Appends a SoundCue (rise/<trainee>/sound), tagged with "trainee". Every
+  /// cue goes out, not only the latest: one-shots must each be played.
+  void store_sound(const std::string& trainee, Json::Value value);
+
   /// Waits up to `wait` for anything newer than *version and returns it as
-  /// {"channels": {channel: {trainee, kind, value}}, "events": [...]} (both
-  /// empty when nothing came); *version becomes the newest. nullopt once closed.
+  /// {"channels": {channel: {trainee, kind, value}}, "events": [...],
+  /// "sounds": [...]} (all empty when nothing came); *version becomes the
+  /// newest. A new stream (*version 0) gets no sounds: those played before
+  /// the page opened are over. nullopt once closed.
   std::optional<Json::Value> changes_since(uint64_t* version, std::chrono::milliseconds wait);
 
   /// Per trainee id: {"id": id, <kind>: latest message, ...}.
@@ -56,6 +65,7 @@ class ChannelCache {
   uint64_t version_ = 0;
   std::map<std::string, Latest> latest_;
   std::deque<std::pair<uint64_t, Json::Value>> events_;
+  std::deque<std::pair<uint64_t, Json::Value>> sounds_;
 };
 
 }  // namespace rise::instructor

@@ -287,4 +287,17 @@ Json::Value task_event_json(const rise_msgs::TaskEvent& m) {
   return v;
 }
 
+Json::Value sound_cue_json(const rise_msgs::SoundCue& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["sim_time_s"] = m.sim_time_s;
+  v["name"] = m.name;
+  v["sample"] = m.sample;
+  v["continuous"] = m.continuous;
+  v["gain"] = m.gain;
+  v["pitch"] = m.pitch;
+  v["detail"] = m.detail;
+  return v;
+}
+
 }  // namespace rise::instructor

@@ -3,7 +3,7 @@
 // What the web console sends its pages, as JSON: the world and the robot the
 // map and the 3D view draw, the console definition the virtual panel copies,
 // the fault buttons, and the classroom's LCM messages (PanelState,
-// RobotState, TaskStatus, SimEvent, TaskEvent) as the SSE stream and
+// RobotState, TaskStatus, SimEvent, TaskEvent, SoundCue) as the SSE stream and
 // /api/trainees carry them. Pure: no I/O, no clock but the publisher's age.
 
 #include <json/json.h>
@@ -17,6 +17,7 @@
 #include "rise_msgs/Publisher.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
+#include "rise_msgs/SoundCue.hpp"
 #include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 
@@ -54,5 +55,7 @@ Json::Value robot_json(const rise_msgs::RobotState& m);
 Json::Value task_status_json(const rise_msgs::TaskStatus& m);
 Json::Value sim_event_json(const rise_msgs::SimEvent& m);
 Json::Value task_event_json(const rise_msgs::TaskEvent& m);
+/// What the trainee page's WebAudio plays (msgs/lcmtypes/SoundCue.lcm).
+Json::Value sound_cue_json(const rise_msgs::SoundCue& m);
 
 }  // namespace rise::instructor

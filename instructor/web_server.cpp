@@ -35,6 +35,7 @@
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
 #include "rise_msgs/SimEvent.hpp"
+#include "rise_msgs/SoundCue.hpp"
 #include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 #include "sim/world_description.hpp"
@@ -127,6 +128,8 @@ struct WebServer::Impl {
       if (auto s = decode<rise_msgs::SimEvent>(rbuf)) cache.store_event(trainee, kind, sim_event_json(*s));
     } else if (kind == "task_event") {
       if (auto s = decode<rise_msgs::TaskEvent>(rbuf)) cache.store_event(trainee, kind, task_event_json(*s));
+    } else if (kind == "sound") {
+      if (auto s = decode<rise_msgs::SoundCue>(rbuf)) cache.store_sound(trainee, sound_cue_json(*s));
     }
   }
 
@@ -182,7 +185,7 @@ WebServer::~WebServer() { stop(); }
 void WebServer::start() {
   Impl& d = *impl_;
   add_routes(d.http, d.route_context());
-  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|fault_command)",
+  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|sound|fault_command)",
                           +[](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Impl* self) {
                             self->on_message(rbuf, channel);
                           },

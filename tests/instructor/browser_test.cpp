@@ -4,18 +4,25 @@
 // console emulator drives it through rise-hild, and its fault button injects
 // a signed fault that rise-hild applies and reports in PanelState, and its
 // camera-blackout button blacks out the camera inset until the fault ends; the
-// virtual panel page drives the robot, and closing it stops the robot.
+// virtual panel page drives the robot, and closing it stops the robot; the
+// trainee page's camera follows the robot, its HUD shows the failsafe, its
+// WebAudio plays SoundCues at their gain; `rise demo --view` serves it.
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
+#include <thread>
 
 #include "msgs/channels.hpp"
 #include "msgs/command_auth.hpp"
 #include "process/child_process.hpp"
+#include "msgs/clock.hpp"
+#include "rise_msgs/SoundCue.hpp"
+#include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
 #include "web_peer.hpp"
 
@@ -63,7 +70,8 @@ struct Stations {
   ChildProcess sim, server, hild, emulator;
 
   /// `emulated`: the console emulator → rise-hild drive the robot too.
-  explicit Stations(bool emulated) {
+  /// `world`: a file of sim/worlds for rise-sim and the server ("": the yard).
+  explicit Stations(bool emulated, const std::string& world = "") {
     char tmpl[] = "/tmp/rise-browser-test-XXXXXX";
     dir = ::mkdtemp(tmpl);
     rise::msgs::write_new_instructor_key((dir / "instructor.key").string());
@@ -73,8 +81,10 @@ struct Stations {
     fs::create_directories(dir / "scenarios");
     std::ofstream(dir / "scenarios" / "stuck.yaml")
         << "scenario: stuck\nfaults:\n  - {id: s, kind: stuck_at, target: drive_y, value: 0.4, at: 1.0}\n";
-    sim = ChildProcess({kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100", "--instructor-key", key},
-                       (dir / "sim.log").string());
+    std::vector<std::string> sim_argv{kBin + "/rise-sim", "--id", id, "--lcm", kLcm, "--panel-timeout-ms", "100",
+                                      "--instructor-key", key};
+    if (!world.empty()) sim_argv.insert(sim_argv.end(), {"--world", kSource + "/sim/worlds/" + world});
+    sim = ChildProcess(sim_argv, (dir / "sim.log").string());
     if (emulated) {
       // Forward at half stick, dead-man held, for as long as the test runs.
       std::ofstream(dir / "drive.txt") << "0.0 mode drive\n0.0 speed medium\n0.2 deadman pressed\n0.5 drive_y 0.5\n";
@@ -88,7 +98,7 @@ struct Stations {
                           (dir / "hild.log").string());
     }
     server = ChildProcess({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token",
-                           token, "--lcm", kLcm, "--world", kSource + "/sim/worlds/yard.yaml", "--instructor-key",
+                           token, "--lcm", kLcm, "--world", kSource + "/sim/worlds/" + (world.empty() ? "yard.yaml" : world), "--instructor-key",
                            (dir / "instructor.key").string(), "--reports-dir", (dir / "reports").string(), "--scenarios-dir",
                            (dir / "scenarios").string()},
                           (dir / "server.log").string());
@@ -265,4 +275,248 @@ TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, an
         return !r.motors_enabled && std::abs(r.linear_velocity_mps[0]) < 0.02;
       },
       5000));
+}
+
+namespace {
+/// Whether the check's log has a line `line` yet (the check says where it is).
+bool log_has(const fs::path& log, const std::string& line) {
+  std::ifstream in(log);
+  for (std::string l; std::getline(in, l);)
+    if (l == line) return true;
+  return false;
+}
+
+/// The utime of the first PanelState of the failsafe run that holds the one
+/// of `utime` (the one the page showed), or 0 when none has that utime.
+int64_t failsafe_run_start(const std::vector<rise_msgs::PanelState>& panels, int64_t utime) {
+  for (std::size_t i = 0; i < panels.size(); ++i) {
+    if (panels[i].utime != utime) continue;
+    while (i > 0 && panels[i - 1].failsafe) --i;
+    return panels[i].utime;
+  }
+  return 0;
+}
+
+/// The HUD's change to FAILSAFE (the page's log entry) against the first
+/// failsafe PanelState on LCM: publication → the text in the DOM, in ms.
+/// Both clocks are this host's wall clock.
+double hud_latency_ms(const Json::Value& entry, int64_t first_utime) {
+  return entry["dom_ms"].asDouble() - static_cast<double>(first_utime) / 1000.0;
+}
+
+rise_msgs::SoundCue probe_cue(const std::string& id, bool continuous, const std::string& sample, float gain) {
+  rise_msgs::SoundCue c{};
+  c.utime = rise::msgs::wall_us();
+  c.robot_id = id;
+  c.name = continuous ? "probe" : "probe_horn";
+  c.sample = sample;
+  c.continuous = continuous;
+  c.gain = gain;
+  c.pitch = 1.0f;
+  c.detail = "browser_test";
+  return c;
+}
+}  // namespace
+
+TEST_CASE("the trainee page's camera follows the robot, its HUD shows the task and the failsafe within 200 ms",
+          "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st(true, "building.yaml");  // room A, the door to room B straight ahead
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  const fs::path log = st.dir / "trainee_check.log";
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/trainee_check.cjs", st.base(), st.token, st.id,
+                     st.out_dir(), kWeb, "drive"},
+                    log.string());
+  // A trainer's TaskStatus and a TaskEvent at ~2 Hz while the emulator drives.
+  rise_msgs::TaskStatus task{};
+  task.trainee_id = st.id;
+  task.task = "approach_object";
+  task.state = "running";
+  task.time_limit_s = 120.0;
+  rise_msgs::TaskEvent event{};
+  event.task = "approach_object";
+  event.name = "object_touched";
+  event.points = 5;
+  event.score = 5;
+  int ticks = 0;
+  int64_t stopped_us = 0;
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] {
+    if (ticks++ % 50 == 0) {
+      task.utime = event.utime = rise::msgs::wall_us();
+      task.task_time_s = ticks * 0.01;
+      peer.lcm().publish(rise::msgs::task_status_channel(st.id), &task);
+      peer.lcm().publish(rise::msgs::task_event_channel(st.id), &event);
+    }
+    // The page is ready: the console goes away, rise-hild fails safe.
+    if (stopped_us == 0 && ticks % 5 == 0 && log_has(log, "READY failsafe")) {
+      stopped_us = rise::msgs::wall_us();
+      st.emulator.stop();
+    }
+  });
+  if (!finished) node.stop();
+  const auto result = read_result(log.string());
+  INFO(read_file(log.string()));
+  REQUIRE(finished);
+  REQUIRE(result.isObject());
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["status"].asInt() == 200);
+  CHECK(result["page_errors"].size() == 0);
+  // The camera moved with the robot, stays at its mount (skid4's front camera,
+  // 0.41 m ahead), and the picture changed.
+  const auto moved = [](const Json::Value& a, const Json::Value& b) {
+    return std::hypot(a[0].asDouble() - b[0].asDouble(), a[1].asDouble() - b[1].asDouble());
+  };
+  CHECK(moved(result["camera_first"]["position"], result["camera_later"]["position"]) > 0.5);
+  CHECK(moved(result["robot_first"], result["robot_later"]) > 0.4);
+  CHECK(moved(result["camera_later"]["position"], result["robot_later"]) < 1.0);
+  CHECK(result["thumb_changed"].asDouble() > 0.05);
+  CHECK(result["stats"]["variance"].asDouble() > 50.0);
+  WARN("trainee page: camera moved " << moved(result["camera_first"]["position"], result["camera_later"]["position"])
+                                     << " m; " << result["thumb_changed"].asDouble() * 100
+                                     << " % of the picture's 32 × 18 cells changed by more than 8 grey levels");
+  // The HUD: speed, the panel, the task with its time left and its event.
+  CHECK(result["hud"]["hud-panel"].asString() == "OK · dead-man held");
+  CHECK(std::stod(result["hud"]["hud-speed"].asString()) > 0.05);
+  CHECK(result["hud"]["hud-time"].asString().find("s left") != std::string::npos);
+  CHECK(result["hud"]["hud-events"].asString().find("object_touched +5") != std::string::npos);
+  CHECK(result["wheel_cue"]["gain"].asDouble() > 0.0);  // rise-sim's motor cue came through the stream
+  CHECK(result["shown_before"]["pip"].asBool());
+  CHECK(result["shown_before"]["minimap"].asBool());
+  CHECK_FALSE(result["shown_off"]["pip"].asBool());
+  CHECK_FALSE(result["shown_off"]["minimap"].asBool());
+  CHECK(result["shown_on"]["pip"].asBool());
+  CHECK(result["shown_on"]["minimap"].asBool());
+  // The door the robot pushed open, drawn swung the way it drives, into
+  // room B (a turn of -80° from closed), whether the page heard of it as it
+  // happened or from the stream's recent events.
+  CHECK(result["door_after"].asDouble() == Approx(-80.0 * M_PI / 180.0));
+  CHECK(is_png(st.out_dir() + "/trainee_page.png"));
+  // The failsafe: rise-hild's first failsafe PanelState after the console
+  // went away, to the HUD's text in the page's DOM.
+  REQUIRE(stopped_us > 0);
+  const int64_t first = failsafe_run_start(peer.daemon_panels, result["failsafe"]["panel_utime"].asInt64());
+  REQUIRE(first > 0);
+  const auto& e = result["failsafe"];
+  CHECK(result["failsafe_text"].asString().rfind("FAILSAFE", 0) == 0);
+  const double latency = hud_latency_ms(e, first);
+  WARN("HUD failsafe: PanelState published → DOM " << latency << " ms (push arrival → DOM "
+                                                    << e["dom_ms"].asDouble() - e["arrival_ms"].asDouble()
+                                                    << " ms, → next frame "
+                                                    << e["frame_ms"].asDouble() - e["dom_ms"].asDouble() << " ms more); console stopped → DOM "
+                                                    << e["dom_ms"].asDouble() - static_cast<double>(stopped_us) / 1000.0 << " ms");
+  CHECK(latency >= 0.0);
+  CHECK(latency < 200.0);
+}
+
+TEST_CASE("the trainee page plays SoundCues at their gain, and shows the virtual panel failing safe", "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st(false);
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  const fs::path log = st.dir / "trainee_check.log";
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/trainee_check.cjs", st.base(), st.token, st.id,
+                     st.out_dir(), kWeb, "sound"},
+                    log.string());
+  // A continuous cue at the gain of the phase the page asks for, every 20 ms
+  // as rise-sim sends its own; one horn one-shot when asked.
+  const float gains[] = {0.2f, 0.4f, 0.8f, 0.0f};
+  int phase = -1, ticks = 0;
+  bool horn = false;
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] {
+    if (++ticks % 2 != 0) return;
+    if (phase < 3 && log_has(log, "PHASE " + std::to_string(phase + 1))) ++phase;
+    if (phase >= 0) {
+      const auto cue = probe_cue(st.id, true, "wheel_motor_whine", gains[phase]);
+      peer.lcm().publish(rise::msgs::sound_channel(st.id), &cue);
+    }
+    if (!horn && log_has(log, "ONESHOT")) {
+      horn = true;
+      const auto cue = probe_cue(st.id, false, "horn", 0.8f);
+      peer.lcm().publish(rise::msgs::sound_channel(st.id), &cue);
+    }
+  });
+  if (!finished) node.stop();
+  const auto result = read_result(log.string());
+  INFO(read_file(log.string()));
+  REQUIRE(finished);
+  REQUIRE(result.isObject());
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["page_errors"].size() == 0);
+  CHECK(result["button_before"].asString().find("click to enable sound") != std::string::npos);
+  CHECK(result["button_after"].asString().find("sound on") != std::string::npos);
+  // The level follows the gain, roughly in proportion, and is silent at 0.
+  const auto& lv = result["levels"];
+  REQUIRE(lv.size() == 4);
+  const double r2 = lv[0]["rms"].asDouble(), r4 = lv[1]["rms"].asDouble(), r8 = lv[2]["rms"].asDouble(),
+               r0 = lv[3]["rms"].asDouble();
+  WARN("trainee page audio RMS at gain 0.2 / 0.4 / 0.8 / 0: " << r2 << " / " << r4 << " / " << r8 << " / " << r0
+                                                              << "; horn " << result["one_shot_rms"].asDouble());
+  CHECK(r2 > 0.005);
+  CHECK(r4 / r2 == Approx(2.0).epsilon(0.2));
+  CHECK(r8 / r2 == Approx(4.0).epsilon(0.2));
+  CHECK(r0 < 0.01 * r8);
+  CHECK(result["held"]["probe"]["voice"].asString() == "wheel_motor_whine");
+  // The one-shot sounded and died away.
+  CHECK(result["one_shot_rms"].asDouble() > 0.01);
+  CHECK(result["after_one_shot_rms"].asDouble() < 0.01 * result["one_shot_rms"].asDouble());
+  // The virtual panel: held, then closed → FAILSAFE on the trainee page.
+  CHECK(result["virtual_held"].asString() == "OK · dead-man held");
+  CHECK(result["virtual_failsafe_text"].asString().rfind("FAILSAFE", 0) == 0);
+  const int64_t first = failsafe_run_start(peer.panels, result["virtual_failsafe"]["panel_utime"].asInt64());
+  REQUIRE(first > 0);
+  const double latency = hud_latency_ms(result["virtual_failsafe"], first);
+  WARN("HUD failsafe after the virtual panel closed: PanelState published → DOM " << latency << " ms");
+  CHECK(latency >= 0.0);
+  CHECK(latency < 200.0);
+}
+
+TEST_CASE("rise demo --view serves the trainee page and prints its URL for the demo's robot", "[instructor]") {
+  if (!fs::exists(kWeb + "/dist/trainee.html")) {
+    WARN("skipped: the pages are not built (instructor/web: npm ci && node build.mjs)");
+    return;
+  }
+  char tmpl[] = "/tmp/rise-demo-view-XXXXXX";
+  const fs::path dir = ::mkdtemp(tmpl);
+  const std::string id = "view" + std::to_string(::getpid());
+  ChildProcess demo({kBin + "/rise", "demo", "--view", "--id", id, "--lcm", kLcm, "--log-dir", (dir / "logs").string()},
+                    (dir / "demo.log").string());
+  // The URL is printed once the chain is up.
+  static const std::regex url_re(R"(trainee view \(camera, HUD, sound\) at http://127\.0\.0\.1:(\d+)(/trainee\.html\?id=([^&]+)&token=(\w+)))");
+  std::smatch m;
+  std::string out;
+  for (int i = 0; i < 300 && demo.running(); ++i) {
+    out = read_file((dir / "demo.log").string());
+    if (std::regex_search(out, m, url_re)) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  INFO(out);
+  REQUIRE(m.size() == 5);
+  CHECK(m[3] == id);
+  httplib::Client http("127.0.0.1", std::stoi(m[1]));
+  const auto page = http.Get(m[2].str().c_str());
+  REQUIRE(page);
+  CHECK(page->status == 200);
+  CHECK(page->body.find("trainee.js") != std::string::npos);
+  const auto no_token = http.Get(("/trainee.html?id=" + id).c_str());
+  REQUIRE(no_token);
+  CHECK(no_token->status == 401);
+  // The server hears the demo's robot.
+  const auto trainees = http.Get("/api/trainees", {{"X-Rise-Token", m[4].str()}});
+  REQUIRE(trainees);
+  CHECK(trainees->status == 200);
+  const auto list = parse_json(trainees->body);
+  bool robot = false;
+  for (const auto& t : list) robot |= t["id"].asString() == id && t.isMember("robot_state");
+  CHECK(robot);
+  demo.stop(5000);
+  fs::remove_all(dir);
 }

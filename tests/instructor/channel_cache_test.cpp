@@ -62,3 +62,24 @@ TEST_CASE("the channel cache keeps the newest events for a stream that falls beh
   REQUIRE((*update)["events"].size() == ChannelCache::kRecentEvents);
   CHECK((*update)["events"][0]["n"].asInt() == 50);
 }
+
+TEST_CASE("the channel cache sends every sound cue to a stream, but none from before it opened", "[instructor]") {
+  ChannelCache cache;
+  cache.store_sound("a", value(1));  // played before the page opened
+  uint64_t version = 0;
+  auto first = cache.changes_since(&version, 0ms);
+  REQUIRE(first);
+  CHECK((*first)["sounds"].empty());
+  // Two cues between pushes: both go out (a one-shot must not be coalesced away).
+  cache.store_sound("a", value(2));
+  cache.store_sound("b", value(3));
+  auto second = cache.changes_since(&version, 0ms);
+  REQUIRE(second);
+  REQUIRE((*second)["sounds"].size() == 2);
+  CHECK((*second)["sounds"][0]["n"].asInt() == 2);
+  CHECK((*second)["sounds"][1]["trainee"].asString() == "b");
+  CHECK((*second)["channels"].empty());
+  auto none = cache.changes_since(&version, 0ms);
+  REQUIRE(none);
+  CHECK((*none)["sounds"].empty());
+}

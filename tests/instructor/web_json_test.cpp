@@ -78,3 +78,23 @@ TEST_CASE("the RobotState JSON gives the yaw of the orientation and names the ob
   CHECK(v["objects"][0]["name"].asString() == "crate");
   CHECK(v["objects"][0]["position"][1].asDouble() == Approx(2.0).margin(1e-12));
 }
+
+TEST_CASE("the SoundCue JSON carries what the trainee page plays", "[instructor]") {
+  rise_msgs::SoundCue m{};
+  m.utime = 1700000000123456;
+  m.sim_time_s = 2.5;
+  m.name = "wheel_motors";
+  m.sample = "wheel_motor_whine";
+  m.continuous = true;
+  m.gain = 0.25f;
+  m.pitch = 1.5f;
+  m.detail = "drive_speed 0.620";
+  const Json::Value v = rise::instructor::sound_cue_json(m);
+  CHECK(v["utime"].asInt64() == 1700000000123456);
+  CHECK(v["name"].asString() == "wheel_motors");
+  CHECK(v["sample"].asString() == "wheel_motor_whine");
+  CHECK(v["continuous"].asBool());
+  CHECK(v["gain"].asDouble() == Approx(0.25));
+  CHECK(v["pitch"].asDouble() == Approx(1.5));
+  CHECK(v["detail"].asString() == "drive_speed 0.620");
+}

@@ -1,6 +1,8 @@
 // The instructor console: live map, 3D view, panels, faults, training, reports.
 import * as THREE from 'three';
 import { api, getJson, postJson, stream, el, token, ROBOT_COLOUR } from './common.js';
+import { createView, camera, buildWorld, robotMesh as makeRobotMesh, poseRobot, placeObjects, onboardMount, placeOnboard,
+  placeChase, cameraBlackedOut, renderInto, canvasStats } from './scene3d.js';
 
 const state = {
   world: null,
@@ -91,80 +93,26 @@ function drawMap() {
   }
 }
 
-// ---- 3D view ------------------------------------------------------------
+// ---- 3D view (the scene: scene3d.js, shared with the trainee page) ----------
 const view = {};
 function setup3d() {
   const canvas = document.getElementById('view3d');
-  // preserveDrawingBuffer: the tests read the pixels back.
-  view.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-  view.renderer.setSize(canvas.width, canvas.height, false);
-  view.renderer.setScissorTest(true);
-  view.scene = new THREE.Scene();
-  view.scene.background = new THREE.Color(0x87a8c8);
-  view.scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
-  const sun = new THREE.DirectionalLight(0xffffff, 1.5); sun.position.set(5, -3, 10); view.scene.add(sun);
-  view.chase = new THREE.PerspectiveCamera(60, canvas.width / canvas.height, 0.05, 200);
-  view.chase.up.set(0, 0, 1);
-  view.onboard = new THREE.PerspectiveCamera(70, 4 / 3, 0.05, 200);
-  view.onboard.up.set(0, 0, 1);
+  Object.assign(view, createView(canvas));
+  view.chase = camera(60, canvas.width / canvas.height);
+  view.onboard = camera(70, 4 / 3);
   view.robots = new Map();
-  view.objects = new Map();
 }
 
 function buildScene() {
-  const ground = new THREE.Mesh(new THREE.PlaneGeometry(200, 200), new THREE.MeshLambertMaterial({ color: 0x5b6b4a }));
-  view.scene.add(ground);
-  const grid = new THREE.GridHelper(100, 100, 0x333333, 0x444444); grid.rotation.x = Math.PI / 2; grid.position.z = 0.01;
-  view.scene.add(grid);
-  const colours = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x8d8d8d, prop: 0x9775fa };
-  for (const b of state.world.boxes) {
-    const m = new THREE.Mesh(new THREE.BoxGeometry(...b.size), new THREE.MeshLambertMaterial({ color: colours[b.kind] || colours.prop }));
-    m.position.set(...b.center); m.rotation.z = b.yaw;
-    view.scene.add(m);
-  }
-  for (const r of state.world.regions) {
-    const size = [0, 1, 2].map((i) => Math.max(0.01, r.max[i] - r.min[i]));
-    const m = new THREE.Mesh(new THREE.BoxGeometry(...size),
-      new THREE.MeshBasicMaterial({ color: 0x2ea043, transparent: true, opacity: 0.2, depthWrite: false }));
-    m.position.set(...[0, 1, 2].map((i) => (r.max[i] + r.min[i]) / 2));
-    view.scene.add(m);
-  }
-  for (const o of state.world.objects) {
-    const m = new THREE.Mesh(new THREE.BoxGeometry(...o.size), new THREE.MeshLambertMaterial({ color: 0xe3b341 }));
-    m.position.set(...o.center); view.scene.add(m); view.objects.set(o.name, m);
-  }
+  view.objects = buildWorld(view.scene, state.world).objects;
 }
 
 function robotMesh(id) {
   if (!view.robots.has(id)) {
-    const g = new THREE.Group();
-    const size = (state.world.robot && state.world.robot.chassis_size) || [0.8, 0.5, 0.25];
-    // Unlit: its colour reaches the screen as it is (the tests look for it).
-    const body = new THREE.Mesh(new THREE.BoxGeometry(...size), new THREE.MeshBasicMaterial({ color: ROBOT_COLOUR }));
-    g.add(body);
-    const nose = new THREE.Mesh(new THREE.BoxGeometry(0.15, size[1] / 2, 0.08), new THREE.MeshLambertMaterial({ color: 0x222222 }));
-    nose.position.set(size[0] / 2 - 0.08, 0, size[2] / 2 + 0.04); g.add(nose);
+    const g = makeRobotMesh(state.world);
     view.scene.add(g); view.robots.set(id, g);
   }
   return view.robots.get(id);
-}
-
-// The onboard camera: the robot file's first camera mount (`sensors.cameras`,
-// base frame, x forward, z up, rpy; e.g. skid4's "front" 0.41 m ahead, 10°
-// down), or without a robot file 0.30 m ahead and 0.50 m above the base,
-// 10° down; placed from RobotState's base pose.
-function onboardMount() {
-  const c = state.world.robot && state.world.robot.cameras && state.world.robot.cameras[0];
-  return c ? { name: c.name, position: c.position, rpy: c.rpy } : { name: 'onboard', position: [0.30, 0, 0.50], rpy: [0, 10 * Math.PI / 180, 0] };
-}
-
-// Whether the robot's RobotState.active_faults ("id: camera_blackout
-// target", target "" = every camera) blacks out the camera `name`.
-function cameraBlackedOut(robotState, name) {
-  return (robotState.active_faults || []).some((f) => {
-    const m = /^[^:]*: camera_blackout ?(.*)$/.exec(f);
-    return m && (m[1].trim() === '' || m[1].trim() === name);
-  });
 }
 
 // The inset's rectangle in canvas pixels (y up, as WebGL's viewport).
@@ -177,39 +125,21 @@ function render3d() {
   if (!view.renderer || !state.world) return;
   for (const [id, t] of state.trainees) {
     const r = t.robot_state; if (!r) continue;
-    const g = robotMesh(id);
-    const q = r.orientation_wxyz;
-    g.position.set(...r.position);
-    g.quaternion.set(q[1], q[2], q[3], q[0]);
-    for (const o of r.objects) { const m = view.objects.get(o.name); if (m) m.position.set(...o.position); }
+    poseRobot(robotMesh(id), r);
+    placeObjects(view.objects, r);
   }
   const sel = state.trainees.get(state.selected);
   const r = sel && sel.robot_state;
   const pos = r ? new THREE.Vector3(...r.position) : new THREE.Vector3(state.world.robot_start[0], state.world.robot_start[1], 0.2);
-  const yaw = r ? r.yaw : state.world.robot_start[2];
-  const fwd = new THREE.Vector3(Math.cos(yaw), Math.sin(yaw), 0);
-  view.chase.position.copy(pos).addScaledVector(fwd, -4.0).add(new THREE.Vector3(0, 0, 2.5));
-  view.chase.lookAt(pos);
+  placeChase(view.chase, pos, r ? r.yaw : state.world.robot_start[2]);
   const w = view.renderer.domElement.width, h = view.renderer.domElement.height;
-  view.renderer.setViewport(0, 0, w, h); view.renderer.setScissor(0, 0, w, h);
-  view.renderer.render(view.scene, view.chase);
+  renderInto(view.renderer, view.scene, view.chase, { x: 0, y: 0, w, h });
   if (r) {
-    const m = onboardMount(), q = robotMesh(state.selected).quaternion;
-    const cam = new THREE.Vector3(...m.position).applyQuaternion(q).add(pos);
-    view.onboard.position.copy(cam);
-    // The mount's x axis, R = Rz(yaw) Ry(pitch) Rx(roll), in the world.
-    const [, p, y] = m.rpy;
-    const dir = new THREE.Vector3(Math.cos(p) * Math.cos(y), Math.cos(p) * Math.sin(y), -Math.sin(p)).applyQuaternion(q);
-    view.onboard.lookAt(cam.clone().add(dir));
-    const inset = insetRect(w, h);
-    view.renderer.setViewport(inset.x, inset.y, inset.w, inset.h); view.renderer.setScissor(inset.x, inset.y, inset.w, inset.h);
+    const m = onboardMount(state.world);
+    placeOnboard(view.onboard, m, robotMesh(state.selected));
+    // The camera sends nothing while blacked out: the inset is black, labelled.
     const blackout = cameraBlackedOut(r, m.name);
-    if (blackout) {
-      // The camera sends nothing: the inset is black, labelled.
-      view.renderer.setClearColor(0x000000, 1); view.renderer.clear();
-    } else {
-      view.renderer.render(view.scene, view.onboard);
-    }
+    renderInto(view.renderer, view.scene, view.onboard, insetRect(w, h), blackout);
     setCameraLabel(blackout ? 'camera blackout (' + m.name + ')' : '');
   } else {
     setCameraLabel('');
@@ -353,21 +283,6 @@ function frame() {
   requestAnimationFrame(frame);
 }
 
-// Pixel statistics of a canvas for the browser tests: the variance of the
-// luminance, and how many pixels carry the robot's colour.
-function canvasStats(canvas) {
-  const c = document.createElement('canvas'); c.width = canvas.width; c.height = canvas.height;
-  const g = c.getContext('2d'); g.drawImage(canvas, 0, 0);
-  const d = g.getImageData(0, 0, c.width, c.height).data;
-  const want = [(ROBOT_COLOUR >> 16) & 255, (ROBOT_COLOUR >> 8) & 255, ROBOT_COLOUR & 255];
-  let sum = 0, sum2 = 0, robot = 0; const n = d.length / 4;
-  for (let i = 0; i < d.length; i += 4) {
-    const y = 0.299 * d[i] + 0.587 * d[i + 1] + 0.114 * d[i + 2]; sum += y; sum2 += y * y;
-    if (Math.abs(d[i] - want[0]) <= 12 && Math.abs(d[i + 1] - want[1]) <= 12 && Math.abs(d[i + 2] - want[2]) <= 12) robot++;
-  }
-  const mean = sum / n;
-  return { variance: sum2 / n - mean * mean, robot_pixels: robot, pixels: n };
-}
 // The camera inset's mean luminance (0..255) and the label over it.
 function insetStats() {
   const v = document.getElementById('view3d'), r = insetRect(v.width, v.height);

@@ -70,15 +70,15 @@ run(async () => {
     // for its 10 s; the camera inset goes black, labelled, and comes back.
     result.inset_before = await page.evaluate(() => window.riseConsole.insetStats());
     await page.click('button[data-fault="camera-blackout"]');
-    await page.waitForFunction(() => {
+    // Read in the same poll that sees the black inset: on a loaded machine the
+    // fault's 10 s may be over by a later evaluate.
+    const blackout = await (await page.waitForFunction(() => {
       const s = window.riseConsole.insetStats();
-      return s.label.includes('camera blackout') && s.max < 8;
-    }, null, { timeout: 15000 });
-    result.inset_blackout = await page.evaluate(() => window.riseConsole.insetStats());
-    result.blackout_robot_faults = await page.evaluate(() => {
       const t = window.riseConsole.state.trainees.get(window.riseConsole.state.selected);
-      return t.robot_state.active_faults;
-    });
+      return s.label.includes('camera blackout') && s.max < 8 && { inset: s, faults: t.robot_state.active_faults };
+    }, null, { timeout: 15000 })).jsonValue();
+    result.inset_blackout = blackout.inset;
+    result.blackout_robot_faults = blackout.faults;
     await page.locator('#view3d-box').screenshot({ path: path.join(outDir, 'instructor_view3d_blackout.png') });
     await page.waitForFunction(() => {
       const s = window.riseConsole.insetStats();
