@@ -56,7 +56,8 @@ TEST_CASE("a station's clock offset is measured and its states are judged in our
     late_leg.receive_utime += 8'000;  // the probe's leg took 8 ms longer: 4 ms off
     late_leg.utime += 8'000;
     links.on_echo("b", late_leg, t4 + 8'000);
-    links.on_echo("b", echo(kWall + 500'000, 7'000'000, 200, &t4), t4);
+    const auto quick = echo(kWall + 500'000, 7'000'000, 200, &t4);
+    links.on_echo("b", quick, t4);
     REQUIRE(links.offset_us("b"));
     CHECK(*links.offset_us("b") == 7'000'000);
     const auto l = links.link("b", 1'000'000);
