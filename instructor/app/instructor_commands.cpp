@@ -266,6 +266,9 @@ void add_list_command(CLI::App& app) {
                         "@" + p.publisher.host;
       std::printf("%-10s %-28s %-22s %-24s %-20s %s\n", r.id.c_str(), panel.c_str(), robot.c_str(), task.c_str(),
                   faults.empty() ? "-" : faults.c_str(), publishers.empty() ? "-" : publishers.c_str());
+      if (r.lost(now))
+        std::printf("  LOST: nothing from rise/%s/* for %.1f s\n", r.id.c_str(),
+                    static_cast<double>(now - r.last_seen_us) / 1e6);
       for (const auto& what : r.duplicated(now)) {
         std::printf("  DUPLICATE: rise/%s/%s has more than one publisher:\n", r.id.c_str(), what.c_str());
         for (const auto& p : r.publishers)

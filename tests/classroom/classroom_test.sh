@@ -20,6 +20,7 @@
 #      state period and the log's slack), /api/trainees shows C lost within
 #      1 s, and so does the console page's trainee list (headless Chromium);
 #      A and B stay live; C stays lost for the 2 s its link is down;
+#      `rise-instructor list`, listening across the cut, marks C (only) LOST;
 #   4. the link back (ip link set up, the multicast route again as ifup
 #      would add it): C live again on the API and the page, its motors enabled.
 # Every name carries this script's pid; the namespaces and the processes in
@@ -217,6 +218,11 @@ log "rise-instructor inject: $(grep -o "${IDS[1]}'s clock.*" <<<"$OUT"); $(tail 
 
 # ---- 3. C's link cut ------------------------------------------------------------
 C=${IDS[2]}
+# rise-instructor list, listening across the cut: C heard, then silent.
+ip netns exec "$INS" "$BIN/rise-instructor" list --lcm "$LCM" --wait 1.5 >"$WORK/list.log" 2>&1 &
+LIST=$!
+PIDS+=($LIST)
+sleep 0.2
 CUT=$(now_ms)
 ip -n "${HOSTS[2]}" link set eth0 down
 wait_for 3000 ".[] | select(.id == \"$C\") | .link.state == \"lost\"" || fail "$C not lost 3 s after its link was cut"
@@ -246,6 +252,13 @@ log "$C's rise-sim stopped the robot (no panel state) $STOP_MS ms after the cut"
 [ $STOP_MS -le $((PANEL_TIMEOUT_MS + 60)) ] ||
   fail "$C's rise-sim stopped $STOP_MS ms after the cut (panel timeout $PANEL_TIMEOUT_MS ms + 60 ms)"
 
+wait $LIST || fail "rise-instructor list: $(cat "$WORK/list.log")"
+grep -q "LOST: nothing from rise/$C/\*" "$WORK/list.log" || fail "rise-instructor list does not show $C lost: $(cat "$WORK/list.log")"
+for id in "${IDS[0]}" "${IDS[1]}"; do
+  grep -q "^$id " "$WORK/list.log" || fail "rise-instructor list misses $id: $(cat "$WORK/list.log")"
+  ! grep -q "LOST: nothing from rise/$id/" "$WORK/list.log" || fail "rise-instructor list shows $id lost: $(cat "$WORK/list.log")"
+done
+log "rise-instructor list: $(grep LOST "$WORK/list.log")"
 # C stays lost while its link is down (2 s in all).
 while [ "$(now_ms)" -lt $((CUT + 2000)) ]; do sleep 0.05; done
 link_of "$C" | jq -e '.state == "lost"' >/dev/null || fail "$C not lost 2 s into the cut: $(link_of "$C")"
