@@ -117,19 +117,19 @@ struct WebServer::Impl {
     } else if (kind == "panel_state") {
       if (auto s = decode<rise_msgs::PanelState>(rbuf)) {
         watch_publisher(channel, trainee, s->publisher);
-        links.heard(trainee, s->utime, msgs::wall_us(), msgs::monotonic_us());
+        heard(trainee, s->publisher, s->utime);
         cache.store_latest(channel, trainee, kind, panel_json(*s));
       }
     } else if (kind == "robot_state") {
       if (auto s = decode<rise_msgs::RobotState>(rbuf)) {
         watch_publisher(channel, trainee, s->publisher);
-        links.heard(trainee, s->utime, msgs::wall_us(), msgs::monotonic_us());
+        heard(trainee, s->publisher, s->utime);
         cache.store_latest(channel, trainee, kind, robot_json(*s));
       }
     } else if (kind == "task_status") {
       if (auto s = decode<rise_msgs::TaskStatus>(rbuf)) {
         watch_publisher(channel, trainee, s->publisher);
-        links.heard(trainee, s->utime, msgs::wall_us(), msgs::monotonic_us());
+        heard(trainee, s->publisher, s->utime);
         cache.store_latest(channel, trainee, kind, task_status_json(*s));
       }
     } else if (kind == "clock_echo") {
@@ -141,6 +141,13 @@ struct WebServer::Impl {
     } else if (kind == "task_event") {
       if (auto s = decode<rise_msgs::TaskEvent>(rbuf)) cache.store_event(trainee, kind, task_event_json(*s));
     }
+  }
+
+  // A state from the station's side (not this server's own virtual panel,
+  // which says nothing of the station's link and stamps with our clock).
+  void heard(const std::string& trainee, const rise_msgs::Publisher& p, int64_t utime) {
+    if (p.session_id != msgs::this_publisher().session_id)
+      links.heard(trainee, p.host, utime, msgs::wall_us(), msgs::monotonic_us());
   }
 
   // A second publisher beside one of this server's virtual panels is told

@@ -41,6 +41,7 @@ TOKEN="classroom-$P"
 LAN=rlan$P INS=rins$P
 HOSTS=(rsa$P rsb$P rsc$P)
 IDS=(a$P b$P c$P)
+LETTERS=(a b c)
 WORK=""
 PIDS=()
 
@@ -116,27 +117,27 @@ events:
   - {name: bump, kind: collision, points: -1}
 EOF
 
-start() {  # NS LOG [env...] -- PROGRAM ARGS...: started in NS, its pid kept
-  local ns=$1 logf=$2; shift 2
-  ip netns exec "$ns" env "$@" >"$WORK/$logf.log" 2>&1 &
+start() {  # NS HOSTNAME LOG [VAR=VALUE...] PROGRAM ARGS...: started in NS under its own host name, its pid kept
+  local ns=$1 name=$2 logf=$3; shift 3
+  ip netns exec "$ns" unshare --uts -- sh -c 'hostname "$0" && exec env "$@"' "$name" "$@" >"$WORK/$logf.log" 2>&1 &
   PIDS+=($!)
 }
 
 for i in 0 1 2; do
-  ns=${HOSTS[$i]} id=${IDS[$i]}
+  ns=${HOSTS[$i]} id=${IDS[$i]} name=station-${LETTERS[$i]}
   clock=()
   # Station B: a host whose wall clock is SKEW_S ahead (steady clock untouched).
   [ $i -eq 1 ] && clock=(LD_PRELOAD="$FAKETIME_LIB" FAKETIME="+${SKEW_S}s" FAKETIME_DONT_FAKE_MONOTONIC=1)
-  start "$ns" "$id.emulator" "${clock[@]}" "$BIN/rise-panel" emulate --panel "$PANEL" \
+  start "$ns" "$name" "$id.emulator" "${clock[@]}" "$BIN/rise-panel" emulate --panel "$PANEL" \
     --can socketcand+listen://127.0.0.1:29536/can0 --script "$WORK/console.txt" --hold
-  start "$ns" "$id.hild" "${clock[@]}" "$BIN/rise-hild" --panel "$PANEL" --can socketcand://127.0.0.1:29536/can0 \
+  start "$ns" "$name" "$id.hild" "${clock[@]}" "$BIN/rise-hild" --panel "$PANEL" --can socketcand://127.0.0.1:29536/can0 \
     --id "$id" --lcm "$LCM" --instructor-key "$KEY"
-  start "$ns" "$id.sim" "${clock[@]}" "$BIN/rise-sim" --id "$id" --lcm "$LCM" --panel-timeout-ms "$PANEL_TIMEOUT_MS" \
+  start "$ns" "$name" "$id.sim" "${clock[@]}" "$BIN/rise-sim" --id "$id" --lcm "$LCM" --panel-timeout-ms "$PANEL_TIMEOUT_MS" \
     --instructor-key "$KEY"
-  start "$ns" "$id.trainer" "${clock[@]}" "$BIN/rise-trainer" run-task "$WORK/task.yaml" --id "$id" --lcm "$LCM" \
+  start "$ns" "$name" "$id.trainer" "${clock[@]}" "$BIN/rise-trainer" run-task "$WORK/task.yaml" --id "$id" --lcm "$LCM" \
     --out "$WORK/reports/$id"
 done
-start "$INS" instructor "$BIN/rise-instructor" serve --listen "127.0.0.1:$PORT" --token "$TOKEN" --lcm "$LCM" \
+start "$INS" instructor instructor "$BIN/rise-instructor" serve --listen "127.0.0.1:$PORT" --token "$TOKEN" --lcm "$LCM" \
   --instructor-key "$KEY" --world "$SRC/sim/worlds/yard.yaml" --lost-after-ms "$LOST_AFTER_MS" --push-hz 20
 
 # ---- the console page, watching station C's row (loaded while the stations start)
@@ -185,6 +186,8 @@ for i in 0 1 2; do
     fail "$id: clock offset $(jq .clock_offset_ms <<<"$L") ms, expected $want ± 100 ms"
   jq -e '.state == "live" and (.arrival_age_ms | fabs) < 500' <<<"$L" >/dev/null ||
     fail "$id: not judged fresh: $L"
+  jq -e --arg host "station-${LETTERS[$i]}" '.clock_host == $host' <<<"$L" >/dev/null ||
+    fail "$id: clock measured on $(jq .clock_host <<<"$L"), not station-${LETTERS[$i]}"
 done
 
 if [ $PAGE -eq 1 ]; then
