@@ -34,6 +34,10 @@ struct TraineeRow {
   /// The channels ("panel_state", ...) on which more than one process was
   /// heard within `window_us` before now_us: two publishers on one station.
   std::vector<std::string> duplicated(int64_t now_us, int64_t window_us = 2'000'000) const;
+  /// Whether nothing of it came within `after_us` before now_us (the clock of
+  /// on_message's now_us): a station lost, its link cut or its programs
+  /// stopped (the web console watches this live: instructor/trainee_links.hpp).
+  bool lost(int64_t now_us, int64_t after_us = 500'000) const { return now_us - last_seen_us > after_us; }
 };
 
 class TraineeDirectory {

@@ -300,4 +300,17 @@ Json::Value sound_cue_json(const rise_msgs::SoundCue& m) {
   return v;
 }
 
+Json::Value link_json(const TraineeLink& l) {
+  Json::Value v;
+  v["state"] = l.state;
+  v["heard_ago_ms"] = static_cast<double>(l.heard_ago_us) / 1000.0;
+  v["arrival_age_ms"] = static_cast<double>(l.arrival_age_us) / 1000.0;
+  if (l.clock) {
+    v["clock_offset_ms"] = static_cast<double>(l.clock->offset_us) / 1000.0;
+    v["clock_delay_ms"] = static_cast<double>(l.clock->delay_us) / 1000.0;
+    v["clock_host"] = l.clock_host;
+  }
+  return v;
+}
+
 }  // namespace rise::instructor

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "instructor/fault_presets.hpp"
+#include "instructor/trainee_links.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/Publisher.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -57,5 +58,8 @@ Json::Value sim_event_json(const rise_msgs::SimEvent& m);
 Json::Value task_event_json(const rise_msgs::TaskEvent& m);
 /// What the trainee page's WebAudio plays (msgs/lcmtypes/SoundCue.lcm).
 Json::Value sound_cue_json(const rise_msgs::SoundCue& m);
+/// A trainee's link (instructor/trainee_links.hpp) in ms: state, heard_ago_ms,
+/// arrival_age_ms, and clock_offset_ms / clock_delay_ms / clock_host once measured.
+Json::Value link_json(const TraineeLink& l);
 
 }  // namespace rise::instructor

@@ -117,9 +117,21 @@ Json::Value trainees_json(const WebRouteContext& ctx) {
     Json::Value& d = by_id[id]["duplicate_publishers"][what];
     for (const auto& p : list) d.append(publisher_json(p));
   }
+  for (const auto& l : ctx.links.links(msgs::monotonic_us())) {
+    by_id[l.id]["id"] = l.id;
+    by_id[l.id]["link"] = link_json(l);
+  }
   Json::Value out(Json::arrayValue);
   for (auto& [id, t] : by_id) out.append(t);
   return out;
+}
+
+// Every trainee's link, by id: pushed with each SSE update so that a lost
+// one shows as lost though nothing of it changes any more.
+Json::Value links_json(const WebRouteContext& ctx) {
+  Json::Value v(Json::objectValue);
+  for (const auto& l : ctx.links.links(msgs::monotonic_us())) v[l.id] = link_json(l);
+  return v;
 }
 
 Json::Value reports_json(const std::string& reports_dir) {
@@ -170,6 +182,7 @@ void handle_stream(std::shared_ptr<const WebRouteContext> ctx, httplib::Response
     auto update = ctx->cache.changes_since(last.get(), std::chrono::seconds(1));
     if (!update || !ctx->running) return false;
     (*update)["server_utime"] = Json::Int64(msgs::wall_us());
+    (*update)["links"] = links_json(*ctx);
     const std::string text = "data: " + json_text(*update) + "\n\n";
     return sink.write(text.data(), text.size());
   });
@@ -249,7 +262,10 @@ void handle_fault(const WebRouteContext& ctx, const httplib::Request& req, httpl
   const std::string id = body->get("trainee", "").asString();
   if (!valid_id(id)) return reply_error(res, 400, "trainee '" + id + "': letters, digits, _ . - only");
   rise_msgs::FaultCommand c{};
-  c.utime = 0;
+  // Stamped in the receiver's clock, as measured: a station whose clock is
+  // off by more than its --command-window still takes it (msgs/clock_offset.hpp).
+  const auto offset = ctx.links.offset_us(id);
+  c.utime = msgs::wall_us() + offset.value_or(0);
   c.nonce = 0;
   c.issuer = ctx.settings.issuer;
   c.trainee_id = id;
@@ -271,6 +287,8 @@ void handle_fault(const WebRouteContext& ctx, const httplib::Request& req, httpl
   v["kind"] = c.kind;
   v["target"] = c.target;
   v["nonce"] = Json::Int64(c.nonce);
+  v["utime"] = Json::Int64(c.utime);
+  if (offset) v["clock_offset_ms"] = static_cast<double>(*offset) / 1000.0;
   reply_json(res, v);
 }
 

@@ -13,6 +13,7 @@
 
 #include "instructor/channel_cache.hpp"
 #include "instructor/scenario_processes.hpp"
+#include "instructor/trainee_links.hpp"
 #include "instructor/virtual_panels.hpp"
 #include "instructor/web_server.hpp"
 #include "msgs/command_auth.hpp"
@@ -42,6 +43,7 @@ struct WebRouteContext {
   ScenarioProcesses& scenarios;
   const msgs::PublisherWatch& publishers;
   std::atomic<int64_t>& sim_control_seq;  ///< SimControl.seq, counted over every trainee
+  const TraineeLinks& links;  ///< live / stale / lost and the clock offset per trainee
 };
 
 /// Sets up `http`: its request threads (settings.http_threads, at least 4),

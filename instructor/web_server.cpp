@@ -22,15 +22,19 @@
 #include "hil/panel_state_message.hpp"
 #include "instructor/channel_cache.hpp"
 #include "instructor/scenario_processes.hpp"
+#include "instructor/trainee_links.hpp"
 #include "instructor/virtual_panels.hpp"
 #include "instructor/web_json.hpp"
 #include "instructor/web_routes.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/clock_offset.hpp"
 #include "msgs/command_auth.hpp"
 #include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 #include "panels/panel_definition.hpp"
+#include "rise_msgs/ClockEcho.hpp"
+#include "rise_msgs/ClockProbe.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -76,6 +80,9 @@ struct WebServer::Impl {
   ChannelCache cache;
   std::optional<VirtualPanels> virtual_panels;  // once the console and the key are loaded
   ScenarioProcesses scenarios;
+  TraineeLinks links{int64_t{settings.lost_after_ms} * 1000};
+  int64_t next_probe_us = 0;  // steady clock
+  int64_t probe_seq = 0;
 
   explicit Impl(WebServerSettings s)
       : settings(std::move(s)),
@@ -99,7 +106,7 @@ struct WebServer::Impl {
 
   WebRouteContext route_context() {
     return {settings, world_text, console, key, running, lcm, cache, *virtual_panels, scenarios, publishers,
-            sim_control_seq};
+            sim_control_seq, links};
   }
 
   void on_message(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
@@ -112,18 +119,25 @@ struct WebServer::Impl {
     } else if (kind == "panel_state") {
       if (auto s = decode<rise_msgs::PanelState>(rbuf)) {
         watch_publisher(channel, trainee, s->publisher);
+        heard(trainee, s->publisher, s->utime);
         cache.store_latest(channel, trainee, kind, panel_json(*s));
       }
     } else if (kind == "robot_state") {
       if (auto s = decode<rise_msgs::RobotState>(rbuf)) {
         watch_publisher(channel, trainee, s->publisher);
+        heard(trainee, s->publisher, s->utime);
         cache.store_latest(channel, trainee, kind, robot_json(*s));
       }
     } else if (kind == "task_status") {
       if (auto s = decode<rise_msgs::TaskStatus>(rbuf)) {
         watch_publisher(channel, trainee, s->publisher);
+        heard(trainee, s->publisher, s->utime);
         cache.store_latest(channel, trainee, kind, task_status_json(*s));
       }
+    } else if (kind == "clock_echo") {
+      const int64_t t4 = msgs::wall_us();
+      auto e = decode<rise_msgs::ClockEcho>(rbuf);
+      if (e && e->prober_session == msgs::this_publisher().session_id) links.on_echo(trainee, *e, t4);
     } else if (kind == "sim_event") {
       if (auto s = decode<rise_msgs::SimEvent>(rbuf)) cache.store_event(trainee, kind, sim_event_json(*s));
     } else if (kind == "task_event") {
@@ -131,6 +145,13 @@ struct WebServer::Impl {
     } else if (kind == "sound") {
       if (auto s = decode<rise_msgs::SoundCue>(rbuf)) cache.store_sound(trainee, sound_cue_json(*s));
     }
+  }
+
+  // A state from the station's side (not this server's own virtual panel,
+  // which says nothing of the station's link and stamps with our clock).
+  void heard(const std::string& trainee, const rise_msgs::Publisher& p, int64_t utime) {
+    if (p.session_id != msgs::this_publisher().session_id)
+      links.heard(trainee, p.host, utime, msgs::wall_us(), msgs::monotonic_us());
   }
 
   // A second publisher beside one of this server's virtual panels is told
@@ -150,6 +171,22 @@ struct WebServer::Impl {
     while (running) {
       pollfd p{fd, POLLIN, 0};
       if (::poll(&p, 1, 50) > 0 && (p.revents & POLLIN)) lcm.handle();
+      probe_clocks();
+    }
+  }
+
+  // Every trainee heard gets a ClockProbe each clock_probe_ms; its station
+  // processes echo it (msgs/clock_offset.hpp).
+  void probe_clocks() {
+    const int64_t now = msgs::monotonic_us();
+    if (now < next_probe_us) return;
+    next_probe_us = now + int64_t{settings.clock_probe_ms} * 1000;
+    for (const std::string& id : links.trainees()) {
+      rise_msgs::ClockProbe probe;
+      probe.prober_session = msgs::this_publisher().session_id;
+      probe.seq = ++probe_seq;
+      probe.utime = msgs::wall_us();
+      lcm.publish(msgs::clock_probe_channel(id), &probe);
     }
   }
 
@@ -185,7 +222,7 @@ WebServer::~WebServer() { stop(); }
 void WebServer::start() {
   Impl& d = *impl_;
   add_routes(d.http, d.route_context());
-  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|sound|fault_command)",
+  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|sound|fault_command|clock_echo)",
                           +[](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Impl* self) {
                             self->on_message(rbuf, channel);
                           },

@@ -6,7 +6,10 @@
 // sim_event, task_status, task_event), coalesced to the latest message per
 // channel and pushed at push_hz; and the virtual panels whose pages post
 // their controls here, published as PanelState under the daemon's safety
-// rules (instructor/virtual_panel.hpp).
+// rules (instructor/virtual_panel.hpp). Each trainee's link is watched
+// (live, stale, lost) and its clock offset probed, so that the states and
+// the signed commands of a station on another host are judged in the right
+// clock (instructor/trainee_links.hpp).
 
 #include <cstddef>
 #include <cstdint>
@@ -31,6 +34,10 @@ struct WebServerSettings {
   std::string panel_file;           ///< the console definition the virtual panel copies
   uint32_t virtual_timeout_ms = 200;  ///< a virtual panel without an update for this long fails safe
   double push_hz = 50.0;            ///< SSE push rate (≥ 20)
+  /// A trainee not heard for this long shows as lost (instructor/trainee_links.hpp).
+  uint32_t lost_after_ms = 500;
+  /// How often each trainee's clock offset is probed (msgs/clock_offset.hpp).
+  uint32_t clock_probe_ms = 500;
   /// Request threads: every open page holds one for its SSE stream and one
   /// for its keep-alive requests (cpp-httplib's default pool is 8).
   std::size_t http_threads = 64;

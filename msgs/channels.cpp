@@ -24,6 +24,8 @@ std::string task_event_channel(const std::string& id) { return station_channel(i
 std::string task_status_channel(const std::string& id) { return station_channel(id, "task_status"); }
 std::string fault_command_channel(const std::string& id) { return station_channel(id, "fault_command"); }
 std::string training_control_channel(const std::string& id) { return station_channel(id, "training_control"); }
+std::string clock_probe_channel(const std::string& id) { return station_channel(id, "clock_probe"); }
+std::string clock_echo_channel(const std::string& id) { return station_channel(id, "clock_echo"); }
 
 std::optional<StationChannel> parse_station_channel(const std::string& channel) {
   if (channel.rfind(kPrefix, 0) != 0) return std::nullopt;

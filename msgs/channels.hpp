@@ -11,7 +11,8 @@
 namespace rise::msgs {
 
 /// LCM's own default multicast group and port; ttl=0 keeps the traffic on
-/// this machine until a classroom passes --lcm with a ttl of 1.
+/// this machine until a classroom passes --lcm with a ttl of 1 (README
+/// "A classroom on a LAN").
 inline constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0";
 
 std::string panel_state_channel(const std::string& trainee_id);       ///< PanelState, rise-hild or a virtual panel
@@ -24,6 +25,8 @@ std::string task_event_channel(const std::string& trainee_id);        ///< TaskE
 std::string task_status_channel(const std::string& trainee_id);       ///< TaskStatus, rise-trainer
 std::string fault_command_channel(const std::string& trainee_id);     ///< FaultCommand (signed), the instructor
 std::string training_control_channel(const std::string& trainee_id);  ///< TrainingControl (signed), the instructor
+std::string clock_probe_channel(const std::string& trainee_id);       ///< ClockProbe, the instructor → the station's processes
+std::string clock_echo_channel(const std::string& trainee_id);        ///< ClockEcho, rise-hild and rise-sim → the instructor
 
 /// A station channel taken apart: rise/<trainee>/<what>.
 struct StationChannel {

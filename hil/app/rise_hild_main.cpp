@@ -24,6 +24,7 @@
 #include "hil/source_factory.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/clock_offset.hpp"
 #include "msgs/command_auth.hpp"
 #include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
@@ -410,6 +411,8 @@ int main(int argc, char** argv) {
   FaultCommands fault_commands(o, verifier, fault_injector, publisher);
   publisher.set_injector(&fault_injector);
   fault_commands.listen(lcm);
+  rise::msgs::ClockEchoResponder clock_echo(lcm, self);  // the instructor measures this host's clock offset
+  clock_echo.listen(o.id);
 
   const std::string feedback_channel = rise::msgs::panel_feedback_channel(o.id);
   FeedbackHandler handler{&bridge};

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -21,6 +22,7 @@
 #include "instructor/trainee_directory.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/clock_offset.hpp"
 #include "msgs/command_auth.hpp"
 #include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
@@ -95,6 +97,21 @@ bool is_daemon_kind(const std::string& kind) {
   return true;
 }
 
+// The receiver's clock − ours, measured once per trainee (msgs/clock_offset.hpp),
+// so that a command is stamped in its receiver's clock; 0 when no station
+// process answers (the command then carries this host's clock).
+int64_t receiver_offset_us(lcm::LCM& lcm, const std::string& trainee) {
+  static std::map<std::string, int64_t> measured;
+  if (const auto it = measured.find(trainee); it != measured.end()) return it->second;
+  const auto s = msgs::measure_clock_offset(lcm, trainee);
+  if (s)
+    spdlog::info("{}'s clock: {:+.1f} ms from this host's (round trip {:.1f} ms)", trainee,
+                 static_cast<double>(s->offset_us) / 1e3, static_cast<double>(s->delay_us) / 1e3);
+  else
+    spdlog::info("{}: no clock echo (rise-hild, rise-sim): commands carry this host's clock", trainee);
+  return measured[trainee] = s ? s->offset_us : 0;
+}
+
 // What the receivers answered to one fault command.
 struct Answer {
   bool confirmed = false;
@@ -107,6 +124,7 @@ struct Answer {
 // a refusal or rejection as fault_refused / command_rejected (sim) or a
 // "command_rejected" PanelState entry (daemon).
 Answer send_fault(lcm::LCM& lcm, rise_msgs::FaultCommand c, double confirm_s) {
+  c.utime = msgs::wall_us() + receiver_offset_us(lcm, c.trainee_id);
   msgs::sign(c, instructor_key());
   Answer answer;
   const bool daemon = c.action == "inject" ? is_daemon_kind(c.kind) : false;
@@ -249,6 +267,9 @@ void add_list_command(CLI::App& app) {
                         "@" + p.publisher.host;
       std::printf("%-10s %-28s %-22s %-24s %-20s %s\n", r.id.c_str(), panel.c_str(), robot.c_str(), task.c_str(),
                   faults.empty() ? "-" : faults.c_str(), publishers.empty() ? "-" : publishers.c_str());
+      if (r.lost(now))
+        std::printf("  LOST: nothing from rise/%s/* for %.1f s\n", r.id.c_str(),
+                    static_cast<double>(now - r.last_seen_us) / 1e6);
       for (const auto& what : r.duplicated(now)) {
         std::printf("  DUPLICATE: rise/%s/%s has more than one publisher:\n", r.id.c_str(), what.c_str());
         for (const auto& p : r.publishers)
@@ -357,6 +378,7 @@ void add_scenario_command(CLI::App& app) {
     const uint64_t seed = o->seed ? *o->seed : scenario.seed;
     const auto key = instructor_key();
     auto lcm = open_lcm();
+    const int64_t offset_us = receiver_offset_us(*lcm, o->trainee);  // before the scenario's clock starts
     ScenarioRunner runner(scenario, seed);
     const auto start = Clock::now();
     const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -364,6 +386,7 @@ void add_scenario_command(CLI::App& app) {
     const auto send = [&](const std::vector<ScenarioAction>& actions) {
       for (const auto& a : actions) {
         auto c = to_command(a, o->trainee, common_options().issuer);
+        c.utime = msgs::wall_us() + offset_us;
         msgs::sign(c, key);
         lcm->publish(msgs::fault_command_channel(o->trainee), &c);
         ++sent;
@@ -430,6 +453,7 @@ void add_task_command(CLI::App& app) {
     c.trainee_id = o->trainee;
     c.command = o->command;
     c.task = o->task;
+    c.utime = msgs::wall_us() + receiver_offset_us(*lcm, o->trainee);
     msgs::sign(c, key);
     std::string answer;
     RawHandler h{[&](const std::string&, const lcm::ReceiveBuffer* rbuf) {

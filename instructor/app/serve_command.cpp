@@ -33,6 +33,7 @@ struct ServeOptions {
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
   double push_hz = 50.0;
+  uint32_t lost_after_ms = 500;
 };
 
 std::binary_semaphore g_stop{0};
@@ -74,6 +75,7 @@ int serve(const ServeOptions& o) {
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
+  s.lost_after_ms = o.lost_after_ms;
   s.instructor_key_file = msgs::instructor_key_path(common.key_file);
   if (s.instructor_key_file.empty()) spdlog::warn("no instructor key: the fault buttons are off (--instructor-key FILE)");
 
@@ -112,6 +114,9 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")
       ->capture_default_str();
   cmd->add_option("--push-hz", o->push_hz, "SSE push rate (>= 20)")->capture_default_str();
+  cmd->add_option("--lost-after-ms", o->lost_after_ms, "a trainee not heard this long shows as lost")
+      ->check(CLI::Range(50u, 60000u))
+      ->capture_default_str();
   cmd->callback([o] {
     spdlog::set_level(spdlog::level::from_str(common_options().log_level));
     int code = 0;

@@ -32,6 +32,7 @@
 #include "cli/command_line.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/clock_offset.hpp"
 #include "msgs/command_auth.hpp"
 #include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
@@ -794,6 +795,8 @@ int main(int argc, char** argv) {
         g_stop = 1;
       });
   for (const std::string& channel : channels) others.listen(lcm, channel);
+  rise::msgs::ClockEchoResponder clock_echo(lcm, self);  // the instructor measures this host's clock offset
+  for (const auto& st : stations) clock_echo.listen(st->id);
 
   SimNode node(o, lcm, self, std::move(stations), std::move(world), std::move(verifier));
   node.subscribe();

@@ -19,6 +19,8 @@ TEST_CASE("every station channel is rise/<id>/<what> and reads back as its train
       {rise::msgs::task_status_channel, "task_status"},
       {rise::msgs::fault_command_channel, "fault_command"},
       {rise::msgs::training_control_channel, "training_control"},
+      {rise::msgs::clock_probe_channel, "clock_probe"},
+      {rise::msgs::clock_echo_channel, "clock_echo"},
   }));
   CHECK(channel("t1") == "rise/t1/" + what);
   const auto parsed = parse_station_channel(channel("lab-3"));

@@ -154,6 +154,25 @@ function setCameraLabel(text) {
 // ---- panels, training, events --------------------------------------------
 function fmt(x, d = 2) { return typeof x === 'number' ? x.toFixed(d) : '—'; }
 
+// A trainee's link (live, stale, lost) and its clock's measured offset.
+function linkCells(link) {
+  if (!link) return [];
+  const text = link.state === 'lost' ? 'LOST (nothing for ' + fmt(link.heard_ago_ms / 1000, 1) + ' s)'
+    : link.state === 'stale' ? 'stale (' + fmt(link.arrival_age_ms, 0) + ' ms old)' : 'live';
+  const clock = typeof link.clock_offset_ms === 'number'
+    ? ' clock ' + (link.clock_offset_ms >= 0 ? '+' : '') + fmt(link.clock_offset_ms, 1) + ' ms' : '';
+  return [el('span', { class: link.state === 'live' ? 'ok' : 'bad' }, text), clock];
+}
+
+// The trainee list marks the lost ones.
+function renderTraineeList() {
+  for (const o of document.getElementById('trainee').options) {
+    const t = state.trainees.get(o.value), lost = t && t.link && t.link.state === 'lost';
+    const text = o.value + (lost ? ' (lost)' : '');
+    if (o.textContent !== text) o.textContent = text;
+  }
+}
+
 function renderPanels() {
   const rows = [];
   for (const [id, t] of state.trainees) {
@@ -163,13 +182,15 @@ function renderPanels() {
     const axes = p ? Object.entries(p.axes).map(([k, v]) => k + '=' + fmt(v)).join(' ') : '';
     const sw = p ? Object.entries(p.switches).map(([k, v]) => k + '=' + v).join(' ') : '';
     const faults = p && p.active_faults.length ? p.active_faults.join(', ') : '';
-    rows.push(el('tr', { 'data-trainee': id }, el('td', {}, id), el('td', {}, status),
+    const link = t.link;
+    rows.push(el('tr', { 'data-trainee': id, 'data-link': link ? link.state : '' }, el('td', {}, id),
+      el('td', { class: 'link' }, ...linkCells(link)), el('td', {}, status),
       el('td', {}, p ? (p.deadman ? 'dead-man held' : 'dead-man released') : ''),
       el('td', {}, axes), el('td', {}, sw), el('td', { class: 'faults' }, faults)));
     for (const s of (p ? p.sources : [])) {
       const health = !s.connected ? el('span', { class: 'bad' }, 'down' + (s.down_reason ? ': ' + s.down_reason : '')) : s.stale ? el('span', { class: 'bad' }, 'stale')
         : el('span', { class: 'ok' }, 'ok');
-      rows.push(el('tr', { class: 'source' }, el('td', {}, ''), el('td', {}, 'source ' + s.name), el('td', {}, health),
+      rows.push(el('tr', { class: 'source' }, el('td', {}, ''), el('td', {}, ''), el('td', {}, 'source ' + s.name), el('td', {}, health),
         el('td', {}, s.url), el('td', {}, 'age ' + fmt(s.age_ms, 0) + ' ms'), el('td', {}, 'ok ' + s.frames_ok + ' bad ' + s.frames_bad)));
     }
   }
@@ -271,6 +292,8 @@ function onUpdate(u) {
       if (t.trail.length > 5000) t.trail.shift();
     }
   }
+  for (const [id, l] of Object.entries(u.links || {})) trainee(id).link = l;
+  renderTraineeList();
   for (const e of u.events) { trainee(e.trainee); state.events.push(e); }
   if (state.events.length > 500) state.events.splice(0, state.events.length - 500);
   renderPanels(); renderTraining(); renderRobotLine();
@@ -306,7 +329,7 @@ async function main() {
   setup3d(); buildScene();
   for (const t of await getJson('/api/trainees')) {
     const x = trainee(t.id);
-    for (const k of ['panel_state', 'robot_state', 'task_status']) if (t[k]) x[k] = t[k];
+    for (const k of ['panel_state', 'robot_state', 'task_status', 'link']) if (t[k]) x[k] = t[k];
   }
   setupFaults(); loadReports();
   stream(onUpdate, (ok) => {
