@@ -17,6 +17,7 @@
 #include "hil/panel_state_message.hpp"
 #include "hil/source_input.hpp"
 #include "msgs/failsafe.hpp"
+#include "msgs/lcm_decode.hpp"
 
 namespace rise::hil {
 
@@ -519,7 +520,7 @@ PanelStateLog read_panel_state_log(const std::string& path, const std::string& c
       continue;
     }
     rise_msgs::PanelState m;
-    if (m.decode(e->data, 0, static_cast<int>(e->datalen)) < 0)
+    if (!msgs::decode_message(e->data, e->datalen, m))
       throw std::runtime_error(path + ": event " + std::to_string(event) + " on " + e->channel +
                                " does not decode as rise_msgs.PanelState");
     out.messages.push_back(std::move(m));

@@ -6,6 +6,7 @@
 
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "msgs/publisher_session.hpp"
 
 namespace rise::msgs {
@@ -46,7 +47,7 @@ std::optional<ClockSample> measure_clock_offset(lcm::LCM& lcm, const std::string
                                                 int period_ms) {
   EchoCollector collector;
   collector.session = this_publisher().session_id;
-  lcm::Subscription* sub = lcm.subscribe(clock_echo_channel(trainee_id), &EchoCollector::on, &collector);
+  lcm::Subscription* sub = subscribe<&EchoCollector::on>(lcm, clock_echo_channel(trainee_id), &collector);
   sub->setQueueCapacity(64);
   const int64_t period_us = int64_t{period_ms} * 1000;
   int64_t next_us = monotonic_us();
@@ -69,7 +70,7 @@ std::optional<ClockSample> measure_clock_offset(lcm::LCM& lcm, const std::string
 
 void ClockEchoResponder::listen(const std::string& trainee_id) {
   stations_.push_back({this, clock_echo_channel(trainee_id)});
-  lcm_.subscribe(clock_probe_channel(trainee_id), &Station::on, &stations_.back())->setQueueCapacity(16);
+  subscribe<&Station::on>(lcm_, clock_probe_channel(trainee_id), &stations_.back())->setQueueCapacity(16);
 }
 
 void ClockEchoResponder::Station::on(const lcm::ReceiveBuffer*, const std::string&,
