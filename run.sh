@@ -24,7 +24,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # gzip'd CARMEN logs, cpp-httplib for the instructor's web server, Node.js
 # + npm to build its pages from the locked npm packages in instructor/web
 # (three.js, esbuild, playwright-core) at set-up, universal-ctags for the
-# function-size check. Installing
+# function-size check, ALSA (libasound2-dev) for rise-sound's playback and
+# sox to measure its output's level in the test. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -39,6 +40,7 @@ packages=(
   libjsoncpp-dev chromium zlib1g-dev
   libssl-dev libcpp-httplib-dev nodejs npm
   universal-ctags
+  libasound2-dev sox
 )
 
 setup() {
