@@ -3,7 +3,7 @@
 // What the web console sends its pages, as JSON: the world and the robot the
 // map and the 3D view draw, the console definition the virtual panel copies,
 // the fault buttons, and the classroom's LCM messages (PanelState,
-// RobotState, TaskStatus, SimEvent, TaskEvent) as the SSE stream and
+// RobotState, TaskStatus, SimEvent, TaskEvent, PanelFeedback) as the SSE stream and
 // /api/trainees carry them. Pure: no I/O, no clock but the publisher's age.
 
 #include <json/json.h>
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "instructor/fault_presets.hpp"
+#include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/Publisher.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -54,5 +55,8 @@ Json::Value robot_json(const rise_msgs::RobotState& m);
 Json::Value task_status_json(const rise_msgs::TaskStatus& m);
 Json::Value sim_event_json(const rise_msgs::SimEvent& m);
 Json::Value task_event_json(const rise_msgs::TaskEvent& m);
+/// The console's LEDs and displays by name ({"leds": {NAME: on}, "displays":
+/// {NAME: value}}), the buzzer ("off", "on", "beep") and the rumble.
+Json::Value panel_feedback_json(const rise_msgs::PanelFeedback& m);
 
 }  // namespace rise::instructor

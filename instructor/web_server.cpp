@@ -122,6 +122,8 @@ struct WebServer::Impl {
         watch_publisher(channel, trainee, s->publisher);
         cache.store_latest(channel, trainee, kind, task_status_json(*s));
       }
+    } else if (kind == "panel_feedback") {
+      if (auto s = decode<rise_msgs::PanelFeedback>(rbuf)) cache.store_latest(channel, trainee, kind, panel_feedback_json(*s));
     } else if (kind == "sim_event") {
       if (auto s = decode<rise_msgs::SimEvent>(rbuf)) cache.store_event(trainee, kind, sim_event_json(*s));
     } else if (kind == "task_event") {
@@ -181,7 +183,7 @@ WebServer::~WebServer() { stop(); }
 void WebServer::start() {
   Impl& d = *impl_;
   add_routes(d.http, d.route_context());
-  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|fault_command)",
+  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|fault_command|panel_feedback)",
                           +[](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Impl* self) {
                             self->on_message(rbuf, channel);
                           },
