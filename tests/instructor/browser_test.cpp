@@ -273,6 +273,10 @@ void check_keyboard_widgets(const Json::Value& r) {
     CHECK(w["speed_on"][0].asString() == speeds[i]);
   }
   CHECK(r["speed_panel"].asString() == "medium");
+  // The mouse at 3/4 of the arm stick's width: x 0.5, the dot 37.5 px right of the middle.
+  CHECK(r["arm_mouse"]["x"].asDouble() == Approx(0.5).margin(0.03));
+  CHECK(r["arm_mouse"]["y"].asDouble() == Approx(0.0).margin(0.03));
+  CHECK(r["arm_mouse"]["px"].asDouble() == Approx(127.5).margin(2.5));
   // Driving and the gamepad: the widgets show it too.
   CHECK(r["driving"]["deadman_held"].asString() == "held");
   CHECK(r["stick_driving"]["page"]["y"].asDouble() == 1.0);

@@ -1,8 +1,9 @@
 // The virtual panel page: its widgets follow the keyboard (W moves the drive
 // stick's dot, read from the page and from the canvas pixels; Space shows the
 // dead-man held; Esc latches the e-stop: banner, striped button, failsafe from
-// the server; 1/2/3 set the speed mode), a second page for trainee FB_ID shows
-// the PanelFeedback the test publishes for it (LEDs, displays, buzzer); then
+// the server; 1/2/3 set the speed mode) and the mouse (pressed on the arm
+// stick, its dot goes there); a second page for trainee FB_ID shows the
+// PanelFeedback the test publishes for it (LEDs, displays, buzzer); then
 // dead-man (Space) and forward (W) held drive the robot in rise-sim and the
 // speed display shows rise-sim's feedback; released, then a gamepad (a Gamepad
 // API object the page's navigator.getGamepads returns, as a browser gives a
@@ -80,6 +81,14 @@ async function keyboardWidgets(page, result) {
     await nextSends(page);
     result.speeds.push(await widgets(page));
   }
+  // The mouse: pressed a quarter of the arm stick's width right of its middle, its dot goes there.
+  const arm = await page.locator('canvas[data-stick="arm"]').boundingBox();
+  await page.mouse.move(arm.x + arm.width * 0.75, arm.y + arm.height / 2);
+  await page.mouse.down();
+  await page.waitForFunction(() => window.risePanel.sticks().arm.x > 0.4, null, { timeout: 5000 });
+  result.arm_mouse = await page.evaluate(() => window.risePanel.sticks().arm);
+  await page.mouse.up();
+  await page.waitForFunction(() => window.risePanel.sticks().arm.x === 0, null, { timeout: 5000 });
   // The server's PanelState follows (through the mapper, LCM and the stream).
   await page.waitForFunction(() => window.risePanel.panel.switches.speed === 'medium', null, { timeout: 5000 });
   result.speed_panel = await page.evaluate(() => window.risePanel.panel.switches.speed);
