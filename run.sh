@@ -26,7 +26,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # (three.js, esbuild, playwright-core) at set-up, universal-ctags for the
 # function-size check, iproute2 + libfaketime + curl + jq for the classroom
 # test (hosts as network namespaces on a bridge, one host's clock skewed, its
-# HTTP API read with curl and jq). Installing
+# HTTP API read with curl and jq), ALSA (libasound2-dev) for rise-sound's
+# playback and sox to measure its output's level in the test. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -42,6 +43,7 @@ packages=(
   libssl-dev libcpp-httplib-dev nodejs npm
   universal-ctags
   iproute2 faketime curl jq
+  libasound2-dev sox
 )
 
 setup() {

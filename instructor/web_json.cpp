@@ -133,6 +133,18 @@ Json::Value panel_definition_json(const panels::PanelDefinition& panel, uint32_t
     controls.append(cv);
   }
   v["controls"] = controls;
+  // What the console shows back (PanelFeedback): the page draws these before any arrives.
+  Json::Value leds(Json::arrayValue);
+  for (const auto& l : panel.leds) leds.append(l.name);
+  v["leds"] = leds;
+  Json::Value displays(Json::arrayValue);
+  for (const auto& d : panel.displays) {
+    Json::Value dv;
+    dv["name"] = d.name;
+    dv["decimals"] = d.decimals;
+    displays.append(dv);
+  }
+  v["displays"] = displays;
   return v;
 }
 
@@ -310,6 +322,22 @@ Json::Value link_json(const TraineeLink& l) {
     v["clock_delay_ms"] = static_cast<double>(l.clock->delay_us) / 1000.0;
     v["clock_host"] = l.clock_host;
   }
+  return v;
+}
+
+Json::Value panel_feedback_json(const rise_msgs::PanelFeedback& m) {
+  Json::Value v;
+  v["utime"] = Json::Int64(m.utime);
+  v["panel_id"] = m.panel_id;
+  Json::Value leds(Json::objectValue);
+  for (std::size_t i = 0; i < m.led_names.size() && i < m.led_on.size(); ++i) leds[m.led_names[i]] = m.led_on[i] != 0;
+  v["leds"] = leds;
+  Json::Value displays(Json::objectValue);
+  for (std::size_t i = 0; i < m.display_names.size() && i < m.display_values.size(); ++i)
+    displays[m.display_names[i]] = m.display_values[i];
+  v["displays"] = displays;
+  v["buzzer"] = m.buzzer == 1 ? "on" : m.buzzer == 2 ? "beep" : "off";
+  v["rumble"] = m.rumble;
   return v;
 }
 

@@ -3,7 +3,7 @@
 // What the web console sends its pages, as JSON: the world and the robot the
 // map and the 3D view draw, the console definition the virtual panel copies,
 // the fault buttons, and the classroom's LCM messages (PanelState,
-// RobotState, TaskStatus, SimEvent, TaskEvent, SoundCue) as the SSE stream and
+// RobotState, TaskStatus, SimEvent, TaskEvent, SoundCue, PanelFeedback) as the SSE stream and
 // /api/trainees carry them. Pure: no I/O, no clock but the publisher's age.
 
 #include <json/json.h>
@@ -14,6 +14,7 @@
 
 #include "instructor/fault_presets.hpp"
 #include "instructor/trainee_links.hpp"
+#include "rise_msgs/PanelFeedback.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/Publisher.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -61,5 +62,8 @@ Json::Value sound_cue_json(const rise_msgs::SoundCue& m);
 /// A trainee's link (instructor/trainee_links.hpp) in ms: state, heard_ago_ms,
 /// arrival_age_ms, and clock_offset_ms / clock_delay_ms / clock_host once measured.
 Json::Value link_json(const TraineeLink& l);
+/// The console's LEDs and displays by name ({"leds": {NAME: on}, "displays":
+/// {NAME: value}}), the buzzer ("off", "on", "beep") and the rumble.
+Json::Value panel_feedback_json(const rise_msgs::PanelFeedback& m);
 
 }  // namespace rise::instructor

@@ -138,6 +138,8 @@ struct WebServer::Impl {
       const int64_t t4 = msgs::wall_us();
       auto e = decode<rise_msgs::ClockEcho>(rbuf);
       if (e && e->prober_session == msgs::this_publisher().session_id) links.on_echo(trainee, *e, t4);
+    } else if (kind == "panel_feedback") {
+      if (auto s = decode<rise_msgs::PanelFeedback>(rbuf)) cache.store_latest(channel, trainee, kind, panel_feedback_json(*s));
     } else if (kind == "sim_event") {
       if (auto s = decode<rise_msgs::SimEvent>(rbuf)) cache.store_event(trainee, kind, sim_event_json(*s));
     } else if (kind == "task_event") {
@@ -222,7 +224,7 @@ WebServer::~WebServer() { stop(); }
 void WebServer::start() {
   Impl& d = *impl_;
   add_routes(d.http, d.route_context());
-  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|sound|fault_command|clock_echo)",
+  d.lcm.subscribeFunction("rise/.*/(panel_state|robot_state|sim_event|task_status|task_event|sound|fault_command|clock_echo|panel_feedback)",
                           +[](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Impl* self) {
                             self->on_message(rbuf, channel);
                           },

@@ -44,8 +44,8 @@ Run run(const std::vector<std::string>& args) {
   return r;
 }
 
-const std::vector<std::string> kPrograms{"rise",       "rise-hild",     "rise-sim",       "rise-trainer",
-                                         "rise-panel", "rise-semantic", "rise-instructor"};
+const std::vector<std::string> kPrograms{"rise",       "rise-hild",     "rise-sim",        "rise-trainer",
+                                         "rise-panel", "rise-semantic", "rise-instructor", "rise-sound"};
 
 }  // namespace
 
@@ -87,6 +87,9 @@ TEST_CASE("every program exits 2 for an unknown option, a bad value or a missing
       {"rise-semantic", "register", "a.pcd", "b.pcd", "--min-dist", "1", "--max-dist", "0.5"},
       {"rise-instructor", "--no-such-option"},
       {"rise-instructor", "report", "--trainee", "t1"},
+      {"rise-sound", "--no-such-option"},
+      {"rise-sound", "--device", "null"},
+      {"rise-sound", "--id", "t1", "--seconds", "-1"},
   }));
   std::string line;
   for (const auto& a : args) line += a + " ";

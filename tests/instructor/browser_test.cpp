@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -18,9 +19,11 @@
 #include <thread>
 
 #include "msgs/channels.hpp"
+#include "msgs/clock.hpp"
 #include "msgs/command_auth.hpp"
 #include "process/child_process.hpp"
-#include "msgs/clock.hpp"
+#include "rise_msgs/PanelFeedback.hpp"
+#include "rise_msgs/SimEvent.hpp"
 #include "rise_msgs/SoundCue.hpp"
 #include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
@@ -43,6 +46,8 @@ std::string missing_browser() {
   if (!fs::exists(kWeb + "/node_modules/playwright-core")) return "playwright-core is not installed (npm ci in instructor/web)";
   return "";
 }
+
+std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
 
 /// The RESULT line a check printed.
 Json::Value read_result(const std::string& log) {
@@ -226,6 +231,85 @@ TEST_CASE("the console shows the robot moving while the emulator drives, and a c
   CHECK(is_png(st.out_dir() + "/instructor_view3d_blackout.png"));
 }
 
+namespace {
+/// The drive stick's dot where the page says it drew it, and there in the
+/// canvas's pixels: at rest in the middle, W pushes it 75 px up.
+void check_stick(const Json::Value& s, double x, double y) {
+  INFO(text(s));
+  CHECK(s["page"]["x"].asDouble() == x);
+  CHECK(s["page"]["y"].asDouble() == y);
+  CHECK(s["pixels"].asInt() > 300);  // the dot: r 14 px
+  CHECK(std::abs(s["cx"].asDouble() - (90.0 + 75.0 * x)) < 1.5);
+  CHECK(std::abs(s["cy"].asDouble() - (90.0 - 75.0 * y)) < 1.5);
+  CHECK(std::abs(s["cy"].asDouble() - s["page"]["py"].asDouble()) < 1.5);
+}
+
+/// "rgb(r, g, b)" → distance to another such colour.
+double colour_distance(const std::string& a, const std::string& b) {
+  int r1 = 0, g1 = 0, b1 = 0, r2 = 0, g2 = 0, b2 = 0;
+  std::sscanf(a.c_str(), "rgb(%d, %d, %d)", &r1, &g1, &b1);
+  std::sscanf(b.c_str(), "rgb(%d, %d, %d)", &r2, &g2, &b2);
+  return std::hypot(r1 - r2, g1 - g2, b1 - b2);
+}
+
+void check_keyboard_widgets(const Json::Value& r) {
+  check_stick(r["stick_rest"], 0, 0);
+  check_stick(r["stick_w"], 0, 1);
+  check_stick(r["stick_released"], 0, 0);
+  // Space: the dead-man button and line show it held, in a colour of their own.
+  CHECK(r["idle"]["deadman_held"].asString() == "released");
+  CHECK(r["space"]["deadman_held"].asString() == "held");
+  CHECK(r["space"]["deadman_text"].asString() == "DEAD-MAN HELD");
+  CHECK(colour_distance(r["idle"]["deadman_colour"].asString(), r["space"]["deadman_colour"].asString()) > 80);
+  // Esc: latched is a striped button and a banner; the server's PanelState is failsafe.
+  CHECK_FALSE(r["idle"]["banner_visible"].asBool());
+  CHECK(r["idle"]["estop_image"].asString() == "none");
+  CHECK(r["estop"]["banner_visible"].asBool());
+  CHECK(r["estop"]["banner_text"].asString().find("E-STOP LATCHED") != std::string::npos);
+  CHECK(r["estop"]["estop_button"].asString() == "held");
+  CHECK(r["estop"]["estop_image"].asString().find("repeating-linear-gradient") != std::string::npos);
+  CHECK(r["estop_panel"]["failsafe"].asBool());
+  CHECK_FALSE(r["estop_released"]["banner_visible"].asBool());
+  CHECK(r["estop_released"]["estop_button"].asString() == "released");
+  // 3, 1, 2: the speed widget and what is sent, and the server's PanelState after.
+  const char* speeds[] = {"fast", "slow", "medium"};
+  for (int i = 0; i < 3; ++i) {
+    const auto& w = r["speeds"][i];
+    CHECK(w["speed_value"].asString() == speeds[i]);
+    CHECK(w["sent_speed"].asString() == speeds[i]);
+    REQUIRE(w["speed_on"].size() == 1);
+    CHECK(w["speed_on"][0].asString() == speeds[i]);
+  }
+  CHECK(r["speed_panel"].asString() == "medium");
+  // The mouse at 3/4 of the arm stick's width: x 0.5, the dot 37.5 px right of the middle.
+  CHECK(r["arm_mouse"]["x"].asDouble() == Approx(0.5).margin(0.03));
+  CHECK(r["arm_mouse"]["y"].asDouble() == Approx(0.0).margin(0.03));
+  CHECK(r["arm_mouse"]["px"].asDouble() == Approx(127.5).margin(2.5));
+  // Driving and the gamepad: the widgets show it too.
+  CHECK(r["driving"]["deadman_held"].asString() == "held");
+  CHECK(r["stick_driving"]["page"]["y"].asDouble() == 1.0);
+  CHECK(r["gamepad_widgets"]["deadman_held"].asString() == "held");
+  CHECK(r["gamepad_stick"]["page"]["y"].asDouble() == 1.0);
+  CHECK(r["gamepad_stick"]["cy"].asDouble() < 20.0);
+}
+
+/// The PanelFeedback the test published shows on the page; rise-sim's speed
+/// display shows the robot moving.
+void check_feedback(const Json::Value& r) {
+  const auto& f = r["feedback"];
+  INFO(text(f));
+  CHECK(f["leds"]["power"].asBool());
+  CHECK_FALSE(f["leds"]["fault"].asBool());
+  CHECK(f["leds"]["estop"].asBool());
+  CHECK(f["leds"]["door_open"].asBool());  // not in the definition: shown as well
+  CHECK(f["displays"]["speed"].asString() == "0.75");
+  CHECK(f["displays"]["battery"].asString() == "87.50");
+  CHECK(f["buzzer"].asString() == "buzzer beep");
+  CHECK(colour_distance(f["lit_colour"].asString(), "rgb(51, 51, 51)") > 80);
+  CHECK(std::stod(r["sim_speed_display"].asString()) > 0.05);
+}
+}  // namespace
+
 TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, and closing it stops the robot", "[instructor]") {
   if (const auto why = missing_browser(); !why.empty()) {
     WARN("skipped: " << why);
@@ -236,10 +320,27 @@ TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, an
   REQUIRE(peer.good());
   REQUIRE(st.ready(peer));
   const auto start = peer.robot.back();
+  // The feedback a console would show, for a trainee of its own (rise-sim's
+  // 10 Hz feedback for st.id names no LEDs and would replace these).
+  const std::string fb_id = st.id + "fb";
   ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/panel_check.cjs", st.base(), st.token, st.id,
-                     st.out_dir(), kWeb},
+                     st.out_dir(), kWeb, fb_id},
                     (st.dir / "panel_check.log").string());
-  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000);
+  rise_msgs::PanelFeedback fb{};
+  fb.led_names = {"power", "fault", "estop", "door_open"};
+  fb.led_on = {1, 0, 1, 1};
+  fb.num_leds = 4;
+  fb.display_names = {"speed", "battery"};
+  fb.display_values = {0.75f, 87.5f};
+  fb.num_displays = 2;
+  fb.buzzer = 2;
+  fb.rumble = 0.0f;
+  int ticks = 0;
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 90000, [&] {
+    if (ticks++ % 10 != 0) return;
+    fb.utime = rise::msgs::wall_us();
+    peer.lcm().publish(rise::msgs::panel_feedback_channel(fb_id), &fb);
+  });
   if (!finished) node.stop();
   const auto result = read_result((st.dir / "panel_check.log").string());
   INFO(read_file((st.dir / "panel_check.log").string()));
@@ -250,6 +351,9 @@ TEST_CASE("the virtual panel page drives the robot from keyboard and gamepad, an
   CHECK(result["sticks"].asInt() == 2);
   CHECK(result["buttons"].asInt() >= 4);
   CHECK(result["closed"].asBool());
+  CHECK(result["page_errors"].size() == 0);
+  check_keyboard_widgets(result);
+  check_feedback(result);
   // The keys released the dead-man; the gamepad held it and drove forward.
   CHECK_FALSE(result["released"].asBool());
   CHECK(result["gamepad_panel"]["deadman"].asBool());
@@ -519,4 +623,90 @@ TEST_CASE("rise demo --view serves the trainee page and prints its URL for the d
   CHECK(robot);
   demo.stop(5000);
   fs::remove_all(dir);
+}
+
+namespace {
+/// A collision that goes on as rise-sim and a trainer report it: per step,
+/// collision_continues of the chassis and of a wheel, and a penalty.
+struct EventScript {
+  lcm::LCM& lcm;
+  std::string id;
+  void sim(const std::string& kind, const std::string& a, const std::string& b) {
+    rise_msgs::SimEvent e{};
+    e.utime = rise::msgs::wall_us();
+    e.robot_id = id;
+    e.kind = kind;
+    e.a = a;
+    e.b = b;
+    lcm.publish(rise::msgs::sim_event_channel(id), &e);
+  }
+  void penalty(int score) {
+    rise_msgs::TaskEvent e{};
+    e.utime = rise::msgs::wall_us();
+    e.trainee_id = id;
+    e.task = "drive_through";
+    e.attempt = 1;
+    e.name = "collision";
+    e.kind = "collision";
+    e.points = -1;
+    e.score = score;
+    lcm.publish(rise::msgs::task_event_channel(id), &e);
+  }
+};
+}  // namespace
+
+TEST_CASE("the console folds a collision that goes on into one line with a count and a duration", "[instructor]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  Stations st(false);
+  TraineePeer peer(st.id);
+  REQUIRE(peer.good());
+  REQUIRE(st.ready(peer));
+  // A trainee of its own: rise-sim's events for st.id would interleave.
+  const std::string ev_id = st.id + "ev";
+  const std::string ready = (st.dir / "console_ready").string();
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/console_fold_check.cjs", st.base(), st.token,
+                     ev_id, st.out_dir(), kWeb, ready},
+                    (st.dir / "console_fold_check.log").string());
+  REQUIRE(peer.wait_until([&] { return fs::exists(ready) || !node.running(); }, 30000));
+  EventScript script{peer.lcm(), ev_id};
+  const auto pause = [&](int ms) { peer.wait_until([] { return false; }, ms); };
+  script.sim("collision_started", "chassis", "wall_3");
+  for (int i = 0; i < 20; ++i) {
+    pause(150);
+    script.sim("collision_continues", "chassis", "wall_3");
+    script.sim("collision_continues", "wheel_fl", "wall_3");
+    script.penalty(100 - i - 1);
+  }
+  script.sim("region_entered", "chassis", "dock");
+  for (int i = 0; i < 3; ++i) {
+    pause(150);
+    script.sim("collision_continues", "chassis", "wall_3");
+  }
+  const bool finished = peer.wait_until([&] { return !node.running(); }, 40000);
+  if (!finished) node.stop();
+  const auto result = read_result((st.dir / "console_fold_check.log").string());
+  INFO(read_file((st.dir / "console_fold_check.log").string()));
+  REQUIRE(finished);
+  REQUIRE_FALSE(result.isMember("error"));
+  CHECK(result["page_errors"].size() == 0);
+  // 24 events of the run and the penalties: five lines, as published.
+  const auto& lines = result["lines"];
+  REQUIRE(lines.size() == 5);
+  CHECK(lines[0]["text"].asString() == ev_id + " collision_started chassis / wall_3");
+  CHECK(lines[1]["count"].asInt() == 40);
+  const std::string run = lines[1]["text"].asString();
+  CHECK(run.rfind(ev_id + " collision_continues ×40 over ", 0) == 0);
+  CHECK(run.find("chassis / wall_3, wheel_fl / wall_3") != std::string::npos);
+  // The run spans 19 pauses of 150 ms (and whatever the machine adds).
+  const double span = std::stod(run.substr(run.find(" over ") + 6));
+  CHECK(span >= 2.8);
+  CHECK(span < 6.0);
+  CHECK(lines[2]["count"].asInt() == 20);
+  CHECK(lines[2]["text"].asString().rfind(ev_id + " task collision -1 ×20 over ", 0) == 0);
+  CHECK(lines[2]["text"].asString().find("→ 80") != std::string::npos);
+  CHECK(lines[3]["text"].asString() == ev_id + " region_entered chassis / dock");
+  CHECK(lines[4]["count"].asInt() == 3);
 }

@@ -98,3 +98,25 @@ TEST_CASE("the SoundCue JSON carries what the trainee page plays", "[instructor]
   CHECK(v["pitch"].asDouble() == Approx(1.5));
   CHECK(v["detail"].asString() == "drive_speed 0.620");
 }
+
+TEST_CASE("the PanelFeedback JSON gives the LEDs and displays by name and the buzzer in words", "[instructor]") {
+  rise_msgs::PanelFeedback m{};
+  m.utime = 42;
+  m.led_names = {"power", "fault"};
+  m.led_on = {1, 0};
+  m.num_leds = 2;
+  m.display_names = {"speed"};
+  m.display_values = {1.25f};
+  m.num_displays = 1;
+  m.buzzer = 2;
+  m.rumble = 0.5f;
+  const auto v = rise::instructor::panel_feedback_json(m);
+  CHECK(v["leds"]["power"].asBool());
+  CHECK(v["leds"]["power"].isBool());
+  CHECK_FALSE(v["leds"]["fault"].asBool());
+  CHECK(v["displays"]["speed"].asDouble() == Approx(1.25));
+  CHECK(v["buzzer"].asString() == "beep");
+  CHECK(v["rumble"].asDouble() == Approx(0.5));
+  m.buzzer = 0;
+  CHECK(rise::instructor::panel_feedback_json(m)["buzzer"].asString() == "off");
+}

@@ -3,12 +3,13 @@ import * as THREE from 'three';
 import { api, getJson, postJson, stream, el, token, ROBOT_COLOUR } from './common.js';
 import { createView, camera, buildWorld, robotMesh as makeRobotMesh, poseRobot, placeObjects, onboardMount, placeOnboard,
   placeChase, cameraBlackedOut, renderInto, canvasStats } from './scene3d.js';
+import { foldEvent, lineText } from './event_fold.js';
 
 const state = {
   world: null,
   trainees: new Map(),   // id → {panel_state, robot_state, task_status, trail: [[x,y]...]}
   selected: '',
-  events: [],
+  eventLines: [],  // the progress list, runs folded (event_fold.js)
   pushes: 0,
   dirty: true,
 };
@@ -208,9 +209,7 @@ function renderTraining() {
   }
   document.getElementById('training').replaceChildren(el('table', {}, ...rows));
   const log = document.getElementById('events');
-  log.replaceChildren(...state.events.slice(-60).map((e) => el('div', {},
-    e.trainee + ' ' + (e.channel_kind === 'task_event' ? 'task ' + e.name + ' ' + (e.points >= 0 ? '+' : '') + e.points + ' → ' + e.score
-      : e.kind + ' ' + e.a + (e.b ? ' / ' + e.b : '') + (e.detail ? ' (' + e.detail + ')' : '')))));
+  log.replaceChildren(...state.eventLines.slice(-60).map((l) => el('div', { 'data-count': l.count }, lineText(l))));
   log.scrollTop = log.scrollHeight;
 }
 
@@ -294,8 +293,8 @@ function onUpdate(u) {
   }
   for (const [id, l] of Object.entries(u.links || {})) trainee(id).link = l;
   renderTraineeList();
-  for (const e of u.events) { trainee(e.trainee); state.events.push(e); }
-  if (state.events.length > 500) state.events.splice(0, state.events.length - 500);
+  for (const e of u.events) { trainee(e.trainee); foldEvent(state.eventLines, e); }
+  if (state.eventLines.length > 500) state.eventLines.splice(0, state.eventLines.length - 500);
   renderPanels(); renderTraining(); renderRobotLine();
 }
 
