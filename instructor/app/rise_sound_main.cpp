@@ -19,6 +19,7 @@
 #include "instructor/app/sound_output.hpp"
 #include "instructor/sound_synth.hpp"
 #include "msgs/channels.hpp"
+#include "msgs/lcm_decode.hpp"
 #include "rise_msgs/SoundCue.hpp"
 
 namespace {
@@ -128,7 +129,7 @@ int main(int argc, char** argv) {
   Counts counts;
   CueHandler handler{&synth, &counts};
   const std::string channel = rise::msgs::sound_channel(o.id);
-  lcm.subscribe(channel, &CueHandler::on, &handler)->setQueueCapacity(200);
+  rise::msgs::subscribe<&CueHandler::on>(lcm, channel, &handler)->setQueueCapacity(200);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   spdlog::info("rise-sound ready: {} → ALSA '{}' at {} Hz{}", channel, o.device, o.rate, o.out.empty() ? "" : ", " + o.out);
