@@ -24,7 +24,9 @@ build=${RISE_BUILD_DIR:-$root/build}
 # gzip'd CARMEN logs, cpp-httplib for the instructor's web server, Node.js
 # + npm to build its pages from the locked npm packages in instructor/web
 # (three.js, esbuild, playwright-core) at set-up, universal-ctags for the
-# function-size check. Installing
+# function-size check, libpcap to read pcap/pcapng captures (CAN, Modbus/TCP)
+# with tcpdump capturing vcan in the VM test and tshark as the oracle of
+# the pcap tests. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -39,6 +41,7 @@ packages=(
   libjsoncpp-dev chromium zlib1g-dev
   libssl-dev libcpp-httplib-dev nodejs npm
   universal-ctags
+  libpcap-dev tcpdump tshark
 )
 
 setup() {

@@ -289,12 +289,16 @@ constexpr uint8_t kCanFdBrs = 0x01;
 constexpr uint8_t kCanFdEsi = 0x02;
 constexpr uint8_t kCanFdFdf = 0x04;
 
-// struct can_frame / canfd_frame as libpcap stores them: the CAN id in
-// network byte order (pcap-linux.c turns it so, for link type 227 and for
-// cooked captures alike), then length, FD flags, two reserved bytes, data.
-bool parse_socketcan(const uint8_t* p, size_t n, bool fd, CanFrame& f) {
+// struct can_frame / canfd_frame as libpcap stores them: CAN id, length,
+// FD flags, two reserved bytes, data. The id is in network byte order for
+// link type 227 (libpcap turns it so) but in the capturing machine's order
+// (little-endian on every machine we meet) in cooked captures, as a real
+// tcpdump -i any capture of vcan shows (tests/vcan/capture_vm_test.cpp) and
+// Wireshark reads it. libpcap 1.10 writes the FD flags of a 227 capture as
+// zero: CAN FD is then told by the length (CANFD_MTU), BRS and ESI are lost.
+bool parse_socketcan(const uint8_t* p, size_t n, bool fd, bool host_order_id, CanFrame& f) {
   if (n < 8) return false;
-  const uint32_t raw = be32(p);
+  const uint32_t raw = host_order_id ? le32(p) : be32(p);
   f.extended = (raw & kEffFlag) != 0;
   f.remote = (raw & kRtrFlag) != 0;
   f.error = (raw & kErrFlag) != 0;
@@ -405,7 +409,7 @@ class PcapLog final : public BinaryCanLog {
     record.tx = packet_type == kPacketOutgoing;
     const bool fd = link_ != kDltCanSocketcan && protocol == kSllProtoCanFd;
     if (n != kCanMtu && n != kCanFdMtu && !fd) return Decoded::Malformed;
-    return parse_socketcan(p, n, fd, record.frame) ? Decoded::Frame : Decoded::Malformed;
+    return parse_socketcan(p, n, fd, link_ != kDltCanSocketcan, record.frame) ? Decoded::Frame : Decoded::Malformed;
   }
 
   std::string path_;
