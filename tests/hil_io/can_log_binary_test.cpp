@@ -15,7 +15,9 @@
 #include <string>
 #include <vector>
 
+#include "hil/io/can_bus.hpp"
 #include "hil/io/can_log.hpp"
+#include "hil/io/replay_bus.hpp"
 
 using namespace rise::hil::io;
 
@@ -406,4 +408,41 @@ TEST_CASE("pcap: a cut capture ends with one malformed record; other link types 
   pcap_dump_close(dump);
   pcap_close(dead);
   CHECK_THROWS_WITH(CanLogReader(ether), Catch::Contains("link type 1 (EN10MB) is not SocketCAN"));
+}
+
+TEST_CASE("replay:// plays a BLF and a pcapng like the log they were made from", "[hil_io][blf][pcap]") {
+  const std::string log = data_file("CANBUSlogs-yaris09/accellog.log");
+  REQUIRE_DATA(log);
+  REQUIRE_PEER(kPythonCan, "/usr/bin/python3 with python3-can (Debian)");
+  REQUIRE_PEER("editcap -v >/dev/null 2>&1", "editcap (Debian's wireshark-common, with tshark)");
+  TempDir tmp;
+  const std::string blf = tmp / "accel.blf";
+  run("/usr/bin/python3 " + kBlfTool + " write '" + log + "' '" + blf + "'");
+  const std::string pcap = tmp / "accel.pcap";
+  const std::string pcapng = tmp / "accel.pcapng";
+  write_pcap(pcap, 227, read_can_log(log));
+  run("editcap -F pcapng '" + pcap + "' '" + pcapng + "'");
+  const auto source = read_can_log(log);
+  for (const auto& file : {blf, pcapng}) {
+    INFO(file);
+    // Twice through (loop=1), only the ids 0x2C1 and 0x3B3 kept.
+    auto bus = open_can_bus("replay://" + file + "?fast=1&loop=1&ids=2C1,3B3");
+    auto* replay = dynamic_cast<ReplayBus*>(bus.get());
+    REQUIRE(replay != nullptr);
+    std::vector<CanFrame> played;
+    CanFrame f;
+    for (int i = 0; i < 100'000; ++i) {
+      const IoStatus st = bus->receive(f, 1000);
+      if (st == IoStatus::Disconnected) break;
+      if (st == IoStatus::Ok) played.push_back(f);
+    }
+    std::vector<CanFrame> expected;
+    for (int pass = 0; pass < 2; ++pass)
+      for (const auto& r : source)
+        if (r.frame.id == 0x2C1 || r.frame.id == 0x3B3) expected.push_back(r.frame);
+    REQUIRE(expected.size() > 100);
+    REQUIRE(played.size() == expected.size());
+    for (size_t i = 0; i < played.size(); ++i) CHECK(same_content(played[i], expected[i]));
+    CHECK(replay->loops_done() == 1);
+  }
 }
