@@ -231,6 +231,89 @@ ModbusCapture read_modbus_capture(const std::string& path, uint16_t port) {
   return std::move(decoder.result());
 }
 
+bool looks_like_modbus_capture(const std::string& path) {
+  char error[PCAP_ERRBUF_SIZE] = "";
+  std::unique_ptr<pcap_t, void (*)(pcap_t*)> pcap(pcap_open_offline(path.c_str(), error), pcap_close);
+  if (!pcap) return false;
+  const int link = pcap_datalink(pcap.get());
+  if (link == kDltEthernet || link == kDltRaw || link == kDltRawAlt) return true;
+  if (link != kDltSll && link != kDltSll2) return false;
+  pcap_pkthdr* header = nullptr;
+  const u_char* packet = nullptr;
+  if (pcap_next_ex(pcap.get(), &header, &packet) != 1) return true;
+  const size_t at = link == kDltSll ? 14 : 0;
+  if (header->caplen < at + 2) return true;
+  const uint16_t protocol = be16(packet + at);
+  return protocol != 0x000C && protocol != 0x000D;  // CAN, CAN FD
+}
+
+namespace {
+
+// Bits of a coil/discrete-input PDU, first address in the lowest bit.
+void unpack_bits(const uint8_t* bytes, size_t size, uint16_t count, std::vector<uint16_t>& out) {
+  for (uint16_t i = 0; i < count && i / 8u < size; ++i) out.push_back((bytes[i / 8] >> (i % 8)) & 1u);
+}
+
+void unpack_registers(const uint8_t* bytes, size_t size, std::vector<uint16_t>& out) {
+  for (size_t i = 0; i + 1 < size; i += 2) out.push_back(be16(bytes + i));
+}
+
+// The values a trace line carries: the read's answer, or what was written.
+// False when the PDU holds fewer than count of them.
+bool trace_values(const ModbusCaptureTransaction& t, ModbusTraceRecord& r) {
+  const bool bits = is_bit_function(r.function);
+  const bool write = t.function == 15 || t.function == 16;
+  const std::vector<uint8_t>& pdu = write ? t.request_pdu : t.response_pdu;
+  const size_t at = write ? 6 : 2;  // after the byte count
+  if (pdu.size() < at) return false;
+  const size_t size = std::min<size_t>(pdu[at - 1], pdu.size() - at);
+  if (bits) unpack_bits(pdu.data() + at, size, r.count, r.values);
+  else unpack_registers(pdu.data() + at, size, r.values);
+  return r.values.size() >= r.count;
+}
+
+}  // namespace
+
+std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& capture, const std::string& source) {
+  constexpr int64_t kNoAnswerUs = 1'000'000;
+  std::vector<ModbusTraceRecord> records;
+  const auto& all = capture.transactions;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const ModbusCaptureTransaction& t = all[i];
+    const bool known = (t.function >= 1 && t.function <= 4) || t.function == 15 || t.function == 16;
+    if (!known || !t.address || !t.count) continue;
+    ModbusTraceRecord r;
+    r.time_us = t.request_us;
+    r.source = source;
+    r.unit = t.unit;
+    r.function = static_cast<ModbusFunction>(t.function);
+    r.address = *t.address;
+    r.count = *t.count;
+    if (!t.response_us) {
+      r.result.status = ModbusStatus::Timeout;
+      r.rtt_us = kNoAnswerUs;
+      for (size_t j = i + 1; j < all.size(); ++j) {
+        if (all[j].client != t.client || all[j].server != t.server) continue;
+        r.rtt_us = all[j].request_us - t.request_us;
+        break;
+      }
+    } else if (t.exception) {
+      r.rtt_us = *t.response_us - t.request_us;
+      r.result = {ModbusStatus::Exception, *t.exception};
+    } else {
+      r.rtt_us = *t.response_us - t.request_us;
+      if (trace_values(t, r)) {
+        r.values.resize(r.count);
+      } else {
+        r.result.status = ModbusStatus::Error;  // an answer too short for its count
+        r.values.clear();
+      }
+    }
+    records.push_back(std::move(r));
+  }
+  return records;
+}
+
 std::string modbus_function_name(uint8_t function) {
   switch (function) {
     case 1: return "Read Coils";

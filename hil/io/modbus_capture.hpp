@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "hil/io/modbus_trace.hpp"
+
 namespace rise::hil::io {
 
 struct ModbusCaptureTransaction {
@@ -48,6 +50,18 @@ struct ModbusCapture {
 /// Reads every transaction of a capture. Throws std::runtime_error naming
 /// the path when it cannot be opened or its link type carries no IP.
 ModbusCapture read_modbus_capture(const std::string& path, uint16_t port = 502);
+
+/// True when path is a pcap/pcapng whose packets are IP (Ethernet, raw IP,
+/// or a Linux cooked capture whose first packet is not CAN): a capture for
+/// a Modbus source rather than a CAN one. Does not throw.
+bool looks_like_modbus_capture(const std::string& path);
+
+/// The capture's transactions as trace records (modbus_trace.hpp) of one
+/// source, for replay://CAPTURE.pcap on a Modbus source: the functions a
+/// trace knows (01-04, 15, 16) with the values read or written, exceptions,
+/// and requests without an answer as timeouts (rtt: until the next request
+/// on the connection, or 1 s); other functions are left out.
+std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& capture, const std::string& source);
 
 /// "Read Coils", "Write Multiple Registers", ... ("function N" otherwise).
 std::string modbus_function_name(uint8_t function);

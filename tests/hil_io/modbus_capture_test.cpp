@@ -8,12 +8,14 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include "hil/io/modbus_capture.hpp"
+#include "hil/io/replay_modbus_link.hpp"
 
 using namespace rise::hil::io;
 
@@ -258,4 +260,39 @@ TEST_CASE("Modbus/TCP capture: a CAN capture or a missing file is refused with i
   pcap_close(dead);
   CHECK_THROWS_WITH(read_modbus_capture(can), Catch::Contains("link type 227"));
   std::filesystem::remove(can);
+}
+
+TEST_CASE("replay://modbusSmall.pcap on a Modbus source answers each coil read as the capture's server did", "[hil_io][modbus]") {
+  const std::string pcap = zeek_file("modbusSmall.pcap");
+  const std::string baseline = zeek_file("coil_parsing_small/output");
+  REQUIRE_DATA(pcap);
+  REQUIRE_DATA(baseline);
+  // Zeek's read-coils responses by client port (the order they came in).
+  std::map<int, std::vector<uint8_t>> zeek;
+  std::ifstream in(baseline);
+  const std::regex response(R"(modbus_read_coils_response, \[.*orig_p=(\d+)/tcp.*\], \[([TF, ]*)\]$)");
+  std::smatch m;
+  for (std::string line; std::getline(in, line);) {
+    if (!std::regex_search(line, m, response)) continue;
+    const std::string bits = m[2];
+    std::vector<uint8_t> v;
+    for (const char c : bits)
+      if (c == 'T' || c == 'F') v.push_back(c == 'T');
+    zeek[std::stoi(m[1])] = v;
+  }
+  REQUIRE(zeek.size() == 8);
+  CHECK(looks_like_modbus_capture(pcap));
+  const auto link = open_modbus_replay("replay://" + pcap + "?fast=1");
+  REQUIRE(link->is_open());
+  for (const auto& [port, bits] : zeek) {
+    INFO("the answer to port " << port);
+    std::array<uint8_t, 3> coils{};
+    REQUIRE(link->read_coils(0, coils).ok());
+    CHECK(std::vector<uint8_t>(coils.begin(), coils.end()) == std::vector<uint8_t>(bits.begin(), bits.begin() + 3));
+    const std::array<uint8_t, 3> write{1, 0, 1};
+    CHECK(link->write_coils(0, write).ok());  // accepted and dropped, as the trace replay does
+  }
+  // Not in the capture: exception 02, as a server without it.
+  std::array<uint16_t, 1> reg{};
+  CHECK(link->read_holding_registers(0, reg).exception_code == 2);
 }
