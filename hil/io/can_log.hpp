@@ -28,8 +28,10 @@ const char* to_string(CanLogFormat format);
 
 /// One frame of a log. frame.timestamp_us is the file's time as the file
 /// counts it: seconds since the Unix epoch for candump, since the start of
-/// the measurement for ASC, TRC and BLF (relative ASC stamps are summed
-/// up), since the Unix epoch for pcap/pcapng.
+/// the measurement for ASC and TRC (relative ASC stamps are summed up),
+/// since the Unix epoch for pcap/pcapng and for BLF (its header's start
+/// time, local time taken as UTC, plus each object's offset; the offset
+/// alone when the header has no start time).
 /// Error frames carry no error class in ASC/TRC/BLF: their id is 0 and len 8.
 struct CanLogRecord {
   CanFrame frame;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <ctime>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -47,6 +48,27 @@ constexpr size_t kCanFd64Size = 40;      // fixed part before the data
 constexpr size_t kCanErrorExtSize = 32;
 constexpr uint32_t kMaxContainer = 64u << 20;  // no real writer makes containers this big
 
+constexpr size_t kStartTimeAt = 40;     // the header's start SYSTEMTIME
+
+// A Windows SYSTEMTIME (year, month, weekday, day, hour, minute, second,
+// ms) as µs since the Unix epoch; 0 when it is no date (python-can's
+// systemtime_to_timestamp gives 0 then too). BLF keeps the logger's local
+// time without its zone: it is taken as UTC, as python-can on a UTC machine.
+int64_t systemtime_us(const uint8_t* p) {
+  std::tm t{};
+  t.tm_year = le16(p) - 1900;
+  t.tm_mon = le16(p + 2) - 1;
+  t.tm_mday = le16(p + 6);
+  t.tm_hour = le16(p + 8);
+  t.tm_min = le16(p + 10);
+  t.tm_sec = le16(p + 12);
+  const int ms = le16(p + 14);
+  if (t.tm_year < 70 || t.tm_mon < 0 || t.tm_mon > 11 || t.tm_mday < 1 || t.tm_mday > 31 || t.tm_hour > 23 ||
+      t.tm_min > 59 || t.tm_sec > 59 || ms > 999)
+    return 0;
+  return static_cast<int64_t>(::timegm(&t)) * 1000000 + ms * 1000;
+}
+
 bool is_lobj(const uint8_t* p) { return std::memcmp(p, "LOBJ", 4) == 0; }
 
 class BlfLog final : public BinaryCanLog {
@@ -57,6 +79,7 @@ class BlfLog final : public BinaryCanLog {
     if (!in_.read(reinterpret_cast<char*>(header), sizeof header))
       throw std::runtime_error(path + ": BLF: file header cut short");
     header_size_ = le32(header + 4);
+    start_us_ = systemtime_us(header + kStartTimeAt);
     if (header_size_ < kFileHeaderMin) throw std::runtime_error(path + ": BLF: file header size " + std::to_string(header_size_));
     rewind();
   }
@@ -180,7 +203,7 @@ class BlfLog final : public BinaryCanLog {
     const uint32_t flags = le32(obj + kObjBase);
     const uint64_t stamp = le64(obj + kObjBase + 8);
     record.frame = CanFrame{};
-    record.frame.timestamp_us = static_cast<int64_t>(flags == kTimeTenMics ? stamp * 10 : stamp / 1000);
+    record.frame.timestamp_us = start_us_ + static_cast<int64_t>(flags == kTimeTenMics ? stamp * 10 : stamp / 1000);
     const uint8_t* body = obj + header;
     const size_t body_size = size - header;
     switch (type) {
@@ -263,6 +286,7 @@ class BlfLog final : public BinaryCanLog {
   std::string path_;
   std::ifstream in_;
   uint32_t header_size_ = 0;
+  int64_t start_us_ = 0;  // the measurement's start, 0 when the header has none
   uint64_t consumed_ = 0;
   std::vector<uint8_t> data_;  // decompressed objects not yet parsed
   size_t pos_ = 0;

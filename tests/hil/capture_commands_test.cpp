@@ -76,6 +76,27 @@ std::vector<std::string> fields(const std::string& row) {
   return f;
 }
 
+// The frames of a CAN log as a pcap of link type 227, written by libpcap.
+void write_pcap(const std::string& log, const std::string& pcap) {
+  pcap_t* dead = pcap_open_dead(227, 65535);
+  pcap_dumper_t* dump = pcap_dump_open(dead, pcap.c_str());
+  REQUIRE(dump != nullptr);
+  for (const auto& rec : rise::hil::io::read_can_log(log)) {
+    const auto& f = rec.frame;
+    const uint32_t id = f.id | (f.extended ? 0x80000000u : 0);
+    std::vector<u_char> p = {static_cast<u_char>(id >> 24), static_cast<u_char>(id >> 16), static_cast<u_char>(id >> 8),
+                             static_cast<u_char>(id), f.len, 0, 0, 0};
+    p.insert(p.end(), f.data.begin(), f.data.begin() + 8);
+    pcap_pkthdr h{};
+    h.ts.tv_sec = f.timestamp_us / 1000000;
+    h.ts.tv_usec = f.timestamp_us % 1000000;
+    h.caplen = h.len = static_cast<bpf_u_int32>(p.size());
+    pcap_dump(reinterpret_cast<u_char*>(dump), &h, p.data());
+  }
+  pcap_dump_close(dump);
+  pcap_close(dead);
+}
+
 }  // namespace
 
 TEST_CASE("rise-hild modbus decode prints the transactions of a real capture with their timing", "[hil][modbus]") {
@@ -133,26 +154,10 @@ TEST_CASE("rise-hild dbc decode reads the same car capture as candump, BLF and p
   }
   TempDir tmp;
   const std::string blf = tmp.path + "/steering.blf";
-  REQUIRE(std::system(("/usr/bin/python3 " + std::string(RISE_SOURCE_DIR) + "/tests/hil_io/python_can_blf.py write '" +
+  REQUIRE(std::system(("TZ=UTC /usr/bin/python3 " + std::string(RISE_SOURCE_DIR) + "/tests/hil_io/python_can_blf.py write '" +
                        log + "' '" + blf + "'").c_str()) == 0);
   const std::string pcap = tmp.path + "/steering.pcap";
-  pcap_t* dead = pcap_open_dead(227, 65535);
-  pcap_dumper_t* dump = pcap_dump_open(dead, pcap.c_str());
-  REQUIRE(dump != nullptr);
-  for (const auto& rec : rise::hil::io::read_can_log(log)) {
-    const auto& f = rec.frame;
-    const uint32_t id = f.id | (f.extended ? 0x80000000u : 0);
-    std::vector<u_char> p = {static_cast<u_char>(id >> 24), static_cast<u_char>(id >> 16), static_cast<u_char>(id >> 8),
-                             static_cast<u_char>(id), f.len, 0, 0, 0};
-    p.insert(p.end(), f.data.begin(), f.data.begin() + 8);
-    pcap_pkthdr h{};
-    h.ts.tv_sec = f.timestamp_us / 1000000;
-    h.ts.tv_usec = f.timestamp_us % 1000000;
-    h.caplen = h.len = static_cast<bpf_u_int32>(p.size());
-    pcap_dump(reinterpret_cast<u_char*>(dump), &h, p.data());
-  }
-  pcap_dump_close(dump);
-  pcap_close(dead);
+  write_pcap(log, pcap);
 
   // MANIFEST.md: 1769 frames, 1128 with a message in the DBC.
   const auto decoded = [](const std::string& text) {
@@ -172,5 +177,25 @@ TEST_CASE("rise-hild dbc decode reads the same car capture as candump, BLF and p
     REQUIRE(r.rc == 0);
     CHECK(r.out.find("# 1769 frames: 1128 with a message") != std::string::npos);
     CHECK(decoded(r.out) == decoded(from_log.out));
+  }
+}
+
+TEST_CASE("rise-hild verify passes the CAN golden session replayed from a BLF and a pcap of its capture", "[hil][blf][pcap]") {
+  const std::string dir = std::string(RISE_SOURCE_DIR) + "/tests/data/replay/can";
+  if (std::system("/usr/bin/python3 -c 'import can' >/dev/null 2>&1") != 0) {
+    WARN("skipped: /usr/bin/python3 with python3-can (Debian) is not installed");
+    return;
+  }
+  TempDir tmp;
+  const std::string blf = tmp.path + "/console.blf";
+  REQUIRE(std::system(("TZ=UTC /usr/bin/python3 " + std::string(RISE_SOURCE_DIR) + "/tests/hil_io/python_can_blf.py write '" +
+                       dir + "/console.log' '" + blf + "'").c_str()) == 0);
+  const std::string pcap = tmp.path + "/console.pcap";
+  write_pcap(dir + "/console.log", pcap);
+  for (const auto& file : {blf, pcap}) {
+    INFO(file);
+    const Run r = hild({"verify", "--capture", "console=" + file, "--golden", dir + "/panel_state.lcmlog"}, tmp.path);
+    CHECK(r.rc == 0);
+    CHECK(r.out.find("pass: 212 of 212 PanelState messages") != std::string::npos);
   }
 }

@@ -91,7 +91,8 @@ struct TheirFrame {
 };
 
 std::vector<TheirFrame> python_can_read(const std::string& blf) {
-  std::istringstream in(run("/usr/bin/python3 " + kBlfTool + " dump '" + blf + "'"));
+  // BLF's start time has no zone: python-can reads it in the local one, we as UTC.
+  std::istringstream in(run("TZ=UTC /usr/bin/python3 " + kBlfTool + " dump '" + blf + "'"));
   std::vector<TheirFrame> frames;
   TheirFrame t;
   std::string id;
@@ -190,16 +191,20 @@ TEST_CASE("BLF written by python-can's BLFWriter from real logs: every frame as 
   for (const auto& c : cases) {
     REQUIRE_DATA(c.source);
     const std::string blf = tmp / (std::filesystem::path(c.source).filename().string() + ".blf");
-    run("/usr/bin/python3 " + kBlfTool + " write '" + c.source + "' '" + blf + "' " + c.container);
+    run("TZ=UTC /usr/bin/python3 " + kBlfTool + " write '" + c.source + "' '" + blf + "' " + c.container);
     check_same_as_python_can(blf, c.min_frames);
-    // And the same frames as our reader of the source, times from its first.
+    // And the same frames as our reader of the source, at the same times:
+    // the writer puts the first frame's time, to the ms, in the header.
     const auto source = read_can_log(c.source);
     const auto ours = read_can_log(blf);
     REQUIRE(ours.size() == source.size());
+    const bool epoch = source[0].frame.timestamp_us > 631152000LL * 1000000;  // as python-can's writer tells it
+    CHECK(std::llabs(ours[0].frame.timestamp_us - (epoch ? source[0].frame.timestamp_us : 0)) <= 500);
     for (size_t i = 0; i < ours.size(); ++i) {
       INFO(c.source << " frame " << i);
       CHECK(same_content(ours[i].frame, source[i].frame));
-      CHECK(std::llabs(ours[i].frame.timestamp_us - (source[i].frame.timestamp_us - source[0].frame.timestamp_us)) <= 1);
+      CHECK(std::llabs((ours[i].frame.timestamp_us - ours[0].frame.timestamp_us) -
+                       (source[i].frame.timestamp_us - source[0].frame.timestamp_us)) <= 1);
     }
   }
 }
@@ -210,7 +215,7 @@ TEST_CASE("BLF cut or corrupted anywhere: counted as malformed, never thrown, fr
   REQUIRE_PEER(kPythonCan, "/usr/bin/python3 with python3-can (Debian)");
   TempDir tmp;
   const std::string blf = tmp / "whole.blf";
-  run("/usr/bin/python3 " + kBlfTool + " write '" + source + "' '" + blf + "' 2000");
+  run("TZ=UTC /usr/bin/python3 " + kBlfTool + " write '" + source + "' '" + blf + "' 2000");
   const auto whole = read_can_log(blf);
   std::ifstream in(blf, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -417,7 +422,7 @@ TEST_CASE("replay:// plays a BLF and a pcapng like the log they were made from",
   REQUIRE_PEER("editcap -v >/dev/null 2>&1", "editcap (Debian's wireshark-common, with tshark)");
   TempDir tmp;
   const std::string blf = tmp / "accel.blf";
-  run("/usr/bin/python3 " + kBlfTool + " write '" + log + "' '" + blf + "'");
+  run("TZ=UTC /usr/bin/python3 " + kBlfTool + " write '" + log + "' '" + blf + "'");
   const std::string pcap = tmp / "accel.pcap";
   const std::string pcapng = tmp / "accel.pcapng";
   write_pcap(pcap, 227, read_can_log(log));

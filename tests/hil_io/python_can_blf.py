@@ -3,7 +3,8 @@
 
 usage: python_can_blf.py dump FILE.blf
          one line per frame: ID EXTENDED REMOTE ERROR FD BRS ESI TIME_US DATA
-         (TIME_US: microseconds since the file's start, DATA hex or "-")
+         (TIME_US: microseconds since the epoch, the header's start time read
+         in the local zone: run it with TZ=UTC; DATA hex or "-")
        python_can_blf.py write SOURCE_LOG FILE.blf [MAX_CONTAINER_BYTES]
          every frame of SOURCE_LOG (any format can.LogReader reads) to FILE.blf
 """
@@ -15,7 +16,7 @@ if sys.argv[1] == "dump":
     reader = can.BLFReader(sys.argv[2])
     for m in reader:
         data = m.data.hex() or "-"
-        us = round((m.timestamp - reader.start_timestamp) * 1e6)
+        us = round(m.timestamp * 1e6)
         print(f"{m.arbitration_id:x} {int(m.is_extended_id)} {int(m.is_remote_frame)} "
               f"{int(m.is_error_frame)} {int(m.is_fd)} {int(m.bitrate_switch)} "
               f"{int(m.error_state_indicator)} {us} {data}")
