@@ -209,6 +209,30 @@ TEST_CASE("BLF written by python-can's BLFWriter from real logs: every frame as 
   }
 }
 
+TEST_CASE("BLF objects python-can's writer never makes: CAN_FD_MESSAGE_64, CAN_MESSAGE2 with a v2 header in 10 us units", "[hil_io][blf]") {
+  REQUIRE_PEER(kPythonCan, "/usr/bin/python3 with python3-can (Debian)");
+  TempDir tmp;
+  const std::string blf = tmp / "crafted.blf";
+  run("TZ=UTC /usr/bin/python3 " + kBlfTool + " craft '" + blf + "'");
+  check_same_as_python_can(blf, 6);
+  const auto r = read_can_log(blf);
+  REQUIRE(r.size() == 6);
+  constexpr int64_t kStart = 1714655655678000;  // the header's 2024-05-02 13:14:15.678
+  CHECK(r[0].frame.timestamp_us == kStart + 1);  // 1000 ns
+  CHECK(r[0].frame.fd);
+  CHECK(r[0].frame.brs);
+  CHECK(r[0].frame.len == 64);
+  CHECK(r[0].tx);
+  CHECK(r[1].frame.esi);
+  CHECK_FALSE(r[1].tx);
+  CHECK(r[2].frame.remote);
+  CHECK(r[2].frame.timestamp_us == kStart + 3450);  // 345 × 10 us
+  CHECK(r[2].channel == "3");
+  CHECK(r[4].frame.fd);
+  CHECK(r[4].frame.len == 12);
+  CHECK(r[5].frame.error);
+}
+
 TEST_CASE("BLF cut or corrupted anywhere: counted as malformed, never thrown, frames before it kept", "[hil_io][blf]") {
   const std::string source = data_file("python-can/issue_1256.asc");
   REQUIRE_DATA(source);
