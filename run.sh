@@ -27,7 +27,9 @@ build=${RISE_BUILD_DIR:-$root/build}
 # function-size check, iproute2 + libfaketime + curl + jq for the classroom
 # test (hosts as network namespaces on a bridge, one host's clock skewed, its
 # HTTP API read with curl and jq), ALSA (libasound2-dev) for rise-sound's
-# playback and sox to measure its output's level in the test. Installing
+# playback and sox to measure its output's level in the test, libpcap to read
+# pcap/pcapng captures (CAN, Modbus/TCP) with tcpdump capturing vcan in the VM
+# test and tshark as the oracle of the pcap tests. Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -44,6 +46,7 @@ packages=(
   universal-ctags
   iproute2 faketime curl jq
   libasound2-dev sox
+  libpcap-dev tcpdump tshark
 )
 
 setup() {

@@ -2,15 +2,19 @@
 
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <sstream>
 
 #include "firmware_protocol/dbc.hpp"
 #include "firmware_protocol/hid_text.hpp"
+#include "hil/io/can_log.hpp"
 #include "hil/io/candump_log.hpp"
+#include "hil/io/modbus_capture.hpp"
 
 namespace rise::hil {
 namespace {
@@ -33,25 +37,23 @@ int dbc_decode(const std::string& dbc_file, const std::string& log_file, std::os
     err << e.what() << '\n';
     return 2;
   }
-  std::ifstream in(log_file);
-  if (!in) {
-    err << log_file << ": cannot open: " << std::strerror(errno) << '\n';
+  std::optional<io::CanLogReader> reader;
+  try {
+    reader.emplace(log_file);
+  } catch (const std::exception& e) {
+    err << e.what() << '\n';
     return 2;
   }
-  int64_t frames = 0, decoded = 0, unknown = 0, bad_lines = 0;
+  int64_t frames = 0, decoded = 0, unknown = 0;
   std::map<uint32_t, int64_t> unknown_ids;
+  io::CanLogRecord record;
   std::string line;
-  for (int line_no = 1; std::getline(in, line); ++line_no) {
-    const auto parsed = io::parse_candump_line(line);
-    if (parsed.error == io::CandumpError::Empty) continue;
-    if (!parsed.ok()) {
-      err << log_file << ':' << line_no << ": " << io::to_string(parsed.error) << ", line skipped\n";
-      ++bad_lines;
-      continue;
-    }
+  while (reader->next(record)) {
     ++frames;
-    const auto& f = parsed.record.frame;
+    const auto& f = record.frame;
     const firmware_protocol::DbcMessage* message = f.error || f.remote ? nullptr : db.find(f.id, f.extended);
+    line.clear();
+    io::append_candump_line(line, f, record.channel.empty() ? "can0" : record.channel);
     out << line;
     if (!message) {
       ++unknown;
@@ -69,6 +71,9 @@ int dbc_decode(const std::string& dbc_file, const std::string& log_file, std::os
     }
     out << ")\n";
   }
+  for (const int bad : reader->malformed_lines())
+    err << log_file << ':' << bad << ": not a frame, skipped\n";
+  const size_t bad_lines = reader->malformed_count();
   out << "# " << frames << " frames: " << decoded << " with a message in " << dbc_file << " ("
       << (frames ? 100 * decoded / frames : 0) << " %), " << unknown << " without";
   if (!unknown_ids.empty()) {
@@ -79,6 +84,58 @@ int dbc_decode(const std::string& dbc_file, const std::string& log_file, std::os
   if (bad_lines) out << ", " << bad_lines << " unreadable lines";
   out << '\n';
   return bad_lines && frames == 0 ? 2 : 0;
+}
+
+namespace {
+
+std::string modbus_row(const io::ModbusCaptureTransaction& t, int64_t start_us) {
+  const auto opt = [](const std::optional<uint16_t>& v) { return v ? std::to_string(*v) : std::string("-"); };
+  std::string result = "no response", ms = "-";
+  if (t.response_us) {
+    result = t.exception ? "exception " + std::to_string(*t.exception) + " (" + io::modbus_exception_name(*t.exception) + ")"
+                         : "ok";
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3f", static_cast<double>(*t.response_us - t.request_us) / 1000.0);
+    ms = text;
+  }
+  char row[512];
+  std::snprintf(row, sizeof row, "%12.6f  %-24s %-24s %5u %4u %3u %-30s %7s %6s  %-34s %9s",
+                static_cast<double>(t.request_us - start_us) / 1e6, t.client.c_str(), t.server.c_str(),
+                t.transaction_id, t.unit, t.function, io::modbus_function_name(t.function).c_str(),
+                opt(t.address).c_str(), opt(t.count).c_str(), result.c_str(), ms.c_str());
+  return row;
+}
+
+}  // namespace
+
+int modbus_decode(const std::string& capture_file, std::ostream& out, std::ostream& err) {
+  io::ModbusCapture capture;
+  try {
+    capture = io::read_modbus_capture(capture_file);
+  } catch (const std::exception& e) {
+    err << e.what() << '\n';
+    return 2;
+  }
+  const int64_t start_us = capture.transactions.empty() ? 0 : capture.transactions.front().request_us;
+  char header[512];
+  std::snprintf(header, sizeof header, "# %10s  %-24s %-24s %5s %4s %3s %-30s %7s %6s  %-34s %9s", "time_s", "client",
+                "server", "tid", "unit", "fc", "function", "address", "count", "result", "ms");
+  out << header << '\n';
+  uint64_t unanswered = 0;
+  for (const auto& t : capture.transactions) {
+    out << modbus_row(t, start_us) << '\n';
+    unanswered += !t.response_us;
+  }
+  const io::ModbusCaptureStats& s = capture.stats;
+  out << "# " << capture.transactions.size() << " transactions: " << capture.transactions.size() - unanswered
+      << " answered (" << s.exceptions << " exceptions), " << unanswered << " without response; " << s.packets
+      << " packets, " << s.modbus_segments << " Modbus segments, " << s.retransmissions << " retransmissions, "
+      << s.unmatched_responses << " unmatched responses, " << s.malformed << " malformed\n";
+  if (s.modbus_segments == 0) {
+    err << capture_file << ": no Modbus/TCP (port 502) traffic\n";
+    return 2;
+  }
+  return 0;
 }
 
 int hid_describe(const std::string& file, std::ostream& out, std::ostream& err) {

@@ -85,19 +85,26 @@ void add_daemon_options(CLI::App& app, DaemonOptions& o) {
 // Inspection commands a lab runs before wiring a console in, and verify.
 struct Subcommands {
   CLI::App* dbc_decode = nullptr;
+  CLI::App* modbus_decode = nullptr;
   CLI::App* hid_describe = nullptr;
   CLI::App* verify = nullptr;
-  std::string dbc_file, log_file, hid_file;
+  std::string dbc_file, log_file, hid_file, modbus_capture;
   rise::hil::VerifyOptions verify_options;
 };
 
 void add_subcommands(CLI::App& app, Subcommands& s, const std::string& panel_file) {
   app.require_subcommand(0, 1);
   CLI::App* dbc = app.add_subcommand("dbc", "CAN database tools");
-  s.dbc_decode = dbc->add_subcommand("decode", "decode a candump log with a DBC, one line per frame");
+  s.dbc_decode = dbc->add_subcommand("decode", "decode a CAN log with a DBC, one line per frame");
   dbc->require_subcommand(1);
   s.dbc_decode->add_option("DBC", s.dbc_file, "DBC file")->required();
-  s.dbc_decode->add_option("LOG", s.log_file, "candump -l log")->required();
+  s.dbc_decode->add_option("LOG", s.log_file, "CAN log: candump -l, Vector ASC or BLF, PEAK TRC, pcap/pcapng of SocketCAN")->required();
+  CLI::App* modbus = app.add_subcommand("modbus", "Modbus tools");
+  s.modbus_decode = modbus->add_subcommand(
+      "decode", "print the Modbus/TCP transactions of a pcap/pcapng capture as a table, with response times");
+  modbus->require_subcommand(1);
+  s.modbus_decode->add_option("CAPTURE", s.modbus_capture, "pcap or pcapng (tcpdump, Wireshark) of TCP port 502")
+      ->required();
   CLI::App* hid = app.add_subcommand("hid", "USB HID tools");
   s.hid_describe = hid->add_subcommand(
       "describe", "print every field of a HID report descriptor and the named signal it becomes");
@@ -113,7 +120,7 @@ void add_subcommands(CLI::App& app, Subcommands& s, const std::string& panel_fil
                 "exit 0 pass, 1 difference (the first is printed with its time and control), 2 bad input");
   s.verify->add_option("--panel", v.panel, "panel definition (YAML)")->capture_default_str();
   s.verify->add_option("--capture", v.captures,
-                       "capture file, named SOURCE.log (CAN: candump, ASC, TRC), SOURCE.modbus.log (Modbus trace) or "
+                       "capture file, named SOURCE.log (CAN: candump, ASC, TRC, BLF, pcap/pcapng), SOURCE.modbus.log (Modbus trace) or "
                        "SOURCE.hid (HID, hid-recorder), or SOURCE=FILE; one per source")
       ->type_name("FILE");
   s.verify->add_option("--record-dir", v.record_dir,
@@ -132,6 +139,7 @@ void add_subcommands(CLI::App& app, Subcommands& s, const std::string& panel_fil
 std::optional<int> run_subcommand(const Subcommands& s) {
   if (s.verify->parsed()) return rise::hil::verify_command(s.verify_options, std::cout, std::cerr);
   if (s.dbc_decode->parsed()) return rise::hil::dbc_decode(s.dbc_file, s.log_file, std::cout, std::cerr);
+  if (s.modbus_decode->parsed()) return rise::hil::modbus_decode(s.modbus_capture, std::cout, std::cerr);
   if (s.hid_describe->parsed()) return rise::hil::hid_describe(s.hid_file, std::cout, std::cerr);
   return std::nullopt;
 }

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <stdexcept>
 
+#include "hil/io/can_log_binary.hpp"
 #include "hil/io/candump_log.hpp"
 
 namespace rise::hil::io {
@@ -145,6 +146,9 @@ const char* to_string(CanLogFormat format) {
     case CanLogFormat::Candump: return "candump";
     case CanLogFormat::VectorAsc: return "asc";
     case CanLogFormat::PeakTrc: return "trc";
+    case CanLogFormat::VectorBlf: return "blf";
+    case CanLogFormat::Pcap: return "pcap";
+    case CanLogFormat::Pcapng: return "pcapng";
   }
   return "?";
 }
@@ -154,6 +158,11 @@ CanLogReader::CanLogReader(const std::string& path) : path_(path), in_(path) {
   std::error_code ec;
   size_bytes_ = static_cast<uint64_t>(std::filesystem::file_size(path, ec));
   if (ec) size_bytes_ = 0;
+  binary_ = open_binary_can_log(path, format_);
+  if (binary_) {
+    in_.close();
+    return;
+  }
   bool known = false;
   std::string text;
   for (int n = 0; n < kDetectLines && !known && std::getline(in_, text); ++n) {
@@ -177,9 +186,23 @@ CanLogReader::CanLogReader(const std::string& path) : path_(path), in_(path) {
     if (ext == "log") format_ = CanLogFormat::Candump;
     else if (ext == "asc" || ext == "ASC") format_ = CanLogFormat::VectorAsc;
     else if (ext == "trc" || ext == "TRC") format_ = CanLogFormat::PeakTrc;
-    else throw std::runtime_error(path + ":1: format: not a candump, ASC or TRC log");
+    else throw std::runtime_error(path + ":1: format: not a candump, ASC, TRC, BLF, pcap or pcapng log");
   }
   rewind();
+}
+
+CanLogReader::~CanLogReader() = default;
+CanLogReader::CanLogReader(CanLogReader&&) noexcept = default;
+CanLogReader& CanLogReader::operator=(CanLogReader&&) noexcept = default;
+
+uint64_t CanLogReader::bytes_consumed() const {
+  if (binary_) return binary_->bytes_consumed();
+  return stream_read_ - (block_end_ - block_begin_);
+}
+
+void CanLogReader::count_malformed(int line) {
+  ++malformed_count_;
+  if (malformed_lines_.size() < kMaxMalformedLines) malformed_lines_.push_back(line);
 }
 
 void CanLogReader::reset_state() {
@@ -194,6 +217,11 @@ void CanLogReader::reset_state() {
 }
 
 void CanLogReader::rewind() {
+  if (binary_) {
+    binary_->rewind();
+    reset_state();
+    return;
+  }
   in_.clear();
   in_.seekg(0);
   block_begin_ = block_end_ = 0;
@@ -232,6 +260,15 @@ bool CanLogReader::next_line(std::string_view& line) {
 }
 
 bool CanLogReader::next(CanLogRecord& record) {
+  if (binary_) {
+    for (;;) {
+      switch (binary_->next(record)) {
+        case BinaryCanLog::Result::Frame: return true;
+        case BinaryCanLog::Result::End: return false;
+        case BinaryCanLog::Result::Malformed: count_malformed(record.line); break;
+      }
+    }
+  }
   if (format_ == CanLogFormat::Candump) {
     // The shape candump -l writes, parsed in place; anything else (and a
     // line cut by the block's end) takes the general path below.
@@ -252,10 +289,7 @@ bool CanLogReader::next(CanLogRecord& record) {
     record.line = line_;
     const LineResult result = parse_line(trim(text), record);
     if (result == LineResult::Frame) return true;
-    if (result == LineResult::Malformed) {
-      ++malformed_count_;
-      if (malformed_lines_.size() < kMaxMalformedLines) malformed_lines_.push_back(line_);
-    }
+    if (result == LineResult::Malformed) count_malformed(line_);
   }
   return false;
 }
@@ -272,6 +306,9 @@ CanLogReader::LineResult CanLogReader::parse_line(std::string_view line, CanLogR
     }
     case CanLogFormat::VectorAsc: record.frame = CanFrame{}; return parse_asc(line, record);
     case CanLogFormat::PeakTrc: record.frame = CanFrame{}; return parse_trc(line, record);
+    case CanLogFormat::VectorBlf:
+    case CanLogFormat::Pcap:
+    case CanLogFormat::Pcapng: break;  // binary: never line by line
   }
   return LineResult::Malformed;
 }

@@ -6,11 +6,15 @@
 //                   30.005021 CANFD   1 Rx  300  1 0 8  8 11 c2 03 04 05 06 07 08 ...
 //   PEAK TRC 2.x        2     17876.708 DT 1      06F9 Rx -  8    05 0C 00 00 00 00 00 00
 //   PEAK TRC 1.x        1)      1841.0  Rx         0001  8  00 00 00 00 00 00 00 00
-// Vector BLF (binary) is not read.
+//   Vector BLF      binary: zlib'd containers of CAN, CAN FD and error objects
+//   pcap, pcapng    SocketCAN captures (tcpdump, Wireshark, candump to pcap):
+//                   link type 227, or Linux cooked SLL/SLL2 carrying CAN
+// The binary formats are told by their first bytes (see can_log_binary.hpp).
 
 #include <cstddef>
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -19,17 +23,20 @@
 
 namespace rise::hil::io {
 
-enum class CanLogFormat { Candump, VectorAsc, PeakTrc };
+enum class CanLogFormat { Candump, VectorAsc, PeakTrc, VectorBlf, Pcap, Pcapng };
 const char* to_string(CanLogFormat format);
 
 /// One frame of a log. frame.timestamp_us is the file's time as the file
 /// counts it: seconds since the Unix epoch for candump, since the start of
-/// the measurement for ASC and TRC (relative ASC stamps are summed up).
-/// Error frames carry no error class in ASC/TRC: their id is 0 and len 8.
+/// the measurement for ASC and TRC (relative ASC stamps are summed up),
+/// since the Unix epoch for pcap/pcapng and for BLF (its header's start
+/// time, local time taken as UTC, plus each object's offset; the offset
+/// alone when the header has no start time).
+/// Error frames carry no error class in ASC/TRC/BLF: their id is 0 and len 8.
 struct CanLogRecord {
   CanFrame frame;
   std::string channel;  ///< "can0" (candump), "1" (ASC, TRC bus); empty if the file has none
-  int line = 0;         ///< 1-based line number in the file
+  int line = 0;         ///< 1-based line number in the file (object or packet number in BLF, pcap)
   bool tx = false;      ///< the logger sent it (ASC/TRC "Tx", candump " T")
 };
 
@@ -37,15 +44,21 @@ struct CanLogRecord {
 /// Lines that are neither a frame nor a known non-frame line (header,
 /// comment, statistics, chip status, J1939 transport summary, TRC status)
 /// are counted as malformed and skipped; next() never throws.
+class BinaryCanLog;
+
 class CanLogReader {
  public:
   /// How many malformed line numbers are kept (the count goes on).
   static constexpr size_t kMaxMalformedLines = 1000;
 
-  /// Opens path and detects its format from the first lines, then from the
-  /// extension (.log .asc .trc). Throws std::runtime_error naming the path
-  /// when it cannot be opened or its format is not recognised.
+  /// Opens path and detects its format from its first bytes (BLF, pcap,
+  /// pcapng), the first lines, then the extension (.log .asc .trc). Throws
+  /// std::runtime_error naming the path when it cannot be opened or its
+  /// format is not recognised.
   explicit CanLogReader(const std::string& path);
+  ~CanLogReader();
+  CanLogReader(CanLogReader&&) noexcept;
+  CanLogReader& operator=(CanLogReader&&) noexcept;
 
   /// The next frame record; false at the end of the file. Does not throw;
   /// allocates only for the channel string and long lines.
@@ -56,10 +69,10 @@ class CanLogReader {
 
   CanLogFormat format() const { return format_; }
   /// Bytes of the file consumed so far in this pass, and its size (progress).
-  uint64_t bytes_consumed() const { return stream_read_ - (block_end_ - block_begin_); }
+  uint64_t bytes_consumed() const;
   uint64_t size_bytes() const { return size_bytes_; }
   const std::string& path() const { return path_; }
-  /// Malformed lines seen so far and the first kMaxMalformedLines of their numbers.
+  /// Malformed lines (objects, packets) seen so far and the first kMaxMalformedLines of their numbers.
   size_t malformed_count() const { return malformed_count_; }
   const std::vector<int>& malformed_lines() const { return malformed_lines_; }
 
@@ -74,7 +87,10 @@ class CanLogReader {
   // remainder of a block carried to the next): no copy per line.
   bool next_line(std::string_view& line);
 
+  void count_malformed(int line);
+
   std::string path_;
+  std::unique_ptr<BinaryCanLog> binary_;  // BLF, pcap, pcapng; null for the text formats
   std::ifstream in_;
   std::vector<char> block_;
   std::size_t block_begin_ = 0;  // first unread byte in block_

@@ -1,5 +1,7 @@
 #include "hil/io/replay_modbus_link.hpp"
 
+#include "hil/io/modbus_capture.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -21,6 +23,16 @@ constexpr int64_t kSingleRequestLoopGapUs = 100'000;
 
 int64_t seconds_to_us(double s) { return static_cast<int64_t>(std::llround(s * 1e6)); }
 
+// The records of a trace file, or of a pcap/pcapng's Modbus/TCP transactions.
+std::vector<ModbusTraceRecord> load_records(const std::string& path) {
+  if (looks_like_modbus_capture(path)) return modbus_trace_from_capture(read_modbus_capture(path), "capture");
+  std::vector<ModbusTraceRecord> records;
+  ModbusTraceReader reader(path);
+  ModbusTraceRecord r;
+  while (reader.next(r)) records.push_back(std::move(r));
+  return records;
+}
+
 }  // namespace
 
 bool is_replay_url(std::string_view url) { return url.rfind("replay://", 0) == 0; }
@@ -28,12 +40,10 @@ bool is_replay_url(std::string_view url) { return url.rfind("replay://", 0) == 0
 ReplayModbusLink::ReplayModbusLink(std::string url, ReplayAddress address)
     : url_(std::move(url)), address_(std::move(address)) {
   const std::string& path = address_.path;
-  ModbusTraceReader reader(path);
-  ModbusTraceRecord r;
   std::string source;
   int64_t first_us = std::numeric_limits<int64_t>::max(), last_us = std::numeric_limits<int64_t>::min();
   std::vector<int64_t> request_times;
-  while (reader.next(r)) {
+  for (const ModbusTraceRecord& r : load_records(path)) {
     if (source.empty()) source = r.source;
     if (r.source != source)
       throw std::runtime_error(path + ":" + std::to_string(r.line) + ": the traffic of another source ('" + r.source +
@@ -236,8 +246,8 @@ std::unique_ptr<ReplayModbusLink> open_modbus_replay(std::string_view url) {
                                 "': ids=, channel= and step= are for CAN logs, not a Modbus trace");
   if (!std::filesystem::exists(address->path))
     throw std::runtime_error(address->path + ": cannot open: " + std::strerror(ENOENT));
-  if (!looks_like_modbus_trace(address->path))
-    throw std::runtime_error(address->path + ": not a Modbus trace (a CAN log replays on a CAN source)");
+  if (!looks_like_modbus_trace(address->path) && !looks_like_modbus_capture(address->path))
+    throw std::runtime_error(address->path + ": not a Modbus trace or capture (a CAN log replays on a CAN source)");
   return std::make_unique<ReplayModbusLink>(std::string(url), std::move(*address));
 }
 

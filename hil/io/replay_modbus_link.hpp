@@ -3,7 +3,9 @@
 // replay://FILE.modbus.log?speed=1&loop=0&start=S&stop=S&fast=0 — a
 // ModbusLink that answers the daemon's polls from a recorded Modbus
 // transaction trace (hil/io/modbus_trace.hpp, what `rise-hild --record`
-// writes), so that the daemon cannot tell the replay from the slave.
+// writes) or a pcap/pcapng of Modbus/TCP (its transactions turned into
+// such a trace, hil/io/modbus_capture.hpp), so that the daemon cannot tell
+// the replay from the slave.
 //
 // Time. The replay time runs from the window's start: r = t_first + start +
 // (now − t0) · speed, with t_first the trace's first record and t0 the
