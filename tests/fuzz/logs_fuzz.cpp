@@ -1,6 +1,7 @@
 // libFuzzer target: the recordings people replay — CAN logs (candump,
 // Vector ASC, PEAK TRC; the format from the first lines, else from the
-// extension the first byte picks), Modbus transaction traces and
+// extension the first byte picks; Vector BLF and pcap/pcapng by their magic
+// bytes), Modbus transaction traces and
 // hid-recorder files — each read from the same arbitrary bytes written to
 // a file. The CAN log reader never throws once open and counts what it
 // skips; a trace line that parses formats back to the same line's record;
@@ -36,7 +37,8 @@ std::string write_input(const std::string& name, std::string_view bytes) {
   const std::string path = dir + name;
   static bool cleanup = [] {
     return std::atexit([] {
-      for (const char* n : {"input.log", "input.asc", "input.trc", "input.modbus.log", "input.hid"}) std::remove((dir + n).c_str());
+      for (const char* n : {"input.log", "input.asc", "input.trc", "input.blf", "input.pcap", "input.modbus.log", "input.hid"})
+        std::remove((dir + n).c_str());
     }) == 0;
   }();
   (void)cleanup;
@@ -108,12 +110,14 @@ void hid_recording(std::string_view bytes) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
-  switch (data[0] % 5) {
+  switch (data[0] % 7) {
     case 0: can_log(bytes, ".log"); break;
     case 1: can_log(bytes, ".asc"); break;
     case 2: can_log(bytes, ".trc"); break;
     case 3: modbus_trace(bytes); break;
-    default: hid_recording(bytes); break;
+    case 4: hid_recording(bytes); break;
+    case 5: can_log(bytes, ".blf"); break;
+    default: can_log(bytes, ".pcap"); break;
   }
   return 0;
 }

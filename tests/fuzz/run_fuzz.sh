@@ -26,7 +26,7 @@ case "$target" in
   # socketcand and slcan line protocols, the signed-command verifier (its
   # two message types generated here by lcm-gen) and the YAML files users
   # write (panels, robots with their URDF, worlds, tasks, scenarios).
-  logs) sources=("$root"/hil/io/{can_log,candump_log,can_frame,modbus_trace,hid_recording,record_file}.cpp) ;;
+  logs) sources=("$root"/hil/io/{can_log,can_log_binary,candump_log,can_frame,modbus_trace,hid_recording,record_file}.cpp) ;;
   line_protocols) sources=("$root"/hil/io/{slcan_wire,socketcand_wire,can_frame}.cpp) ;;
   command_auth) sources=("$root/msgs/command_auth.cpp") ;;
   configs)
@@ -64,6 +64,7 @@ if [ $rebuild -eq 1 ]; then
       flags=(-I"$work/lcmgen")
       libs=(-lcrypto)
       ;;
+    logs) libs=(-lpcap -lz) ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
       libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge)
@@ -159,8 +160,11 @@ case "$target" in
     fi
     ;;
   logs)
-    # A byte first: the reader (0 candump .log, 1 ASC, 2 TRC, 3 Modbus trace, 4 hid-recorder).
+    # A byte first: the reader (0 candump .log, 1 ASC, 2 TRC, 3 Modbus trace, 4 hid-recorder,
+    # 5 BLF, 6 pcap/pcapng: the format from the magic bytes).
     if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/can" ]; then
+      { printf '\x05'; cat "$RISE_TEST_DATA/can/python-can/test_CanMessage.blf"; } >"$corpus/test_CanMessage.blf"
+      { printf '\x06'; head -c 3000 "$RISE_TEST_DATA/modbus/zeek/modbusSmall.pcap"; } >"$corpus/modbusSmall.pcap"
       for f in "$RISE_TEST_DATA"/can/python-can/*.asc; do { printf '\x01'; head -c 6000 "$f"; } >"$corpus/$(basename "$f")"; done
       for f in "$RISE_TEST_DATA"/can/python-can/*.trc; do { printf '\x02'; cat "$f"; } >"$corpus/$(basename "$f")"; done
       { printf '\x00'; head -40 "$RISE_TEST_DATA/can/ICSim/sample-can.log"; } >"$corpus/icsim.log"
