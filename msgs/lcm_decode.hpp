@@ -9,8 +9,11 @@
 // subscriptions call decode() inside lcm_handle() with no try, so one such
 // UDP packet from anyone on the multicast group aborts the receiving
 // process (found by tests/fuzz/command_auth_fuzz.cpp; a 126-byte
-// TrainingControl killed rise-sim). Every receiver in this project decodes
-// through decode_message(), and subscribes typed handlers through
+// TrainingControl killed rise-sim; a length of INT32_MIN overflowed the int
+// before that). msgs/lcm_gen.sh adds the missing checks to the generated
+// code (string lengths >= 1, array counts within the bytes left); as a
+// second line, every receiver in this project decodes through
+// decode_message(), and subscribes typed handlers through
 // subscribe<&Class::method>(), which counts and drops what does not decode.
 
 #include <lcm/lcm-cpp.hpp>

@@ -17,7 +17,8 @@ void YamlReader::only_keys(const YAML::Node& map, const std::string& where,
                            std::initializer_list<const char*> allowed) const {
   if (!map.IsMap()) fail(map, where, "expected a mapping");
   for (const auto& kv : map) {
-    const auto key = kv.first.as<std::string>();
+    if (!kv.first.IsScalar()) fail(kv.first, where, "a key must be a name, not a list or mapping");
+    const auto key = kv.first.Scalar();
     bool ok = false;
     for (const char* a : allowed) ok = ok || key == a;
     if (!ok) fail(kv.first, join(where, key), "unknown key");

@@ -78,6 +78,8 @@ class BlfLog final : public BinaryCanLog {
     uint8_t header[kFileHeaderMin];
     if (!in_.read(reinterpret_cast<char*>(header), sizeof header))
       throw std::runtime_error(path + ": BLF: file header cut short");
+    in_.seekg(0, std::ios::end);
+    file_size_ = static_cast<uint64_t>(std::max<std::streamoff>(in_.tellg(), 0));
     header_size_ = le32(header + 4);
     start_us_ = systemtime_us(header + kStartTimeAt);
     if (header_size_ < kFileHeaderMin) throw std::runtime_error(path + ": BLF: file header size " + std::to_string(header_size_));
@@ -119,7 +121,8 @@ class BlfLog final : public BinaryCanLog {
     eof_ = false;
   }
 
-  uint64_t bytes_consumed() const override { return consumed_; }
+  // The header and padding the file claims can run past its end (a cut file).
+  uint64_t bytes_consumed() const override { return std::min(consumed_, file_size_); }
 
  private:
   enum class Parsed { Frame, Malformed, Other };
@@ -288,6 +291,7 @@ class BlfLog final : public BinaryCanLog {
   uint32_t header_size_ = 0;
   int64_t start_us_ = 0;  // the measurement's start, 0 when the header has none
   uint64_t consumed_ = 0;
+  uint64_t file_size_ = 0;
   std::vector<uint8_t> data_;  // decompressed objects not yet parsed
   size_t pos_ = 0;
   int objects_ = 0;

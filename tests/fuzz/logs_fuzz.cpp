@@ -26,9 +26,14 @@ namespace io = rise::hil::io;
 
 namespace {
 
-void check(bool ok) {
-  if (!ok) std::abort();
-}
+// A failed check names itself before it aborts (the fuzzer reports the abort).
+#define check(ok)                                                                    \
+  do {                                                                               \
+    if (!(ok)) {                                                                     \
+      std::fprintf(stderr, "logs_fuzz: check failed: %s (line %d)\n", #ok, __LINE__); \
+      std::abort();                                                                  \
+    }                                                                                \
+  } while (false)
 
 // The input as a file the readers open (in memory where /dev/shm is).
 std::string write_input(const std::string& name, std::string_view bytes) {

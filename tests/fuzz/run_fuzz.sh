@@ -43,7 +43,7 @@ mkdir -p "$work"
 # Rebuild only when a source or header is newer than the binary.
 rebuild=0
 [ -x "$binary" ] || rebuild=1
-for f in "${sources[@]}" "$root"/{firmware_protocol,semantic,msgs,hil/io,panels,sim,sim/training,instructor}/*.hpp; do
+for f in "${sources[@]}" "$root/msgs/lcm_gen.sh" "$root"/{firmware_protocol,semantic,msgs,hil/io,panels,sim,sim/training,instructor}/*.hpp; do
   [ "$f" -nt "$binary" ] && rebuild=1
 done
 if [ $rebuild -eq 1 ]; then
@@ -60,7 +60,7 @@ if [ $rebuild -eq 1 ]; then
       libs=(-lpcl_io -lpcl_common -lboost_filesystem)
       ;;
     command_auth)
-      lcm-gen --cpp --cpp-std c++11 --cpp-hpath "$work/lcmgen" "$root"/msgs/lcmtypes/{FaultCommand,TrainingControl}.lcm
+      bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen" "$root"/msgs/lcmtypes/{FaultCommand,TrainingControl}.lcm
       flags=(-I"$work/lcmgen")
       libs=(-lcrypto)
       ;;

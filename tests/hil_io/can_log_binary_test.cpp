@@ -253,6 +253,7 @@ TEST_CASE("BLF cut or corrupted anywhere: counted as malformed, never thrown, fr
     while (reader.next(r)) got.push_back(r);
     INFO("cut at " << at);
     REQUIRE(got.size() <= whole.size());
+    REQUIRE(reader.bytes_consumed() <= reader.size_bytes());
     for (size_t i = 0; i < got.size(); ++i) REQUIRE(same_content(got[i].frame, whole[i].frame));
     cuts_with_malformed += reader.malformed_count() > 0;
   }
@@ -273,6 +274,16 @@ TEST_CASE("BLF cut or corrupted anywhere: counted as malformed, never thrown, fr
   // A file that is only the magic.
   std::ofstream(bad, std::ios::binary | std::ios::trunc) << "LOGG";
   CHECK_THROWS_WITH(CanLogReader(bad), Catch::Contains("BLF"));
+  // A header that claims 144 bytes of a 130-byte file: read as far as the
+  // file goes (tests/fuzz/logs_fuzz.cpp found the progress past the end).
+  std::string claims(130, '\0');
+  claims.replace(0, 8, std::string("LOGG\x90\0\0\0", 8));
+  std::ofstream(bad, std::ios::binary | std::ios::trunc) << claims;
+  CanLogReader reader(bad);
+  CanLogRecord r;
+  while (reader.next(r)) {
+  }
+  CHECK(reader.bytes_consumed() <= reader.size_bytes());
 }
 
 namespace {

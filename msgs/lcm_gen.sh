@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# lcm-gen for C++, then the two checks its decode() lacks (LCM 1.4, Debian
+# 12), so that no packet from the network reaches undefined behaviour:
+#  - a string's length (strlen + 1 on the wire, so >= 1) is checked only
+#    against the bytes left: 0 or less made assign(p, length - 1) throw
+#    std::length_error, and INT32_MIN overflowed the int (found by
+#    tests/fuzz/command_auth_fuzz.cpp);
+#  - an array's count is not checked at all before resize(): a negative one
+#    throws, a huge one allocates gigabytes. Every element takes a byte at
+#    least, so a count above the bytes left is malformed.
+# msgs::decode_message() still catches whatever decode() throws.
+#   lcm_gen.sh LCM_GEN OUTDIR FILE.lcm...
+set -euo pipefail
+lcm_gen=$1 out=$2
+shift 2
+mkdir -p "$out"
+"$lcm_gen" --cpp --cpp-std c++11 --cpp-hpath "$out" "$@"
+for lcm in "$@"; do
+  type=$(basename "$lcm" .lcm)
+  header=$(find "$out" -name "$type.hpp")
+  [ -n "$header" ] || { echo "lcm_gen.sh: lcm-gen wrote no $type.hpp" >&2; exit 1; }
+  sed -i -E \
+    -e 's/if\((__[A-Za-z0-9_]*len_*) > maxlen - pos\) return -1;/if(\1 <= 0 || \1 > maxlen - pos) return -1;/' \
+    -e 's/^( *)this->([A-Za-z0-9_]+)\.resize\(this->([A-Za-z0-9_]+)\);/\1if(this->\3 < 0 || this->\3 > maxlen - pos) return -1;\n\1this->\2.resize(this->\3);/' \
+    "$header"
+done
