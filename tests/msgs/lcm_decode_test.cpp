@@ -53,7 +53,7 @@ TEST_CASE("a string length below 1 is a malformed message, not an exception", "[
 
 TEST_CASE("a negative array count is a malformed message, not an exception", "[msgs]") {
   rise_msgs::PanelFeedback feedback{};
-  feedback.panel_id = "p", feedback.trainee_id = "t1";
+  feedback.panel_id = "p";
   feedback.num_leds = 1, feedback.led_names = {"a"}, feedback.led_on = {1};
   std::vector<uint8_t> bytes = encoded(feedback);
   // num_leds (int16 1), then led_names[0]: length 2, "a\0".
