@@ -4,6 +4,7 @@
 #   bash run.sh demo    the whole chain on built-in defaults (rise demo)
 #   bash run.sh test    every test (ctest)
 #   bash run.sh build   only set up and build
+#   bash run.sh sanitize asan|tsan   the sanitizer builds and their tests (CI)
 # Extra arguments after demo/test go to `rise demo` / ctest.
 set -euo pipefail
 cd "$(dirname "$(readlink -f "$0")")"
@@ -94,11 +95,58 @@ build() {
   cmake --build "$build" -j2
 }
 
+# The sanitizer builds (README "Reliability"), each in its own build folder
+# at -O1 with line tables, the test executables chosen there and the programs
+# they start: ASan + UBSan over the parsers, the bridge, the fault paths, the
+# simulator and the instructor's logic; TSan over the threaded parts (the
+# bridge and its recorder, the transports' reader threads, the web server with
+# the virtual panel, the trainer beside rise-sim). Every process writes its
+# reports under the build's sanitizer/ folder (children too, whose own output
+# goes to their logs); any report there fails the run.
+sanitize() {
+  local kind=$1 flags tests
+  case "$kind" in
+    asan) flags="address,undefined"
+      tests="firmware_protocol_test firmware_protocol_hid_test msgs_test panels_test hil_io_test hil_io_slcan_test
+             hil_io_capture_test hil_test hil_fault_test hil_capture_commands_test sim_test sim_control_test
+             instructor_test instructor_process_test training_test" ;;
+    tsan) flags="thread"
+      tests="hil_test hil_io_test instructor_web_test trainer_test" ;;
+    *) echo "usage: bash run.sh sanitize asan|tsan" >&2; exit 2 ;;
+  esac
+  local dir=${build}-$kind
+  web_setup
+  if [ ! -f "$dir/build.ninja" ]; then
+    cmake -S "$root" -B "$dir" -G Ninja -DRISE_WERROR=OFF -DRISE_SANITIZE="$flags" -DCMAKE_BUILD_TYPE=None \
+      -DCMAKE_CXX_FLAGS="-O1 -g1" -DCMAKE_C_FLAGS="-O1 -g1" >/dev/null
+  fi
+  # shellcheck disable=SC2086
+  cmake --build "$dir" -j2 --target $tests
+  local reports=$dir/sanitizer
+  rm -rf "$reports" && mkdir -p "$reports"
+  local supp=$root/tests/sanitizer
+  export ASAN_OPTIONS="log_path=$reports/asan:detect_leaks=1:abort_on_error=0:suppressions=$supp/asan.supp"
+  export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0"
+  export UBSAN_OPTIONS="log_path=$reports/ubsan:print_stacktrace=1:halt_on_error=1"
+  export TSAN_OPTIONS="log_path=$reports/tsan:halt_on_error=1:second_deadlock_stack=1:suppressions=$supp/tsan.supp"
+  local labels rc=0
+  labels="^($(echo $tests | tr ' ' '|'))\$"
+  (cd "$dir" && ctest --output-on-failure --timeout 600 -j2 -L "$labels") || rc=1
+  if [ -n "$(ls -A "$reports")" ]; then
+    echo "run.sh sanitize $kind: sanitizer reports:"
+    for f in "$reports"/*; do echo "== $f"; head -60 "$f"; done
+    rc=1
+  fi
+  [ $rc -eq 0 ] && echo "run.sh sanitize $kind: no sanitizer report, every test passed"
+  return $rc
+}
+
 cmd=${1:-demo}
 [ $# -gt 0 ] && shift
 case "$cmd" in
   demo) setup; build; exec "$build/bin/rise" demo "$@" ;;
   test) setup; build; cd "$build" && exec ctest --output-on-failure --timeout 300 -j2 "$@" ;;
   build) setup; build ;;
-  *) echo "usage: bash run.sh demo|test|build [args]" >&2; exit 2 ;;
+  sanitize) setup; sanitize "${1:-}" ;;
+  *) echo "usage: bash run.sh demo|test|build|sanitize asan|tsan [args]" >&2; exit 2 ;;
 esac
