@@ -95,6 +95,16 @@ const urdf::Collision& collision(const urdf::Link& l, int want, std::size_t inde
   if (c.geometry->type != want)
     fail("link '" + l.name + "': unsupported collision shape " + std::string(shape_name(c.geometry->type)) +
          " (the simulator needs a " + shape_name(want) + ")");
+  // liburdfdom takes any number; a body of negative or zero size is none.
+  bool sized = true;
+  if (want == urdf::Geometry::BOX) {
+    const auto& d = static_cast<const urdf::Box&>(*c.geometry).dim;
+    sized = d.x > 0 && d.y > 0 && d.z > 0;
+  } else if (want == urdf::Geometry::CYLINDER) {
+    const auto& cyl = static_cast<const urdf::Cylinder&>(*c.geometry);
+    sized = cyl.radius > 0 && cyl.length > 0;
+  }
+  if (!sized) fail("link '" + l.name + "': the " + shape_name(want) + "'s sizes must be > 0");
   return c;
 }
 
@@ -108,7 +118,7 @@ std::array<double, 3> box_size(const urdf::Collision& c) {
 double mass_of(const urdf::Link& l, double trace_kgm2_per_kg) {
   if (!l.inertial) fail("link '" + l.name + "' has no inertial");
   const urdf::Inertial& i = *l.inertial;
-  if (!(i.mass > 0)) fail("link '" + l.name + "': mass must be > 0");
+  if (!(i.mass > 0 && std::isfinite(i.mass))) fail("link '" + l.name + "': mass must be > 0");
   const double want = i.mass * trace_kgm2_per_kg;
   const double trace = i.ixx + i.iyy + i.izz;
   if (std::abs(trace - want) > 0.01 * want)
@@ -254,13 +264,20 @@ void read_arm(const urdf::ModelInterface& m, const std::string& base, const std:
 
 UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints) {
   // liburdfdom says only "does not exist", also for a file it may not read.
-  if (!std::ifstream(path)) fail(path + ": cannot open: " + std::strerror(errno));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path + ": cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_urdf_robot(text.str(), joints);
+}
+
+UrdfRobot parse_urdf_robot(const std::string& xml, const UrdfJointNames& joints) {
   urdf::ModelInterfaceSharedPtr model;
   std::string errors;
   {
     CapturedLog log;
     try {
-      model = urdf::parseURDFFile(path);
+      model = urdf::parseURDF(xml);
     } catch (const std::exception& e) {
       fail(std::string("liburdfdom: ") + e.what());
     }

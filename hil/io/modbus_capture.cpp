@@ -289,6 +289,10 @@ std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& ca
     r.function = static_cast<ModbusFunction>(t.function);
     r.address = *t.address;
     r.count = *t.count;
+    // A write's line always says what it wrote, answered or not: one whose
+    // request holds fewer values than its count has no line.
+    const bool write = t.function == 15 || t.function == 16;
+    if (write && !trace_values(t, r)) continue;
     if (!t.response_us) {
       r.result.status = ModbusStatus::Timeout;
       r.rtt_us = kNoAnswerUs;
@@ -302,13 +306,10 @@ std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& ca
       r.result = {ModbusStatus::Exception, *t.exception};
     } else {
       r.rtt_us = *t.response_us - t.request_us;
-      if (trace_values(t, r)) {
-        r.values.resize(r.count);
-      } else {
-        r.result.status = ModbusStatus::Error;  // an answer too short for its count
-        r.values.clear();
-      }
+      if (!write && !trace_values(t, r)) r.result.status = ModbusStatus::Error;  // an answer too short for its count
     }
+    if (write || r.result.ok()) r.values.resize(r.count);
+    else r.values.clear();
     records.push_back(std::move(r));
   }
   return records;

@@ -1,7 +1,7 @@
 // libFuzzer target: the recordings people replay — CAN logs (candump,
 // Vector ASC, PEAK TRC; the format from the first lines, else from the
 // extension the first byte picks; Vector BLF and pcap/pcapng by their magic
-// bytes), Modbus transaction traces and
+// bytes), Modbus transaction traces, Modbus/TCP captures (pcap) and
 // hid-recorder files — each read from the same arbitrary bytes written to
 // a file. The CAN log reader never throws once open and counts what it
 // skips; a trace line that parses formats back to the same line's record;
@@ -20,6 +20,7 @@
 
 #include "hil/io/can_log.hpp"
 #include "hil/io/hid_recording.hpp"
+#include "hil/io/modbus_capture.hpp"
 #include "hil/io/modbus_trace.hpp"
 
 namespace io = rise::hil::io;
@@ -42,7 +43,7 @@ std::string write_input(const std::string& name, std::string_view bytes) {
   const std::string path = dir + name;
   static bool cleanup = [] {
     return std::atexit([] {
-      for (const char* n : {"input.log", "input.asc", "input.trc", "input.blf", "input.pcap", "input.modbus.log", "input.hid"})
+      for (const char* n : {"input.log", "input.asc", "input.trc", "input.blf", "input.pcap", "input.modbus.log", "input.hid", "input.modbus.pcap"})
         std::remove((dir + n).c_str());
     }) == 0;
   }();
@@ -110,19 +111,42 @@ void hid_recording(std::string_view bytes) {
   }
 }
 
+// A Modbus/TCP capture: every transaction's request starts with its function
+// code; the trace records made from it format to lines that parse back.
+void modbus_capture(std::string_view bytes) {
+  const std::string path = write_input("input.modbus.pcap", bytes);
+  (void)io::looks_like_modbus_capture(path);
+  try {
+    const io::ModbusCapture capture = io::read_modbus_capture(path);
+    check(capture.transactions.size() <= capture.stats.requests);
+    for (const auto& t : capture.transactions) {
+      check(!t.request_pdu.empty() && t.request_pdu[0] == t.function);
+      if (!t.response_us) check(t.response_pdu.empty() && !t.exception);
+    }
+    for (const auto& r : io::modbus_trace_from_capture(capture, "fuzz")) {
+      const std::string line = io::format_modbus_trace_line(r);
+      const io::ModbusTraceParse p = io::parse_modbus_trace_line(line);
+      check(p.ok && io::format_modbus_trace_line(p.record) == line);
+    }
+  } catch (const std::runtime_error& e) {
+    check(std::string_view(e.what()).find(path) != std::string_view::npos);
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   if (size == 0) return 0;
   const std::string_view bytes(reinterpret_cast<const char*>(data) + 1, size - 1);
-  switch (data[0] % 7) {
+  switch (data[0] % 8) {
     case 0: can_log(bytes, ".log"); break;
     case 1: can_log(bytes, ".asc"); break;
     case 2: can_log(bytes, ".trc"); break;
     case 3: modbus_trace(bytes); break;
     case 4: hid_recording(bytes); break;
     case 5: can_log(bytes, ".blf"); break;
-    default: can_log(bytes, ".pcap"); break;
+    case 6: can_log(bytes, ".pcap"); break;
+    default: modbus_capture(bytes); break;
   }
   return 0;
 }

@@ -296,3 +296,43 @@ TEST_CASE("replay://modbusSmall.pcap on a Modbus source answers each coil read a
   std::array<uint16_t, 1> reg{};
   CHECK(link->read_holding_registers(0, reg).exception_code == 2);
 }
+
+namespace {
+
+// One Ethernet/IPv4/TCP segment from 10.0.0.1:40000 to 10.0.0.2:502 carrying `adu`.
+Packet modbus_segment(const std::vector<u_char>& adu) {
+  Packet p{};
+  p.header.ts.tv_sec = 1400547199;
+  p.bytes = {0, 1, 2, 3, 4, 5, 0, 1, 2, 3, 4, 6, 0x08, 0x00,                                  // Ethernet
+             0x45, 0, 0, 0, 0, 1, 0x40, 0, 64, 6, 0, 0, 10, 0, 0, 1, 10, 0, 0, 2,             // IPv4
+             0x9C, 0x40, 0x01, 0xF6, 0, 0, 0, 1, 0, 0, 0, 0, 0x50, 0x18, 0x10, 0, 0, 0, 0, 0};  // TCP
+  p.bytes.insert(p.bytes.end(), adu.begin(), adu.end());
+  set_lengths(p);
+  return p;
+}
+
+}  // namespace
+
+// Found by the logs fuzz target (tests/fuzz/logs_fuzz.cpp, a Modbus capture):
+// an unanswered (or refused) Write Multiple Coils became a trace line without
+// the coils it wrote, which the trace reader refuses ("expected one string of
+// count=3 bits"); a write's line always says what it wrote.
+TEST_CASE("Modbus/TCP capture: an unanswered write's trace line says what it wrote; a short one has none", "[hil_io][modbus]") {
+  const std::string path =
+      std::filesystem::temp_directory_path() / ("rise_modbus_write_" + std::to_string(::getpid()) + ".pcap");
+  // FC 15 at 0, 3 coils, 1 byte: 1 0 1; then FC 15 at 8, 9 coils, but 1 byte of them.
+  write_packets(path, {modbus_segment({0, 1, 0, 0, 0, 8, 1, 15, 0, 0, 0, 3, 1, 0x05}),
+                       modbus_segment({0, 2, 0, 0, 0, 8, 1, 15, 0, 8, 0, 9, 1, 0xFF})});
+  const ModbusCapture capture = read_modbus_capture(path);
+  std::filesystem::remove(path);
+  REQUIRE(capture.transactions.size() == 2);
+  const auto records = modbus_trace_from_capture(capture, "plc");
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].result.status == ModbusStatus::Timeout);
+  CHECK(records[0].values == std::vector<uint16_t>{1, 0, 1});
+  const std::string line = format_modbus_trace_line(records[0]);
+  const ModbusTraceParse back = parse_modbus_trace_line(line);
+  INFO(line);
+  REQUIRE(back.ok);
+  CHECK(format_modbus_trace_line(back.record) == line);
+}
