@@ -27,6 +27,8 @@ bool string_member(const Json::Value& body, const char* key, std::string& out, s
   if (!v) return true;
   if (!v->isString()) return refuse(error, std::string("body: '") + key + "' must be a string");
   out = v->asString();
+  // A NUL would end the string in the LCM message (msgs/lcm_gen.sh).
+  if (out.find('\0') != std::string::npos) return refuse(error, std::string("body: '") + key + "' holds a NUL");
   return true;
 }
 

@@ -1,4 +1,5 @@
 #include "hil/io/modbus_capture.hpp"
+#include "hil/io/candump_log.hpp"
 
 #include <arpa/inet.h>
 #include <pcap/pcap.h>
@@ -225,7 +226,12 @@ ModbusCapture read_modbus_capture(const std::string& path, uint16_t port) {
     ++decoder.result().stats.packets;
     Segment s;
     if (!parse_link(link, packet, header->caplen, s)) continue;
-    decoder.segment(s, static_cast<int64_t>(header->ts.tv_sec) * 1000000 + header->ts.tv_usec);
+    const auto time_us = capture_time_us(header->ts.tv_sec, header->ts.tv_usec);
+    if (!time_us) {
+      ++decoder.result().stats.malformed;  // a time no trace line can carry (found by the logs fuzz target)
+      continue;
+    }
+    decoder.segment(s, *time_us);
   }
   if (rc != PCAP_ERROR_BREAK) ++decoder.result().stats.malformed;  // a cut last record
   return std::move(decoder.result());

@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, configs, training_graph, urdf or web_requests; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, configs, training_graph, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -43,6 +43,11 @@ case "$target" in
              "$root/panels/yaml_reader.cpp")
     ;;
   urdf) sources=("$root/sim/urdf_robot.cpp") ;;
+  # The messages of the multicast group as the instructor takes them (every type by lcm-gen here).
+  lcm_messages)
+    sources=("$root"/msgs/{channels,publisher_session,failsafe}.cpp "$root"/instructor/{web_json,trainee_directory}.cpp
+             "$root"/sim/world_description.cpp "$root"/panels/yaml_reader.cpp)  # web_json's world_json
+    ;;
   # The web console's request readers (no server; FaultCommand by lcm-gen here).
   web_requests) sources=("$root"/instructor/{web_requests,fault_presets}.cpp) ;;
   *) echo "run_fuzz.sh: unknown target $target" >&2; exit 2 ;;
@@ -80,6 +85,11 @@ if [ $rebuild -eq 1 ]; then
       bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen" "$root/msgs/lcmtypes/FaultCommand.lcm"
       flags=(-I"$work/lcmgen" -isystem /usr/include/jsoncpp)
       libs=(-ljsoncpp)
+      ;;
+    lcm_messages)
+      bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen-all" "$root"/msgs/lcmtypes/*.lcm
+      flags=(-I"$work/lcmgen-all" -isystem /usr/include/jsoncpp -isystem /usr/include/eigen3)
+      libs=(-ljsoncpp -llcm -lyaml-cpp)
       ;;
     urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
@@ -241,7 +251,7 @@ case "$target" in
     printf '{"trainee":"t1","file":"stuck.yaml","seed":11}' >"$corpus/scenario.json"
     printf 'a=b; rise_token=abc123;theme=dark' >"$corpus/cookie"
     ;;
-  # command_auth writes its own seeds (LLVMFuzzerInitialize).
+  # command_auth and lcm_messages write their own seeds (LLVMFuzzerInitialize).
 esac
 
 cd "$work"

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "hil/io/candump_log.hpp"
 #include "hil/io/modbus_capture.hpp"
 #include "hil/io/replay_modbus_link.hpp"
 
@@ -336,4 +337,28 @@ TEST_CASE("Modbus/TCP capture: an unanswered write's trace line says what it wro
   INFO(line);
   REQUIRE(back.ok);
   CHECK(format_modbus_trace_line(back.record) == line);
+}
+
+// Found by the logs fuzz target: a classic pcap stores a packet's seconds as a
+// signed 32-bit number and its microseconds unchecked, so a request came out
+// at (-1384470635.-886822), a time no trace line can carry. Such a packet is
+// counted malformed; the next one is read.
+TEST_CASE("Modbus/TCP capture: a packet time before 1970 or with microseconds past a second is malformed", "[hil_io][modbus]") {
+  const std::string path =
+      std::filesystem::temp_directory_path() / ("rise_modbus_time_" + std::to_string(::getpid()) + ".pcap");
+  Packet before = modbus_segment({0, 1, 0, 0, 0, 6, 1, 1, 0, 0, 0, 3}, 1);
+  before.header.ts.tv_sec = -1384470635;
+  Packet micros = modbus_segment({0, 2, 0, 0, 0, 6, 1, 1, 0, 0, 0, 3}, 13);
+  micros.header.ts.tv_usec = 2'000'000;
+  const Packet good = modbus_segment({0, 3, 0, 0, 0, 6, 1, 1, 0, 0, 0, 3}, 25);
+  write_packets(path, {before, micros, good});
+  const ModbusCapture capture = read_modbus_capture(path);
+  std::filesystem::remove(path);
+  CHECK(capture.stats.malformed == 2);
+  REQUIRE(capture.transactions.size() == 1);
+  CHECK(capture.transactions[0].transaction_id == 3);
+  CHECK(capture.transactions[0].request_us == 1400547199'000'000);
+  CHECK(capture_time_us(-1, 0) == std::nullopt);
+  CHECK(capture_time_us(999'999'999'999, 999'999) == 999'999'999'999'999'999);
+  CHECK(capture_time_us(1'000'000'000'000, 0) == std::nullopt);
 }
