@@ -8,8 +8,6 @@
 // becomes the JSON the web console pushes (instructor/web_json.hpp), which
 // must parse back as a JSON object. Seeds (each type encoded by lcm-gen's
 // code) are written into the corpus folder at start.
-#include <sys/stat.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -23,24 +21,17 @@
 #include "instructor/web_json.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/lcm_decode.hpp"
+#include "tests/fuzz/fuzz_check.hpp"
 
 namespace ins = rise::instructor;
 namespace m = rise::msgs;
 
 namespace {
 
-#define check(ok)                                                                            \
-  do {                                                                                       \
-    if (!(ok)) {                                                                             \
-      std::fprintf(stderr, "lcm_messages_fuzz: check failed: %s (line %d)\n", #ok, __LINE__); \
-      std::abort();                                                                          \
-    }                                                                                        \
-  } while (false)
-
 template <typename Message>
 std::vector<uint8_t> encoded(const Message& msg) {
   std::vector<uint8_t> bytes(static_cast<std::size_t>(msg.getEncodedSize()));
-  check(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size()));
+  fuzz_check(msg.encode(bytes.data(), 0, static_cast<int>(bytes.size())) == static_cast<int>(bytes.size()));
   return bytes;
 }
 
@@ -51,7 +42,7 @@ void check_json(const Json::Value& v) {
   const std::unique_ptr<Json::CharReader> reader(b.newCharReader());
   Json::Value back;
   std::string errors;
-  check(reader->parse(text.data(), text.data() + text.size(), &back, &errors) && back.isObject());
+  fuzz_check(reader->parse(text.data(), text.data() + text.size(), &back, &errors) && back.isObject());
 }
 
 template <typename Message, typename ToJson>
@@ -60,8 +51,8 @@ void decode(const uint8_t* data, std::size_t size, ToJson to_json) {
   if (!m::decode_message(data, static_cast<int64_t>(size), msg)) return;
   const std::vector<uint8_t> once = encoded(msg);
   Message again;
-  check(m::decode_message(once.data(), static_cast<int64_t>(once.size()), again));
-  check(encoded(again) == once);
+  fuzz_check(m::decode_message(once.data(), static_cast<int64_t>(once.size()), again));
+  fuzz_check(encoded(again) == once);
   check_json(to_json(msg));
 }
 
@@ -111,12 +102,7 @@ void write_seeds(const std::string& dir) {
 
 // The seeds go into every folder named on the command line (the corpus).
 extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
-  for (int i = 1; i < *argc; ++i) {
-    struct stat st{};
-    const std::string dir = (*argv)[i];
-    if (dir.empty() || dir[0] == '-' || ::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) continue;
-    write_seeds(dir);
-  }
+  rise::fuzz::for_each_corpus_folder(*argc, *argv, write_seeds);
   return 0;
 }
 
@@ -128,16 +114,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     // A channel name: taken apart, or not a station's.
     const std::string channel(reinterpret_cast<const char*>(data), size);
     if (const auto parts = m::parse_station_channel(channel)) {
-      check(!parts->trainee_id.empty() && !parts->what.empty());
-      check("rise/" + parts->trainee_id + "/" + parts->what == channel);
+      fuzz_check(!parts->trainee_id.empty() && !parts->what.empty());
+      fuzz_check("rise/" + parts->trainee_id + "/" + parts->what == channel);
     }
     return 0;
   }
   ins::TraineeDirectory directory;
   const std::string channel = std::string("rise/t1/") + kKinds[kind];
   const bool taken = directory.on_message(channel, data, static_cast<int>(size), 1'000'000);
-  check(taken == (directory.rows().size() == 1));
-  if (taken) check(directory.rows()[0].id == "t1");
+  fuzz_check(taken == (directory.rows().size() == 1));
+  if (taken) fuzz_check(directory.rows()[0].id == "t1");
   switch (kind) {
     case 0: decode<rise_msgs::PanelState>(data, size, [](const auto& msg) { return ins::panel_json(msg); }); break;
     case 1: decode<rise_msgs::RobotState>(data, size, [](const auto& msg) { return ins::robot_json(msg); }); break;

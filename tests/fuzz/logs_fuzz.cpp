@@ -22,19 +22,11 @@
 #include "hil/io/hid_recording.hpp"
 #include "hil/io/modbus_capture.hpp"
 #include "hil/io/modbus_trace.hpp"
+#include "tests/fuzz/fuzz_check.hpp"
 
 namespace io = rise::hil::io;
 
 namespace {
-
-// A failed check names itself before it aborts (the fuzzer reports the abort).
-#define check(ok)                                                                    \
-  do {                                                                               \
-    if (!(ok)) {                                                                     \
-      std::fprintf(stderr, "logs_fuzz: check failed: %s (line %d)\n", #ok, __LINE__); \
-      std::abort();                                                                  \
-    }                                                                                \
-  } while (false)
 
 // The input as a file the readers open (in memory where /dev/shm is).
 std::string write_input(const std::string& name, std::string_view bytes) {
@@ -60,16 +52,16 @@ void can_log(std::string_view bytes, const char* extension) {
     for (int pass = 0; pass < 2; ++pass) {
       size_t frames = 0;
       while (reader.next(record)) {
-        check(record.frame.len <= 64);
-        check(record.line >= 1);
+        fuzz_check(record.frame.len <= 64);
+        fuzz_check(record.line >= 1);
         ++frames;
       }
-      check(reader.bytes_consumed() <= reader.size_bytes());
+      fuzz_check(reader.bytes_consumed() <= reader.size_bytes());
       reader.rewind();
       (void)frames;
     }
   } catch (const std::runtime_error& e) {
-    check(std::string_view(e.what()).find(path) != std::string_view::npos);
+    fuzz_check(std::string_view(e.what()).find(path) != std::string_view::npos);
   }
 }
 
@@ -82,7 +74,7 @@ void modbus_trace(std::string_view bytes) {
     if (p.ok && !p.skip) {
       const std::string again = io::format_modbus_trace_line(p.record);
       const io::ModbusTraceParse q = io::parse_modbus_trace_line(again);
-      check(q.ok && io::format_modbus_trace_line(q.record) == again);
+      fuzz_check(q.ok && io::format_modbus_trace_line(q.record) == again);
     }
     begin = end + 1;
   }
@@ -93,7 +85,7 @@ void modbus_trace(std::string_view bytes) {
     while (reader.next(record)) {
     }
   } catch (const std::runtime_error& e) {
-    check(std::string_view(e.what()).starts_with(path));
+    fuzz_check(std::string_view(e.what()).starts_with(path));
   }
 }
 
@@ -103,11 +95,11 @@ void hid_recording(std::string_view bytes) {
     io::HidRecordingReader reader(path);
     io::HidRecordingRecord record;
     for (int pass = 0; pass < 2; ++pass) {
-      while (reader.next(record)) check(record.bytes.size() <= 4096 || record.kind == io::HidRecordingRecord::Kind::Plug);
+      while (reader.next(record)) fuzz_check(record.bytes.size() <= 4096 || record.kind == io::HidRecordingRecord::Kind::Plug);
       reader.rewind();
     }
   } catch (const std::runtime_error& e) {
-    check(std::string_view(e.what()).starts_with(path));
+    fuzz_check(std::string_view(e.what()).starts_with(path));
   }
 }
 
@@ -118,18 +110,18 @@ void modbus_capture(std::string_view bytes) {
   (void)io::looks_like_modbus_capture(path);
   try {
     const io::ModbusCapture capture = io::read_modbus_capture(path);
-    check(capture.transactions.size() <= capture.stats.requests);
+    fuzz_check(capture.transactions.size() <= capture.stats.requests);
     for (const auto& t : capture.transactions) {
-      check(!t.request_pdu.empty() && t.request_pdu[0] == t.function);
-      if (!t.response_us) check(t.response_pdu.empty() && !t.exception);
+      fuzz_check(!t.request_pdu.empty() && t.request_pdu[0] == t.function);
+      if (!t.response_us) fuzz_check(t.response_pdu.empty() && !t.exception);
     }
     for (const auto& r : io::modbus_trace_from_capture(capture, "fuzz")) {
       const std::string line = io::format_modbus_trace_line(r);
       const io::ModbusTraceParse p = io::parse_modbus_trace_line(line);
-      check(p.ok && io::format_modbus_trace_line(p.record) == line);
+      fuzz_check(p.ok && io::format_modbus_trace_line(p.record) == line);
     }
   } catch (const std::runtime_error& e) {
-    check(std::string_view(e.what()).find(path) != std::string_view::npos);
+    fuzz_check(std::string_view(e.what()).find(path) != std::string_view::npos);
   }
 }
 

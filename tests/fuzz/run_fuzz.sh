@@ -59,7 +59,7 @@ mkdir -p "$work"
 # Rebuild only when a source or header is newer than the binary.
 rebuild=0
 [ -x "$binary" ] || rebuild=1
-for f in "${sources[@]}" "$root/msgs/lcm_gen.sh" "$root"/{firmware_protocol,semantic,msgs,hil/io,panels,sim,sim/training,instructor}/*.hpp; do
+for f in "${sources[@]}" "$root/msgs/lcm_gen.sh" "$root"/tests/fuzz/*.hpp "$root"/{firmware_protocol,semantic,msgs,hil/io,panels,sim,sim/training,instructor}/*.hpp; do
   [ "$f" -nt "$binary" ] && rebuild=1
 done
 if [ $rebuild -eq 1 ]; then

@@ -14,18 +14,11 @@
 #include <string_view>
 
 #include "sim/training/training_graph.hpp"
+#include "tests/fuzz/fuzz_check.hpp"
 
 namespace training = rise::sim::training;
 
 namespace {
-
-#define check(ok)                                                                              \
-  do {                                                                                         \
-    if (!(ok)) {                                                                               \
-      std::fprintf(stderr, "training_graph_fuzz: check failed: %s (line %d)\n", #ok, __LINE__); \
-      std::abort();                                                                            \
-    }                                                                                          \
-  } while (false)
 
 const std::string kFile = "fuzz/training.yaml";
 
@@ -34,7 +27,7 @@ void check_lines(std::string_view what) {
   for (std::size_t begin = 0; begin < what.size();) {
     std::size_t end = what.find('\n', begin);
     if (end == std::string_view::npos) end = what.size();
-    check(what.substr(begin, end - begin).starts_with(kFile));
+    fuzz_check(what.substr(begin, end - begin).starts_with(kFile));
     begin = end + 1;
   }
 }
@@ -51,8 +44,8 @@ void check_events(training::TrainingGraph g) {
     n.task = std::move(t);
   }
   for (const auto& e : training::validate_training_graph(g)) {
-    check(e.starts_with(kFile));
-    check(e.find("has no event") != std::string::npos);
+    fuzz_check(e.starts_with(kFile));
+    fuzz_check(e.find("has no event") != std::string::npos);
   }
 }
 
@@ -69,21 +62,21 @@ training::TaskResult result_of(unsigned k, int step) {
 void walk(const training::TrainingGraph& g, unsigned k) {
   long long budget = 0;
   for (const auto& n : g.nodes) {
-    check(n.max_attempts >= 1);
+    fuzz_check(n.max_attempts >= 1);
     budget += n.max_attempts;
   }
   const long long steps = std::min(budget, 2000LL);
   training::TrainingWalker w(g);
   for (long long i = 0; i < steps && !w.ended(); ++i) {
     const auto current = w.current();
-    check(current.has_value());
+    fuzz_check(current.has_value());
     const training::TrainingNode* n = g.node(current->first);
-    check(n != nullptr);
-    check(current->second >= 1 && current->second <= n->max_attempts);
+    fuzz_check(n != nullptr);
+    fuzz_check(current->second >= 1 && current->second <= n->max_attempts);
     w.record(result_of(k, static_cast<int>(i)));
   }
-  if (budget <= 2000) check(w.ended() && !w.end_reason().empty());
-  check(static_cast<long long>(w.visits().size()) <= budget);
+  if (budget <= 2000) fuzz_check(w.ended() && !w.end_reason().empty());
+  fuzz_check(static_cast<long long>(w.visits().size()) <= budget);
 }
 
 }  // namespace
@@ -98,8 +91,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     check_lines(e.what());
     return 0;
   }
-  check(!g.nodes.empty() && !g.transitions.empty());
-  check(training::validate_training_graph(g).empty());
+  fuzz_check(!g.nodes.empty() && !g.transitions.empty());
+  fuzz_check(training::validate_training_graph(g).empty());
   check_events(g);
   walk(g, data[0]);
   return 0;

@@ -13,38 +13,31 @@
 #include <string>
 
 #include "sim/urdf_robot.hpp"
+#include "tests/fuzz/fuzz_check.hpp"
 
 namespace sim = rise::sim;
 
 namespace {
 
-#define check(ok)                                                                    \
-  do {                                                                               \
-    if (!(ok)) {                                                                     \
-      std::fprintf(stderr, "urdf_fuzz: check failed: %s (line %d)\n", #ok, __LINE__); \
-      std::abort();                                                                  \
-    }                                                                                \
-  } while (false)
-
 bool positive(double v) { return std::isfinite(v) && v > 0; }
 
 void check_robot(const sim::UrdfRobot& u, const sim::UrdfJointNames& joints) {
-  for (double s : u.chassis_size_m) check(positive(s));
-  check(positive(u.chassis_mass_kg));
-  check(u.wheels.has_value() == joints.wheels.has_value());
-  check(u.arm.has_value() == joints.arm.has_value());
+  for (double s : u.chassis_size_m) fuzz_check(positive(s));
+  fuzz_check(positive(u.chassis_mass_kg));
+  fuzz_check(u.wheels.has_value() == joints.wheels.has_value());
+  fuzz_check(u.arm.has_value() == joints.arm.has_value());
   if (u.wheels) {
     const auto& w = *u.wheels;
-    check(positive(w.radius_m) && positive(w.width_m) && positive(w.mass_kg));
-    check(positive(w.wheelbase_m) && positive(w.track_m));
-    check(u.clearance_m && std::isfinite(*u.clearance_m) && *u.clearance_m >= 0);
+    fuzz_check(positive(w.radius_m) && positive(w.width_m) && positive(w.mass_kg));
+    fuzz_check(positive(w.wheelbase_m) && positive(w.track_m));
+    fuzz_check(u.clearance_m && std::isfinite(*u.clearance_m) && *u.clearance_m >= 0);
   }
   if (u.arm) {
     const auto& a = *u.arm;
-    check(std::isfinite(a.mount_m[0]) && std::isfinite(a.mount_m[1]));
-    check(positive(a.upper_length_m) && positive(a.forearm_length_m) && positive(a.link_width_m));
-    check(positive(a.link_mass_kg) && positive(a.gripper_stroke_m));
-    for (const auto& [lo, hi] : u.arm_limits_rad) check(std::isfinite(lo) && std::isfinite(hi) && lo < 0 && hi > 0);
+    fuzz_check(std::isfinite(a.mount_m[0]) && std::isfinite(a.mount_m[1]));
+    fuzz_check(positive(a.upper_length_m) && positive(a.forearm_length_m) && positive(a.link_width_m));
+    fuzz_check(positive(a.link_mass_kg) && positive(a.gripper_stroke_m));
+    for (const auto& [lo, hi] : u.arm_limits_rad) fuzz_check(std::isfinite(lo) && std::isfinite(hi) && lo < 0 && hi > 0);
   }
 }
 
@@ -60,7 +53,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   try {
     check_robot(sim::parse_urdf_robot(xml, joints), joints);
   } catch (const std::runtime_error& e) {
-    check(e.what()[0] != '\0');
+    fuzz_check(e.what()[0] != '\0');
   }
   return 0;
 }

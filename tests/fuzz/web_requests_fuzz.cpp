@@ -15,58 +15,51 @@
 #include <string>
 
 #include "instructor/web_requests.hpp"
+#include "tests/fuzz/fuzz_check.hpp"
 
 namespace ins = rise::instructor;
 
 namespace {
 
-#define check(ok)                                                                            \
-  do {                                                                                       \
-    if (!(ok)) {                                                                             \
-      std::fprintf(stderr, "web_requests_fuzz: check failed: %s (line %d)\n", #ok, __LINE__); \
-      std::abort();                                                                          \
-    }                                                                                        \
-  } while (false)
-
 void headers(const std::string& text) {
   const std::string token = ins::cookie_token(text);
-  check(token.find(';') == std::string::npos && text.find(token) != std::string::npos);
-  if (ins::valid_trainee_id(text)) check(!text.empty() && text.size() <= 64 && text.find('/') == std::string::npos);
+  fuzz_check(token.find(';') == std::string::npos && text.find(token) != std::string::npos);
+  if (ins::valid_trainee_id(text)) fuzz_check(!text.empty() && text.size() <= 64 && text.find('/') == std::string::npos);
 }
 
 void virtual_controls(const Json::Value& body) {
   std::string error;
   const auto c = ins::virtual_controls_from_json(body, &error);
   if (!c) {
-    check(error.starts_with("body: "));
+    fuzz_check(error.starts_with("body: "));
     return;
   }
-  for (const auto& [name, v] : c->axes) check(std::isfinite(v) && v >= -1.0f && v <= 1.0f);
+  for (const auto& [name, v] : c->axes) fuzz_check(std::isfinite(v) && v >= -1.0f && v <= 1.0f);
 }
 
 void fault(const Json::Value& body, const std::string& action) {
   std::string error;
   const auto c = ins::fault_command_from_json(body, action, &error);
   if (!c) {
-    check(!error.empty());
+    fuzz_check(!error.empty());
     return;
   }
-  check(ins::valid_trainee_id(c->trainee_id) && c->action == action);
-  check(std::isfinite(c->value) && std::isfinite(c->rate) && std::isfinite(c->duration_s));
-  if (action == "inject") check(!c->fault_id.empty());
+  fuzz_check(ins::valid_trainee_id(c->trainee_id) && c->action == action);
+  fuzz_check(std::isfinite(c->value) && std::isfinite(c->rate) && std::isfinite(c->duration_s));
+  if (action == "inject") fuzz_check(!c->fault_id.empty());
 }
 
 void scenario(const Json::Value& body, bool start) {
   std::string error;
   const auto r = ins::scenario_request_from_json(body, start, &error);
   if (!r) {
-    check(!error.empty());
+    fuzz_check(!error.empty());
     return;
   }
-  check(ins::valid_trainee_id(r->trainee));
+  fuzz_check(ins::valid_trainee_id(r->trainee));
   if (!start) return;
-  check(r->file.size() > 5 && r->file.ends_with(".yaml"));
-  check(r->file.find('/') == std::string::npos && r->file.find('\0') == std::string::npos);
+  fuzz_check(r->file.size() > 5 && r->file.ends_with(".yaml"));
+  fuzz_check(r->file.find('/') == std::string::npos && r->file.find('\0') == std::string::npos);
 }
 
 }  // namespace
@@ -78,10 +71,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
     std::string error;
     const auto body = ins::parse_json_object(text, &error);
     if (!body) {
-      check(error.starts_with("body: "));
+      fuzz_check(error.starts_with("body: "));
       return 0;
     }
-    check(body->isObject());
+    fuzz_check(body->isObject());
     virtual_controls(*body);
     fault(*body, "inject");
     fault(*body, "clear");
