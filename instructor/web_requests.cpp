@@ -103,8 +103,13 @@ std::optional<Json::Value> parse_json_object(const std::string& body, std::strin
   Json::Value v;
   std::string errs;
   const std::unique_ptr<Json::CharReader> reader(b.newCharReader());
-  if (!reader->parse(body.data(), body.data() + body.size(), &v, &errs)) {
-    *error = "body: " + errs;
+  try {
+    if (!reader->parse(body.data(), body.data() + body.size(), &v, &errs)) {
+      *error = "body: " + errs;
+      return std::nullopt;
+    }
+  } catch (const std::exception& e) {  // jsoncpp throws past its nesting limit (stackLimit, 1000)
+    *error = std::string("body: ") + e.what();
     return std::nullopt;
   }
   if (!v.isObject()) {

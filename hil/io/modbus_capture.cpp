@@ -4,6 +4,7 @@
 #include <arpa/inet.h>
 #include <pcap/pcap.h>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -304,7 +305,7 @@ std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& ca
       r.rtt_us = kNoAnswerUs;
       for (size_t j = i + 1; j < all.size(); ++j) {
         if (all[j].client != t.client || all[j].server != t.server) continue;
-        r.rtt_us = all[j].request_us - t.request_us;
+        r.rtt_us = all[j].request_us - t.request_us;  // (clamped below)
         break;
       }
     } else if (t.exception) {
@@ -314,6 +315,9 @@ std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& ca
       r.rtt_us = *t.response_us - t.request_us;
       if (!write && !trace_values(t, r)) r.result.status = ModbusStatus::Error;  // an answer too short for its count
     }
+    // A capture's clock may step back between request and answer (found by
+    // the logs fuzz target): a trace's rtt is never negative.
+    r.rtt_us = std::max<int64_t>(r.rtt_us, 0);
     if (write || r.result.ok()) r.values.resize(r.count);
     else r.values.clear();
     records.push_back(std::move(r));

@@ -362,3 +362,22 @@ TEST_CASE("Modbus/TCP capture: a packet time before 1970 or with microseconds pa
   CHECK(capture_time_us(999'999'999'999, 999'999) == 999'999'999'999'999'999);
   CHECK(capture_time_us(1'000'000'000'000, 0) == std::nullopt);
 }
+
+// Found by the logs fuzz target: a capture whose clock steps back between a
+// request and its answer gave a trace line with rtt_us=-145, which the trace
+// reader refuses. A trace's rtt is never negative.
+TEST_CASE("Modbus/TCP capture: an answer stamped before its request has rtt 0 in the trace", "[hil_io][modbus]") {
+  ModbusCapture capture;
+  ModbusCaptureTransaction t;
+  t.request_us = 1400547213'667867, t.response_us = 1400547213'667722;
+  t.client = "10.0.0.1:40000", t.server = "10.0.0.2:502", t.unit = 1, t.function = 1, t.address = 0, t.count = 3;
+  t.request_pdu = {1, 0, 0, 0, 3}, t.response_pdu = {1, 1, 0x04};
+  capture.transactions = {t};
+  const auto records = modbus_trace_from_capture(capture, "fuzz");
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].rtt_us == 0);
+  CHECK(records[0].values == std::vector<uint16_t>{0, 0, 1});
+  const std::string line = format_modbus_trace_line(records[0]);
+  INFO(line);
+  CHECK(parse_modbus_trace_line(line).ok);
+}

@@ -32,6 +32,10 @@ TEST_CASE("a request body must be one JSON object", "[instructor]") {
   CHECK(error == "body: not a JSON object");
   CHECK_FALSE(parse_json_object(R"({"a": 1} {"b": 2})", &error));
   CHECK(parse_json_object(" {\"a\": 1}\n", &error));
+  // Found by the web_requests fuzz target: jsoncpp throws (not returns false)
+  // past its nesting limit, so such a body was a 500.
+  CHECK_FALSE(parse_json_object(std::string(1001, '[') + std::string(1001, ']'), &error));
+  CHECK(error == "body: Exceeded stackLimit in readValue().");
 }
 
 TEST_CASE("trainee ids and the cookie's token", "[instructor]") {
@@ -113,6 +117,6 @@ TEST_CASE("a virtual panel's controls and a scenario request", "[instructor]") {
   for (const char* bad : {R"({"trainee":"t1","file":"../x.yaml"})", R"({"trainee":"t1","file":"x.yml"})",
                           R"({"trainee":"t1","file":".yaml"})", R"({"trainee":"t1","file":"x\u0000.yaml"})"}) {
     CHECK_FALSE(scenario_request_from_json(body_of(bad), true, &error));
-    CHECK(error.find("not a .yaml file name") != std::string::npos);
+    CHECK((error.find("not a .yaml file name") != std::string::npos || error == "body: 'file' holds a NUL"));
   }
 }
