@@ -44,6 +44,21 @@ class CapturedLog : public console_bridge::OutputHandler {
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
 
+// Whether `text` is whole UTF-8 sequences: tinyxml 2.6 (liburdfdom's XML
+// parser) takes a lead byte's length on trust and reads past the end of a
+// text cut inside a sequence (a heap overflow found by the urdf fuzz target).
+bool whole_utf8(const std::string& text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const std::size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    if (n == 0 || n > text.size() - i) return false;
+    for (std::size_t k = 1; k < n; ++k)
+      if ((static_cast<unsigned char>(text[i + k]) & 0xC0) != 0x80) return false;
+    i += n;
+  }
+  return true;
+}
+
 std::string text(const urdf::Vector3& v) {
   std::ostringstream s;
   s << v.x << " " << v.y << " " << v.z;
@@ -272,6 +287,7 @@ UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints)
 }
 
 UrdfRobot parse_urdf_robot(const std::string& xml, const UrdfJointNames& joints) {
+  if (!whole_utf8(xml)) fail("not UTF-8 text");
   urdf::ModelInterfaceSharedPtr model;
   std::string errors;
   {

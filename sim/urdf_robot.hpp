@@ -46,7 +46,8 @@ struct UrdfRobot {
 /// shape's (the simulator computes inertia from the shape and the URDF mass).
 /// Not for the cyclic path.
 UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints);
-/// The same from the URDF's text (urdf::parseURDF); errors as read_urdf_robot's.
+/// The same from the URDF's text (urdf::parseURDF; text that is not whole
+/// UTF-8 is refused first); errors as read_urdf_robot's.
 UrdfRobot parse_urdf_robot(const std::string& xml, const UrdfJointNames& joints);
 
 }  // namespace rise::sim

@@ -177,3 +177,11 @@ TEST_CASE("a URDF body of zero or negative size is refused", "[sim]") {
   CHECK(ok.chassis_size_m == std::array<double, 3>{1, 1, 1});
   CHECK(ok.chassis_mass_kg == 6.0);
 }
+
+// Found by the urdf fuzz target: a text ending inside a UTF-8 sequence made
+// tinyxml (liburdfdom's parser) read past the end of the string.
+TEST_CASE("a URDF that is not whole UTF-8 is refused before liburdfdom reads it", "[sim]") {
+  CHECK(testing::error_of([] { parse_urdf_robot("<robot name=\"r\">\n    \xef\xef\xef", {}); }) == "not UTF-8 text");
+  CHECK(testing::error_of([] { parse_urdf_robot("<robot name=\"r\xc3\x28\"/>", {}); }) == "not UTF-8 text");
+  CHECK(testing::error_of([] { parse_urdf_robot("<robot name=\"r\xc3\xa9\"/>", {}); }) != "not UTF-8 text");
+}
