@@ -161,3 +161,13 @@ TEST_CASE("invalid training graphs are refused with a message naming file and li
     CHECK_THAT(e, Contains("node 'b' is unreachable from START"));
   }
 }
+
+// Found by the training_graph fuzz target: a key holding a control character
+// and a line break ("trai\x06\x00ng") split its "file:line: key: unknown key"
+// error over two lines. Control characters are written as \xNN.
+TEST_CASE("an error naming a key with control characters stays on one line", "[training]") {
+  const std::string error = graph_error(std::string("trai\x06\x00ng: t\n", 12));
+  INFO(error);
+  CHECK(error.find('\n') == std::string::npos);
+  CHECK(error.find("\\x06") != std::string::npos);
+}
