@@ -9,8 +9,6 @@
 
 namespace rise::panels {
 
-namespace {
-
 // A control character of the file's text (a key, a value quoted in the
 // message) as \xNN: an error stays one "file:line: ..." line (a key holding a
 // line break split it; found by the training_graph fuzz target).
@@ -28,7 +26,6 @@ std::string printable(const std::string& text) {
   return out;
 }
 
-}  // namespace
 
 void YamlReader::fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
   const int line = node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
