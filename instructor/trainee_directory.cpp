@@ -10,7 +10,9 @@ namespace rise::instructor {
 bool TraineeDirectory::on_message(const std::string& channel, const void* data, int size, int64_t now_us) {
   const auto parts = msgs::parse_station_channel(channel);
   if (!parts) return false;
-  const auto& [id, what] = *parts;
+  // Not a structured binding: clang 14 (the fuzz targets' compiler) cannot capture one.
+  const std::string& id = parts->trainee_id;
+  const std::string& what = parts->what;
   const auto take = [&](auto slot, auto message) {
     if (!msgs::decode_message(data, size, message)) return false;
     TraineeRow& row = rows_[id];

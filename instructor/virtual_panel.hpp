@@ -11,19 +11,12 @@
 #include <string>
 
 #include "hil/panel_mapper.hpp"
+#include "instructor/virtual_controls.hpp"
 #include "panels/panel_definition.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 
 namespace rise::instructor {
-
-/// What a page sends, by the panel definition's control names. Controls it
-/// leaves out keep their safe value.
-struct VirtualControls {
-  std::map<std::string, float> axes;          ///< -1..1
-  std::map<std::string, bool> buttons;        ///< pressed
-  std::map<std::string, std::string> switches;  ///< position label
-};
 
 /// The name of the virtual source in PanelState.sources.
 inline constexpr const char* kVirtualSourceName = "virtual";

@@ -7,6 +7,7 @@ add_library(rise_instructor_web
   web_server.cpp
   web_routes.cpp
   web_json.cpp
+  web_requests.cpp
   channel_cache.cpp
   fault_presets.cpp
   virtual_panel.cpp

@@ -30,10 +30,25 @@ Json::Value box_json(const sim::BoxObstacle& b, const std::string& kind) {
 
 }  // namespace
 
+namespace {
+
+// JSON has no infinity (jsoncpp writes 1e+9999, which the page's
+// JSON.parse turns into Infinity and WebAudio refuses): a non-finite
+// number anywhere in `v` becomes null, as jsoncpp writes NaN.
+void finite_numbers(Json::Value& v) {
+  if (v.isDouble() && !std::isfinite(v.asDouble())) v = Json::Value();
+  else if (v.isArray() || v.isObject())
+    for (auto& child : v) finite_numbers(child);
+}
+
+}  // namespace
+
 std::string json_text(const Json::Value& v) {
   Json::StreamWriterBuilder b;
   b["indentation"] = "";
-  return Json::writeString(b, v);
+  Json::Value finite = v;
+  finite_numbers(finite);
+  return Json::writeString(b, finite);
 }
 
 Json::Value world_json(const sim::WorldDescription& w) {

@@ -10,7 +10,6 @@
 #include <fstream>
 #include <map>
 #include <memory>
-#include <regex>
 #include <set>
 #include <stdexcept>
 #include <thread>
@@ -21,6 +20,7 @@
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
 #include "instructor/web_json.hpp"
+#include "instructor/web_requests.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
 #include "rise_msgs/FaultCommand.hpp"
@@ -38,31 +38,12 @@ bool same_token(const std::string& a, const std::string& b) {
   return diff == 0 && !b.empty();
 }
 
-std::string cookie_token(const httplib::Request& req) {
-  const std::string cookies = req.get_header_value("Cookie");
-  const std::string key = "rise_token=";
-  for (std::size_t pos = 0; pos < cookies.size();) {
-    std::size_t end = cookies.find(';', pos);
-    if (end == std::string::npos) end = cookies.size();
-    std::string part = cookies.substr(pos, end - pos);
-    part.erase(0, part.find_first_not_of(' '));
-    if (part.rfind(key, 0) == 0) return part.substr(key.size());
-    pos = end + 1;
-  }
-  return "";
-}
-
 bool authorised(const httplib::Request& req, const std::string& token) {
   if (req.has_param("token") && same_token(req.get_param_value("token"), token)) return true;
   const std::string auth = req.get_header_value("Authorization");
   if (auth.rfind("Bearer ", 0) == 0 && same_token(auth.substr(7), token)) return true;
   if (same_token(req.get_header_value("X-Rise-Token"), token)) return true;
-  return same_token(cookie_token(req), token);
-}
-
-bool valid_id(const std::string& id) {
-  static const std::regex re("[A-Za-z0-9_.-]{1,64}");
-  return std::regex_match(id, re);
+  return same_token(cookie_token(req.get_header_value("Cookie")), token);
 }
 
 void reply_json(httplib::Response& res, const Json::Value& v, int status = 200) {
@@ -76,25 +57,12 @@ void reply_error(httplib::Response& res, int status, const std::string& message)
   reply_json(res, v, status);
 }
 
-std::optional<Json::Value> parse_body(const httplib::Request& req, std::string* error) {
-  Json::CharReaderBuilder b;
-  Json::Value v;
-  std::string errs;
-  std::unique_ptr<Json::CharReader> reader(b.newCharReader());
-  if (!reader->parse(req.body.data(), req.body.data() + req.body.size(), &v, &errs)) {
-    *error = "body: " + errs;
-    return std::nullopt;
-  }
-  return v;
-}
-
 // The body as a JSON object; nullopt after replying 400.
 std::optional<Json::Value> object_body(const httplib::Request& req, httplib::Response& res) {
   std::string error;
-  auto body = parse_body(req, &error);
-  if (body && body->isObject()) return body;
-  reply_error(res, 400, error.empty() ? "body: not a JSON object" : error);
-  return std::nullopt;
+  auto body = parse_json_object(req.body, &error);
+  if (!body) reply_error(res, 400, error);
+  return body;
 }
 
 // Every trainee heard or driven from here, with every channel on which more
@@ -190,20 +158,13 @@ void handle_stream(std::shared_ptr<const WebRouteContext> ctx, httplib::Response
 
 void handle_virtual(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
   const std::string id = req.matches[1];
-  if (!valid_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
+  if (!valid_trainee_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
   const auto body = object_body(req, res);
   if (!body) return;
-  VirtualControls controls;
-  try {
-    for (const auto& name : (*body)["axes"].getMemberNames()) controls.axes[name] = (*body)["axes"][name].asFloat();
-    for (const auto& name : (*body)["buttons"].getMemberNames())
-      controls.buttons[name] = (*body)["buttons"][name].asBool();
-    for (const auto& name : (*body)["switches"].getMemberNames())
-      controls.switches[name] = (*body)["switches"][name].asString();
-  } catch (const std::exception& e) {
-    return reply_error(res, 400, std::string("body: ") + e.what());
-  }
-  if (const auto refused = ctx.virtual_panels.update(id, controls, req.remote_addr))
+  std::string error;
+  const auto controls = virtual_controls_from_json(*body, &error);
+  if (!controls) return reply_error(res, 400, error);
+  if (const auto refused = ctx.virtual_panels.update(id, *controls, req.remote_addr))
     return reply_error(res, refused->channel_taken ? 409 : 400, refused->message);
   res.status = 204;
 }
@@ -216,7 +177,7 @@ void handle_virtual_close(const WebRouteContext& ctx, const httplib::Request& re
 
 void handle_sim_control(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
   const std::string id = req.matches[1], command = req.matches[2];
-  if (!valid_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
+  if (!valid_trainee_id(id)) return reply_error(res, 400, "trainee id '" + id + "': letters, digits, _ . - only");
   rise_msgs::SimControl c;
   c.utime = msgs::wall_us();
   c.issuer = "rise-instructor";
@@ -231,26 +192,6 @@ void handle_sim_control(const WebRouteContext& ctx, const httplib::Request& req,
   reply_json(res, v);
 }
 
-// The fault an inject names: a preset ("fault"), or the body's own fields
-// (kind, target, value, rate, duration_s). False when it names neither.
-bool take_fault_fields(const Json::Value& body, const std::string& name, rise_msgs::FaultCommand& c) {
-  if (const FaultPreset* preset = find_fault_preset(name)) {
-    c.kind = preset->kind;
-    c.target = preset->target;
-    c.value = preset->value;
-    c.rate = preset->rate;
-    c.duration_s = preset->duration_s;
-    return true;
-  }
-  if (!body.isMember("kind")) return false;
-  c.kind = body["kind"].asString();
-  c.target = body.get("target", "").asString();
-  c.value = body.get("value", 0.0).asDouble();
-  c.rate = body.get("rate", 0.0).asDouble();
-  c.duration_s = body.get("duration_s", 0.0).asDouble();
-  return true;
-}
-
 // Inject or clear one fault: a FaultCommand signed with the instructor key
 // on rise/<trainee>/fault_command. The body names a preset ("fault") or
 // gives the fields (kind, target, value, rate, duration_s, seed).
@@ -259,25 +200,17 @@ void handle_fault(const WebRouteContext& ctx, const httplib::Request& req, httpl
   if (!ctx.key) return reply_error(res, 503, "no instructor key (rise-instructor serve --instructor-key FILE)");
   const auto body = object_body(req, res);
   if (!body) return;
-  const std::string id = body->get("trainee", "").asString();
-  if (!valid_id(id)) return reply_error(res, 400, "trainee '" + id + "': letters, digits, _ . - only");
-  rise_msgs::FaultCommand c{};
+  std::string error;
+  auto command = fault_command_from_json(*body, action, &error);
+  if (!command) return reply_error(res, 400, error);
+  rise_msgs::FaultCommand& c = *command;
+  const std::string& id = c.trainee_id;
   // Stamped in the receiver's clock, as measured: a station whose clock is
   // off by more than its --command-window still takes it (msgs/clock_offset.hpp).
   const auto offset = ctx.links.offset_us(id);
   c.utime = msgs::wall_us() + offset.value_or(0);
   c.nonce = 0;
   c.issuer = ctx.settings.issuer;
-  c.trainee_id = id;
-  c.action = action;
-  const std::string name = body->get("fault", "").asString();
-  c.fault_id = name == "*" ? "" : name;
-  if (action == "inject") {
-    if (!take_fault_fields(*body, name, c))
-      return reply_error(res, 400, "fault '" + name + "': no such preset, and no kind given");
-    if (c.fault_id.empty()) return reply_error(res, 400, "fault: a name is required to inject");
-    c.seed = body->get("seed", 1).asInt64();
-  }
   msgs::sign(c, *ctx.key);
   ctx.lcm.publish(msgs::fault_command_channel(id), &c);
   Json::Value v;
@@ -331,19 +264,19 @@ Json::Value scenarios_json(const WebRouteContext& ctx) {
   return v;
 }
 
-// Starts the body's scenario file for its trainee (seed: the body's, else the file's).
-void start_scenario(const WebRouteContext& ctx, const Json::Value& body, ScenarioRun run, httplib::Response& res) {
+// Starts the request's scenario file for its trainee (seed: the request's, else the file's).
+void start_scenario(const WebRouteContext& ctx, const ScenarioRequest& request, ScenarioRun run,
+                    httplib::Response& res) {
   const std::string& dir = ctx.settings.scenarios_dir;
-  run.file = body.get("file", "").asString();
+  run.file = request.file;
   const fs::path path = fs::path(dir) / run.file;
-  if (run.file.empty() || run.file.find('/') != std::string::npos || path.extension() != ".yaml" ||
-      !fs::is_regular_file(path))
+  if (!fs::is_regular_file(path))
     return reply_error(res, 400, "scenario file '" + run.file + "': not a .yaml file in " + dir);
   run.path = path.string();
   try {
     const Scenario s = load_scenario(run.path);
     run.name = s.name;
-    run.seed = body.isMember("seed") ? body.get("seed", 0).asUInt64() : s.seed;
+    run.seed = request.seed.value_or(s.seed);
   } catch (const std::exception& e) {
     return reply_error(res, 400, e.what());
   }
@@ -367,12 +300,14 @@ void handle_scenario(const WebRouteContext& ctx, const httplib::Request& req, ht
   if (!ctx.key) return reply_error(res, 503, "no instructor key (rise-instructor serve --instructor-key FILE)");
   const auto body = object_body(req, res);
   if (!body) return;
+  std::string error;
+  const auto request = scenario_request_from_json(*body, start, &error);
+  if (!request) return reply_error(res, 400, error);
   ScenarioRun run;
-  run.trainee = body->get("trainee", "").asString();
-  if (!valid_id(run.trainee)) return reply_error(res, 400, "trainee '" + run.trainee + "': letters, digits, _ . - only");
+  run.trainee = request->trainee;
   // Stopping (or replacing) a run.
   ctx.scenarios.stop(run.trainee);
-  if (start) return start_scenario(ctx, *body, run, res);
+  if (start) return start_scenario(ctx, *request, run, res);
   Json::Value v;
   v["trainee"] = run.trainee;
   v["stopped"] = true;

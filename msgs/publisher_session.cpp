@@ -46,7 +46,7 @@ std::string describe(const rise_msgs::Publisher& p, int64_t now_utime) {
   char buf[128];
   std::snprintf(buf, sizeof buf, " pid %d on %s (session %08" PRIx64 ", started %.1f s ago)", p.pid,
                 p.host.empty() ? "?" : p.host.c_str(), static_cast<uint64_t>(p.session_id) >> 32,
-                static_cast<double>(now_utime - p.started_utime) * 1e-6);
+                (static_cast<double>(now_utime) - static_cast<double>(p.started_utime)) * 1e-6);  // started_utime is anyone's
   return (p.program.empty() ? std::string("a process") : p.program) + buf;
 }
 

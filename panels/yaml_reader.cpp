@@ -1,6 +1,7 @@
 #include "panels/yaml_reader.hpp"
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -8,9 +9,27 @@
 
 namespace rise::panels {
 
+// A control character of the file's text (a key, a value quoted in the
+// message) as \xNN: an error stays one "file:line: ..." line (a key holding a
+// line break split it; found by the training_graph fuzz target).
+std::string printable(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) {
+      out += c;
+      continue;
+    }
+    char hex[8];
+    std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+    out += hex;
+  }
+  return out;
+}
+
+
 void YamlReader::fail(const YAML::Node& node, const std::string& key, const std::string& what) const {
   const int line = node.IsDefined() && node.Mark().line >= 0 ? node.Mark().line + 1 : 0;
-  throw std::runtime_error(file_ + ":" + std::to_string(line) + ": " + (key.empty() ? "" : key + ": ") + what);
+  throw std::runtime_error(file_ + ":" + std::to_string(line) + ": " + printable((key.empty() ? "" : key + ": ") + what));
 }
 
 void YamlReader::only_keys(const YAML::Node& map, const std::string& where,

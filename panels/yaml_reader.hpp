@@ -17,6 +17,10 @@ namespace rise::panels {
 /// ("cannot read 'lots' as a number"), the simulator's files only quote the text.
 enum class ValueWording { QuoteOnly, NameType };
 
+/// `text` with each control character as \xNN, so that an error quoting
+/// the file's text stays on one line.
+std::string printable(const std::string& text);
+
 class YamlReader {
  public:
   explicit YamlReader(std::string file, ValueWording wording = ValueWording::QuoteOnly)

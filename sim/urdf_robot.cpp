@@ -44,6 +44,21 @@ class CapturedLog : public console_bridge::OutputHandler {
 
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
 
+// Whether `text` is whole UTF-8 sequences: tinyxml 2.6 (liburdfdom's XML
+// parser) takes a lead byte's length on trust and reads past the end of a
+// text cut inside a sequence (a heap overflow found by the urdf fuzz target).
+bool whole_utf8(const std::string& text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const std::size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
+    if (n == 0 || n > text.size() - i) return false;
+    for (std::size_t k = 1; k < n; ++k)
+      if ((static_cast<unsigned char>(text[i + k]) & 0xC0) != 0x80) return false;
+    i += n;
+  }
+  return true;
+}
+
 std::string text(const urdf::Vector3& v) {
   std::ostringstream s;
   s << v.x << " " << v.y << " " << v.z;
@@ -95,6 +110,16 @@ const urdf::Collision& collision(const urdf::Link& l, int want, std::size_t inde
   if (c.geometry->type != want)
     fail("link '" + l.name + "': unsupported collision shape " + std::string(shape_name(c.geometry->type)) +
          " (the simulator needs a " + shape_name(want) + ")");
+  // liburdfdom takes any number; a body of negative or zero size is none.
+  bool sized = true;
+  if (want == urdf::Geometry::BOX) {
+    const auto& d = static_cast<const urdf::Box&>(*c.geometry).dim;
+    sized = d.x > 0 && d.y > 0 && d.z > 0;
+  } else if (want == urdf::Geometry::CYLINDER) {
+    const auto& cyl = static_cast<const urdf::Cylinder&>(*c.geometry);
+    sized = cyl.radius > 0 && cyl.length > 0;
+  }
+  if (!sized) fail("link '" + l.name + "': the " + shape_name(want) + "'s sizes must be > 0");
   return c;
 }
 
@@ -108,7 +133,7 @@ std::array<double, 3> box_size(const urdf::Collision& c) {
 double mass_of(const urdf::Link& l, double trace_kgm2_per_kg) {
   if (!l.inertial) fail("link '" + l.name + "' has no inertial");
   const urdf::Inertial& i = *l.inertial;
-  if (!(i.mass > 0)) fail("link '" + l.name + "': mass must be > 0");
+  if (!(i.mass > 0 && std::isfinite(i.mass))) fail("link '" + l.name + "': mass must be > 0");
   const double want = i.mass * trace_kgm2_per_kg;
   const double trace = i.ixx + i.iyy + i.izz;
   if (std::abs(trace - want) > 0.01 * want)
@@ -254,13 +279,21 @@ void read_arm(const urdf::ModelInterface& m, const std::string& base, const std:
 
 UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints) {
   // liburdfdom says only "does not exist", also for a file it may not read.
-  if (!std::ifstream(path)) fail(path + ": cannot open: " + std::strerror(errno));
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path + ": cannot open: " + std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_urdf_robot(text.str(), joints);
+}
+
+UrdfRobot parse_urdf_robot(const std::string& xml, const UrdfJointNames& joints) {
+  if (!whole_utf8(xml)) fail("not UTF-8 text");
   urdf::ModelInterfaceSharedPtr model;
   std::string errors;
   {
     CapturedLog log;
     try {
-      model = urdf::parseURDFFile(path);
+      model = urdf::parseURDF(xml);
     } catch (const std::exception& e) {
       fail(std::string("liburdfdom: ") + e.what());
     }

@@ -37,7 +37,7 @@ struct UrdfRobot {
   std::array<std::pair<double, double>, 3> arm_limits_rad{};
 };
 
-/// Parses `path` with urdf::parseURDFFile and maps it. The root link is the
+/// Reads `path`, parses it with urdf::parseURDF and maps it. The root link is the
 /// chassis (base frame: chassis centre, x forward, y left, z up). Throws
 /// std::runtime_error with liburdfdom's message (its log is captured, not
 /// printed) or with what does not fit the simulator's model: a missing
@@ -46,5 +46,8 @@ struct UrdfRobot {
 /// shape's (the simulator computes inertia from the shape and the URDF mass).
 /// Not for the cyclic path.
 UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints);
+/// The same from the URDF's text (urdf::parseURDF; text that is not whole
+/// UTF-8 is refused first); errors as read_urdf_robot's.
+UrdfRobot parse_urdf_robot(const std::string& xml, const UrdfJointNames& joints);
 
 }  // namespace rise::sim

@@ -1,4 +1,5 @@
 #include "hil/io/can_log_binary.hpp"
+#include "hil/io/candump_log.hpp"
 
 #include <pcap/pcap.h>
 #include <zlib.h>
@@ -373,7 +374,9 @@ class PcapLog final : public BinaryCanLog {
         case Decoded::Malformed: return Result::Malformed;
         case Decoded::NotCan: continue;
       }
-      record.frame.timestamp_us = static_cast<int64_t>(header->ts.tv_sec) * 1000000 + header->ts.tv_usec;
+      const auto time_us = capture_time_us(header->ts.tv_sec, header->ts.tv_usec);
+      if (!time_us) return Result::Malformed;  // a time no candump line can carry
+      record.frame.timestamp_us = *time_us;
       return Result::Frame;
     }
     return Result::End;

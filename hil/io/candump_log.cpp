@@ -183,6 +183,11 @@ void append_log_time(std::string& out, int64_t time_us) {
   out.append(text, static_cast<std::size_t>(n));
 }
 
+std::optional<int64_t> capture_time_us(int64_t seconds, int64_t micros) {
+  if (seconds < 0 || seconds >= 1'000'000'000'000 || micros < 0 || micros >= 1'000'000) return std::nullopt;
+  return seconds * 1'000'000 + micros;
+}
+
 CandumpParse parse_candump_line(std::string_view line) {
   CandumpParse r;
   std::string_view interface;

@@ -44,6 +44,11 @@ std::optional<int64_t> parse_log_time(std::string_view line, std::string_view* r
 /// Appends "(seconds.micros)", e.g. "(1700000000.000001)". Allocates
 /// nothing when `out` has the room.
 void append_log_time(std::string& out, int64_t time_us);
+/// A capture's packet time (seconds and microseconds, as libpcap gives it)
+/// in microseconds, or nullopt when no log line can carry it: before 1970,
+/// more than 12 digits of seconds, or microseconds outside 0..999999 (a
+/// classic pcap stores them unchecked; a pcapng's 64-bit stamp can be anything).
+std::optional<int64_t> capture_time_us(int64_t seconds, int64_t micros);
 
 /// Parses one log line (trailing "\r\n" and comments after the frame are
 /// ignored). Does not throw.

@@ -1,8 +1,10 @@
 #include "hil/io/modbus_capture.hpp"
+#include "hil/io/candump_log.hpp"
 
 #include <arpa/inet.h>
 #include <pcap/pcap.h>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <stdexcept>
@@ -225,7 +227,12 @@ ModbusCapture read_modbus_capture(const std::string& path, uint16_t port) {
     ++decoder.result().stats.packets;
     Segment s;
     if (!parse_link(link, packet, header->caplen, s)) continue;
-    decoder.segment(s, static_cast<int64_t>(header->ts.tv_sec) * 1000000 + header->ts.tv_usec);
+    const auto time_us = capture_time_us(header->ts.tv_sec, header->ts.tv_usec);
+    if (!time_us) {
+      ++decoder.result().stats.malformed;  // a time no trace line can carry (found by the logs fuzz target)
+      continue;
+    }
+    decoder.segment(s, *time_us);
   }
   if (rc != PCAP_ERROR_BREAK) ++decoder.result().stats.malformed;  // a cut last record
   return std::move(decoder.result());
@@ -289,12 +296,16 @@ std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& ca
     r.function = static_cast<ModbusFunction>(t.function);
     r.address = *t.address;
     r.count = *t.count;
+    // A write's line always says what it wrote, answered or not: one whose
+    // request holds fewer values than its count has no line.
+    const bool write = t.function == 15 || t.function == 16;
+    if (write && !trace_values(t, r)) continue;
     if (!t.response_us) {
       r.result.status = ModbusStatus::Timeout;
       r.rtt_us = kNoAnswerUs;
       for (size_t j = i + 1; j < all.size(); ++j) {
         if (all[j].client != t.client || all[j].server != t.server) continue;
-        r.rtt_us = all[j].request_us - t.request_us;
+        r.rtt_us = all[j].request_us - t.request_us;  // (clamped below)
         break;
       }
     } else if (t.exception) {
@@ -302,13 +313,13 @@ std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& ca
       r.result = {ModbusStatus::Exception, *t.exception};
     } else {
       r.rtt_us = *t.response_us - t.request_us;
-      if (trace_values(t, r)) {
-        r.values.resize(r.count);
-      } else {
-        r.result.status = ModbusStatus::Error;  // an answer too short for its count
-        r.values.clear();
-      }
+      if (!write && !trace_values(t, r)) r.result.status = ModbusStatus::Error;  // an answer too short for its count
     }
+    // A capture's clock may step back between request and answer (found by
+    // the logs fuzz target): a trace's rtt is never negative.
+    r.rtt_us = std::max<int64_t>(r.rtt_us, 0);
+    if (write || r.result.ok()) r.values.resize(r.count);
+    else r.values.clear();
     records.push_back(std::move(r));
   }
   return records;

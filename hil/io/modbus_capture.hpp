@@ -60,7 +60,9 @@ bool looks_like_modbus_capture(const std::string& path);
 /// source, for replay://CAPTURE.pcap on a Modbus source: the functions a
 /// trace knows (01-04, 15, 16) with the values read or written, exceptions,
 /// and requests without an answer as timeouts (rtt: until the next request
-/// on the connection, or 1 s); other functions are left out.
+/// on the connection, or 1 s); other functions are left out, and so is a
+/// write whose request holds fewer values than its count (a write's line
+/// always says what it wrote).
 std::vector<ModbusTraceRecord> modbus_trace_from_capture(const ModbusCapture& capture, const std::string& source);
 
 /// "Read Coils", "Write Multiple Registers", ... ("function N" otherwise).

@@ -38,20 +38,6 @@ RobotSample sample_of(const Simulation& sim, const WorldDescription& world, std:
   return s;
 }
 
-std::optional<double> TaskResult::field(const std::string& name) const {
-  if (name == "score") return score;
-  if (name == "time_s") return time_s;
-  if (name == "success") return success ? 1.0 : 0.0;
-  if (name == "damage") return damage;
-  if (name == "collisions") return collisions;
-  if (name == "attempt") return attempt;
-  if (name.rfind("events.", 0) == 0) {
-    const auto it = counts.find(name.substr(7));
-    if (it != counts.end()) return it->second;
-  }
-  return std::nullopt;
-}
-
 TaskExecutor::TaskExecutor(TaskDescription task, WorldDescription world, std::string robot_id)
     : task_(std::move(task)), world_(std::move(world)), robot_id_(std::move(robot_id)) {
   check_against_world(task_, world_);

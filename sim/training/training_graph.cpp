@@ -304,7 +304,7 @@ TrainingGraph parse_training_graph(const std::string& text, const std::string& f
   const auto errors = validate_training_graph(g);
   if (!errors.empty()) {
     std::string all;
-    for (const auto& e : errors) all += (all.empty() ? "" : "\n") + e;
+    for (const auto& e : errors) all += (all.empty() ? "" : "\n") + panels::printable(e);  // one line each
     throw std::runtime_error(all);
   }
   return g;

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "sim/training/task_description.hpp"
-#include "sim/training/task_executor.hpp"
+#include "sim/training/task_result.hpp"
 
 namespace rise::sim::training {
 

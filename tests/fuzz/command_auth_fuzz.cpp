@@ -7,8 +7,6 @@
 // same twice. Nothing may crash or trigger a sanitizer. The seeds (a signed
 // fault and a training command, encoded by lcm-gen's code) are written into
 // the corpus folder at start.
-#include <sys/stat.h>
-
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -17,14 +15,11 @@
 
 #include "msgs/command_auth.hpp"
 #include "msgs/lcm_decode.hpp"
+#include "tests/fuzz/fuzz_check.hpp"
 
 namespace m = rise::msgs;
 
 namespace {
-
-void check(bool ok) {
-  if (!ok) std::abort();
-}
 
 // The receiver's key; the seeds are signed with another (a well-formed
 // signature the verifier must still refuse).
@@ -42,13 +37,13 @@ void verify(const uint8_t* data, std::size_t size) {
   Command command;
   // As every receiver decodes (lcm-gen's decode() throws on a string length <= 0).
   if (!m::decode_message(data, static_cast<int64_t>(size), command)) return;
-  check(m::canonical_bytes(command) == m::canonical_bytes(command));
+  fuzz_check(m::canonical_bytes(command) == m::canonical_bytes(command));
   m::CommandVerifier verifier(key());
-  check(verifier.check(command, command.utime) != m::Verdict::Accepted);
+  fuzz_check(verifier.check(command, command.utime) != m::Verdict::Accepted);
   if (command.utime <= 0 || command.utime > INT64_MAX / 2) return;  // sign() would stamp it with the wall clock
   m::sign(command, key());
-  check(verifier.check(command, command.utime) == m::Verdict::Accepted);
-  check(verifier.check(command, command.utime) == m::Verdict::Replayed);
+  fuzz_check(verifier.check(command, command.utime) == m::Verdict::Accepted);
+  fuzz_check(verifier.check(command, command.utime) == m::Verdict::Replayed);
 }
 
 template <typename Command>
@@ -65,10 +60,7 @@ void write_seed(const std::string& path, uint8_t which, Command command) {
 
 // The seeds go into every folder named on the command line (the corpus).
 extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
-  for (int i = 1; i < *argc; ++i) {
-    struct stat st{};
-    const std::string dir = (*argv)[i];
-    if (dir.empty() || dir[0] == '-' || ::stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) continue;
+  rise::fuzz::for_each_corpus_folder(*argc, *argv, [](const std::string& dir) {
     rise_msgs::FaultCommand fault{};
     fault.issuer = "instructor", fault.trainee_id = "t1", fault.action = "inject", fault.fault_id = "stick-stuck";
     fault.kind = "stuck_at", fault.target = "drive_y", fault.value = 0.4, fault.duration_s = 5, fault.seed = 7;
@@ -76,7 +68,7 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
     rise_msgs::TrainingControl control{};
     control.issuer = "instructor", control.trainee_id = "t1", control.command = "start", control.task = "approach";
     write_seed(dir + "/training", 1, control);
-  }
+  });
   return 0;
 }
 

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "hil/io/candump_log.hpp"
 #include "hil/io/modbus_capture.hpp"
 #include "hil/io/replay_modbus_link.hpp"
 
@@ -295,4 +296,88 @@ TEST_CASE("replay://modbusSmall.pcap on a Modbus source answers each coil read a
   // Not in the capture: exception 02, as a server without it.
   std::array<uint16_t, 1> reg{};
   CHECK(link->read_holding_registers(0, reg).exception_code == 2);
+}
+
+namespace {
+
+// One Ethernet/IPv4/TCP segment from 10.0.0.1:40000 to 10.0.0.2:502 carrying
+// `adu` at sequence number `seq`.
+Packet modbus_segment(const std::vector<u_char>& adu, u_char seq) {
+  Packet p{};
+  p.header.ts.tv_sec = 1400547199;
+  p.bytes = {0, 1, 2, 3, 4, 5, 0, 1, 2, 3, 4, 6, 0x08, 0x00,                                  // Ethernet
+             0x45, 0, 0, 0, 0, 1, 0x40, 0, 64, 6, 0, 0, 10, 0, 0, 1, 10, 0, 0, 2,             // IPv4
+             0x9C, 0x40, 0x01, 0xF6, 0, 0, 0, seq, 0, 0, 0, 0, 0x50, 0x18, 0x10, 0, 0, 0, 0, 0};  // TCP
+  for (const u_char b : adu) p.bytes.push_back(b);  // (g++ 12 warns a false -Warray-bounds on insert here)
+  set_lengths(p);
+  return p;
+}
+
+}  // namespace
+
+// Found by the logs fuzz target (tests/fuzz/logs_fuzz.cpp, a Modbus capture):
+// an unanswered (or refused) Write Multiple Coils became a trace line without
+// the coils it wrote, which the trace reader refuses ("expected one string of
+// count=3 bits"); a write's line always says what it wrote.
+TEST_CASE("Modbus/TCP capture: an unanswered write's trace line says what it wrote; a short one has none", "[hil_io][modbus]") {
+  const std::string path =
+      std::filesystem::temp_directory_path() / ("rise_modbus_write_" + std::to_string(::getpid()) + ".pcap");
+  // FC 15 at 0, 3 coils, 1 byte: 1 0 1; then FC 15 at 8, 9 coils, but 1 byte of them.
+  write_packets(path, {modbus_segment({0, 1, 0, 0, 0, 8, 1, 15, 0, 0, 0, 3, 1, 0x05}, 1),
+                       modbus_segment({0, 2, 0, 0, 0, 8, 1, 15, 0, 8, 0, 9, 1, 0xFF}, 15)});
+  const ModbusCapture capture = read_modbus_capture(path);
+  std::filesystem::remove(path);
+  REQUIRE(capture.transactions.size() == 2);
+  const auto records = modbus_trace_from_capture(capture, "plc");
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].result.status == ModbusStatus::Timeout);
+  CHECK(records[0].values == std::vector<uint16_t>{1, 0, 1});
+  const std::string line = format_modbus_trace_line(records[0]);
+  const ModbusTraceParse back = parse_modbus_trace_line(line);
+  INFO(line);
+  REQUIRE(back.ok);
+  CHECK(format_modbus_trace_line(back.record) == line);
+}
+
+// Found by the logs fuzz target: a classic pcap stores a packet's seconds as a
+// signed 32-bit number and its microseconds unchecked, so a request came out
+// at (-1384470635.-886822), a time no trace line can carry. Such a packet is
+// counted malformed; the next one is read.
+TEST_CASE("Modbus/TCP capture: a packet time before 1970 or with microseconds past a second is malformed", "[hil_io][modbus]") {
+  const std::string path =
+      std::filesystem::temp_directory_path() / ("rise_modbus_time_" + std::to_string(::getpid()) + ".pcap");
+  Packet before = modbus_segment({0, 1, 0, 0, 0, 6, 1, 1, 0, 0, 0, 3}, 1);
+  before.header.ts.tv_sec = -1384470635;
+  Packet micros = modbus_segment({0, 2, 0, 0, 0, 6, 1, 1, 0, 0, 0, 3}, 13);
+  micros.header.ts.tv_usec = 2'000'000;
+  const Packet good = modbus_segment({0, 3, 0, 0, 0, 6, 1, 1, 0, 0, 0, 3}, 25);
+  write_packets(path, {before, micros, good});
+  const ModbusCapture capture = read_modbus_capture(path);
+  std::filesystem::remove(path);
+  CHECK(capture.stats.malformed == 2);
+  REQUIRE(capture.transactions.size() == 1);
+  CHECK(capture.transactions[0].transaction_id == 3);
+  CHECK(capture.transactions[0].request_us == 1400547199'000'000);
+  CHECK(capture_time_us(-1, 0) == std::nullopt);
+  CHECK(capture_time_us(999'999'999'999, 999'999) == 999'999'999'999'999'999);
+  CHECK(capture_time_us(1'000'000'000'000, 0) == std::nullopt);
+}
+
+// Found by the logs fuzz target: a capture whose clock steps back between a
+// request and its answer gave a trace line with rtt_us=-145, which the trace
+// reader refuses. A trace's rtt is never negative.
+TEST_CASE("Modbus/TCP capture: an answer stamped before its request has rtt 0 in the trace", "[hil_io][modbus]") {
+  ModbusCapture capture;
+  ModbusCaptureTransaction t;
+  t.request_us = 1400547213'667867, t.response_us = 1400547213'667722;
+  t.client = "10.0.0.1:40000", t.server = "10.0.0.2:502", t.unit = 1, t.function = 1, t.address = 0, t.count = 3;
+  t.request_pdu = {1, 0, 0, 0, 3}, t.response_pdu = {1, 1, 0x04};
+  capture.transactions = {t};
+  const auto records = modbus_trace_from_capture(capture, "fuzz");
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].rtt_us == 0);
+  CHECK(records[0].values == std::vector<uint16_t>{0, 0, 1});
+  const std::string line = format_modbus_trace_line(records[0]);
+  INFO(line);
+  CHECK(parse_modbus_trace_line(line).ok);
 }

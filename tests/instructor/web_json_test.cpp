@@ -120,3 +120,20 @@ TEST_CASE("the PanelFeedback JSON gives the LEDs and displays by name and the bu
   m.buzzer = 0;
   CHECK(rise::instructor::panel_feedback_json(m)["buzzer"].asString() == "off");
 }
+
+// Found by the lcm_messages fuzz target (tests/fuzz/lcm_messages_fuzz.cpp):
+// a SoundCue with pitch +inf from the multicast group became "1e+9999", which
+// the page's JSON.parse reads as Infinity (WebAudio throws on it). JSON has no
+// infinity: a non-finite number is null, as jsoncpp writes NaN.
+TEST_CASE("a non-finite number in a message's JSON is null", "[instructor]") {
+  rise_msgs::SoundCue cue{};
+  cue.name = "motor", cue.pitch = INFINITY, cue.gain = -INFINITY;
+  const std::string text = rise::instructor::json_text(rise::instructor::sound_cue_json(cue));
+  CHECK(text.find("\"pitch\":null") != std::string::npos);
+  CHECK(text.find("\"gain\":null") != std::string::npos);
+  CHECK(text.find("1e+9999") == std::string::npos);
+  Json::Value nested;
+  nested["a"][0]["b"] = std::nan("");
+  nested["a"][1] = 1.5;
+  CHECK(rise::instructor::json_text(nested) == R"({"a":[{"b":null},1.5]})");
+}

@@ -67,3 +67,27 @@ TEST_CASE("a negative array count is a malformed message, not an exception", "[m
   CHECK(result < 0);
   CHECK_FALSE(rise::msgs::decode_message(bytes.data(), static_cast<int64_t>(bytes.size()), out));
 }
+
+// Found by tests/fuzz/lcm_messages_fuzz.cpp (a PanelFeedback whose display
+// name was "s\0\0\x01\0"): lcm-gen's decode() took a string with a NUL
+// inside, its encode() writes only up to that NUL while getEncodedSize()
+// counted the whole string, so the message re-encoded short and
+// lcm::LCM::publish() sent the rest of its buffer uninitialised.
+TEST_CASE("a string with a NUL inside does not decode, and encodes no longer than it is", "[msgs]") {
+  rise_msgs::TrainingControl control{};
+  control.issuer = "instructor", control.trainee_id = "t1", control.command = "start", control.task = "approach";
+  std::vector<uint8_t> bytes = encoded(control);
+  const auto at = std::search(bytes.begin(), bytes.end(), control.issuer.begin(), control.issuer.end());
+  REQUIRE(at != bytes.end());
+  at[4] = '\0';  // "inst\0uctor"
+  rise_msgs::TrainingControl out;
+  CHECK(out.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0);
+  CHECK_FALSE(rise::msgs::decode_message(bytes.data(), static_cast<int64_t>(bytes.size()), out));
+
+  // Sent anyway (a string made in this process): what is encoded is up to the NUL, and all of it counted.
+  control.task = std::string("appr\0ach", 8);
+  const std::vector<uint8_t> sent = encoded(control);  // REQUIREs encode() to fill getEncodedSize()
+  REQUIRE(rise::msgs::decode_message(sent.data(), static_cast<int64_t>(sent.size()), out));
+  CHECK(out.task == "appr");
+  CHECK(out.command == "start");
+}

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <climits>
 #include <future>
 #include <thread>
 
@@ -122,4 +123,15 @@ TEST_CASE("a publisher gives way only within its start-up window", "[panels]") {
   CHECK(rise::msgs::gives_way(self, earlier, 10'000'000 + rise::msgs::kGiveWayWindowUs - 1));
   CHECK_FALSE(rise::msgs::gives_way(self, earlier, 10'000'000 + rise::msgs::kGiveWayWindowUs));
   CHECK_FALSE(rise::msgs::gives_way(earlier, self, 9'000'001));  // the first one stays
+}
+
+// Found by the lcm_messages fuzz target: describe() subtracted a Publisher's
+// started_utime, anyone's 64-bit number, from now in int64 (signed overflow
+// for INT64_MIN); the age is computed in double.
+TEST_CASE("a publisher's description takes any start time", "[msgs]") {
+  rise_msgs::Publisher p{};
+  p.program = "rise-sim", p.host = "h", p.pid = 7, p.started_utime = INT64_MIN;
+  const std::string text = rise::msgs::describe(p, 1796289352257872);
+  CHECK(text.rfind("rise-sim pid 7 on h", 0) == 0);
+  CHECK(text.find("s ago)") != std::string::npos);
 }

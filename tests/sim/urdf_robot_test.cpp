@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "sim/simulation.hpp"
+#include "sim/urdf_robot.hpp"
 #include "tests/sim/sim_panel.hpp"
 
 using namespace rise::sim;
@@ -118,7 +119,14 @@ TEST_CASE("a wrong URDF is refused with the robot file's line, the urdf key and 
            "link 'front_left_wheel': unsupported collision shape sphere (the simulator needs a cylinder)"},
       Case{"skid4", "<origin xyz=\"0.25 -0.31 -0.055\"/>", "<origin xyz=\"0.3 -0.31 -0.055\"/>",
            "joint 'front_right_wheel_joint' origin xyz is 0.3 -0.31 -0.055: the wheels must sit at (±wheelbase/2, "
-           "±track/2) at one height, in the order front left, front right, rear left, rear right"});
+           "±track/2) at one height, in the order front left, front right, rear left, rear right"},
+      // Found with the urdf fuzz target's checks (tests/fuzz/urdf_fuzz.cpp): liburdfdom takes a
+      // negative size and the inertia check squares it away, so the simulator got a negative chassis
+      // (the fuzzer's own find, a zero size, is the next test).
+      Case{"tracked_eod", "<box size=\"0.7 0.4 0.18\"/>", "<box size=\"-0.7 0.4 -0.18\"/>",
+           "link 'base_link': the box's sizes must be > 0"},
+      Case{"skid4", "<cylinder radius=\"0.12\" length=\"0.08\"/>", "<cylinder radius=\"-0.12\" length=\"0.08\"/>",
+           "link 'front_left_wheel': the cylinder's sizes must be > 0"});
   TempRobot t("bad_urdf");
   const std::string name = c.robot;
   t.write(name + ".urdf", replaced(slurp(kRobots + name + ".urdf"), c.find, c.replace));
@@ -156,4 +164,24 @@ TEST_CASE("a robot file whose URDF is missing or mixes in inline geometry is ref
            "6: wheels.joints: missing: the URDF joints of the wheels (fl, fr, rl, rr)"});
   const std::string yaml = t.write("robot.yaml", c.text);
   CHECK(load_error(yaml) == yaml + ":" + c.expected);
+}
+
+// Found by the urdf fuzz target (tests/fuzz/urdf_fuzz.cpp, its artifact as it was): a box of
+// size 0 whose inertia trace matches (2 = 6 kg x (0 + 1 + 1) / 6) was taken as a chassis.
+TEST_CASE("a URDF body of zero or negative size is refused", "[sim]") {
+  const std::string urdf =
+      R"(<robot name="r"><link name="base"><inertial><mass value="6"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" )"
+      R"(iyz="0" izz="0"/></inertial><collision><geometry><box size="0 1 1"/></geometry></collision></link></robot>)";
+  CHECK(testing::error_of([&] { parse_urdf_robot(urdf, {}); }) == "link 'base': the box's sizes must be > 0");
+  const auto ok = parse_urdf_robot(replaced(replaced(urdf, "\"0 1 1\"", "\"1 1 1\""), "izz=\"0\"", "izz=\"1\""), {});
+  CHECK(ok.chassis_size_m == std::array<double, 3>{1, 1, 1});
+  CHECK(ok.chassis_mass_kg == 6.0);
+}
+
+// Found by the urdf fuzz target: a text ending inside a UTF-8 sequence made
+// tinyxml (liburdfdom's parser) read past the end of the string.
+TEST_CASE("a URDF that is not whole UTF-8 is refused before liburdfdom reads it", "[sim]") {
+  CHECK(testing::error_of([] { parse_urdf_robot("<robot name=\"r\">\n    \xef\xef\xef", {}); }) == "not UTF-8 text");
+  CHECK(testing::error_of([] { parse_urdf_robot("<robot name=\"r\xc3\x28\"/>", {}); }) == "not UTF-8 text");
+  CHECK(testing::error_of([] { parse_urdf_robot("<robot name=\"r\xc3\xa9\"/>", {}); }) != "not UTF-8 text");
 }

@@ -161,3 +161,27 @@ TEST_CASE("invalid training graphs are refused with a message naming file and li
     CHECK_THAT(e, Contains("node 'b' is unreachable from START"));
   }
 }
+
+// Found by the training_graph fuzz target: a key holding a control character
+// and a line break ("trai\x06\x00ng") split its "file:line: key: unknown key"
+// error over two lines. Control characters are written as \xNN.
+TEST_CASE("an error naming a key with control characters stays on one line", "[training]") {
+  const std::string error = graph_error(std::string("trai\x06\x00ng: t\n", 12));
+  INFO(error);
+  CHECK(error.find('\n') == std::string::npos);
+  CHECK(error.find("\\x06") != std::string::npos);
+}
+
+// Found by the training_graph fuzz target (bench/fuzz_all's second run): a
+// node name with a line break ("mission1\n2") split a validation error.
+TEST_CASE("validation errors naming a node with a line break stay one per line", "[training]") {
+  const std::string error = graph_error(
+      "training: t\nnodes:\n  - {name: \"a\\nb\", task: a.yaml}\ntransitions:\n  - {from: START, to: \"c\\nd\"}\n");
+  INFO(error);
+  for (std::size_t begin = 0; begin < error.size();) {
+    const std::size_t end = std::min(error.find('\n', begin), error.size());
+    CHECK(error.compare(begin, kBad.size(), kBad) == 0);
+    begin = end + 1;
+  }
+  CHECK(error.find("c\\x0ad") != std::string::npos);
+}
