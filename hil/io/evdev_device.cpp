@@ -236,9 +236,21 @@ const input_absinfo* EvdevDevice::absinfo(unsigned code) const {
 
 bool EvdevDevice::has_rumble() const { return writable_ && has(EV_FF, FF_RUMBLE); }
 
+IoStatus EvdevDevice::play(bool on) {
+  input_event play{};
+  play.type = EV_FF;
+  play.code = static_cast<uint16_t>(effect_id_);
+  play.value = on ? 1 : 0;
+  if (::write(fd_, &play, sizeof play) == static_cast<ssize_t>(sizeof play)) return IoStatus::Ok;
+  error_.set("%s: playing the rumble: %s", path_.c_str(), detail::errno_text(errno));
+  return IoStatus::Error;
+}
+
 IoStatus EvdevDevice::rumble(double strong, double weak) {
   if (!dev_) return IoStatus::Disconnected;
   if (!has_rumble()) return IoStatus::Error;
+  // Stopping needs no upload: nothing plays before the first one.
+  if (strong <= 0.0 && weak <= 0.0) return effect_id_ < 0 ? IoStatus::Ok : play(false);
   ff_effect effect{};
   effect.type = FF_RUMBLE;
   effect.id = static_cast<int16_t>(effect_id_);
@@ -250,15 +262,7 @@ IoStatus EvdevDevice::rumble(double strong, double weak) {
     return IoStatus::Error;
   }
   effect_id_ = effect.id;
-  input_event play{};
-  play.type = EV_FF;
-  play.code = static_cast<uint16_t>(effect_id_);
-  play.value = strong > 0.0 || weak > 0.0 ? 1 : 0;
-  if (::write(fd_, &play, sizeof play) != static_cast<ssize_t>(sizeof play)) {
-    error_.set("%s: playing the rumble: %s", path_.c_str(), detail::errno_text(errno));
-    return IoStatus::Error;
-  }
-  return IoStatus::Ok;
+  return play(true);
 }
 
 bool EvdevDevice::wait_for_arrival(int timeout_ms) {

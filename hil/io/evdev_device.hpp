@@ -80,8 +80,10 @@ class EvdevDevice {
   /// An absolute axis's range, flat and fuzz; nullptr when the device has none.
   const input_absinfo* absinfo(unsigned code) const;
 
-  /// Plays FF_RUMBLE at strong / weak (0..1; both 0 stops it). Ok when
-  /// played, Error when the device has no rumble or refused it.
+  /// Plays FF_RUMBLE at strong / weak (0..1; both 0 stops it, without an
+  /// upload). Ok when played, Error when the device has no rumble or refused
+  /// it. EVIOCSFF waits for the driver (a uinput device's own process
+  /// answers it): call from the source's thread.
   IoStatus rumble(double strong, double weak);
   bool has_rumble() const;
 
@@ -99,6 +101,7 @@ class EvdevDevice {
 
  private:
   std::string find_node();
+  IoStatus play(bool on);
   void watch_input_dir();
 
   std::string url_text_;
