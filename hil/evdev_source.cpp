@@ -71,18 +71,20 @@ io::IoStatus EvdevSource::reopen(SourcePanel& panel) {
   signals_.emplace(*device_);
   const std::string missing = bind_sdl(panel);
   values_.assign(signals_->names().size(), 0.0);
-  signals_->read(*device_, values_);
-  panel.update([&](PanelMapper& mapper, int64_t now_us) {
-    if (!mapper.attach_named(panel.source(), signals_->names(), nullptr, missing)) return false;
-    return mapper.on_named_values(panel.source(), values_, now_us);
+  panel.update([&](PanelMapper& mapper, int64_t) {
+    mapper.attach_named(panel.source(), signals_->names(), nullptr, missing);
+    return false;
   });
+  opened_ = true;  // the state read at open goes to the panel with the first receive()
   check_feedback(panel);
   last_rumble_.reset();
   return status;
 }
 
 io::IoStatus EvdevSource::receive(SourcePanel& panel, int timeout_ms) {
-  const io::IoStatus status = device_->read(timeout_ms);
+  const bool first = std::exchange(opened_, false);
+  io::IoStatus status = device_->read(first ? 0 : timeout_ms);
+  if (first && status == io::IoStatus::Timeout) status = io::IoStatus::Ok;
   if (status == io::IoStatus::Ok) {
     signals_->read(*device_, values_);
     panel.update([&](PanelMapper& mapper, int64_t now_us) {

@@ -52,6 +52,7 @@ class EvdevSource final : public SourceTransport {
   std::optional<io::EvdevSignals> signals_;
   std::vector<double> values_;
   bool rumble_ = false;
+  bool opened_ = false;  // reopened: the next receive() gives the panel the state read at open
   std::optional<float> last_rumble_;
 };
 

@@ -222,6 +222,9 @@ TEST_CASE("bridge reads the uinput pad under SDL's names, goes safe when unplugg
   const auto strong = pad->serve_rumble(std::chrono::seconds(10));
   REQUIRE(strong);
   CHECK(*strong == 32768);
+  request.rumble = 0.0f;  // stopped: no upload, so the unplugged pad leaves no request waiting
+  bridge.set_feedback(request);
+  CHECK(bridge.snapshot().sources[0].reconnects == 0);
 
   // Unplug with a button held: safe values, published at once.
   pad->frame({{EV_KEY, BTN_A, 1}});
@@ -244,6 +247,7 @@ TEST_CASE("bridge reads the uinput pad under SDL's names, goes safe when unplugg
   pad = std::make_unique<UinputPad>();
   REQUIRE(wait_for([&] { return bridge.snapshot().sources[0].connected; }));
   const int64_t reopen_ms = ms_since(plugged);
+
   WARN("plug -> reopened: " << reopen_ms << " ms");
   CHECK(reopen_ms < 2000);
   pad->frame({{EV_KEY, BTN_A, 1}, {EV_ABS, ABS_X, -32768}});
