@@ -30,7 +30,8 @@ build=${RISE_BUILD_DIR:-$root/build}
 # HTTP API read with curl and jq), ALSA (libasound2-dev) for rise-sound's
 # playback and sox to measure its output's level in the test, libpcap to read
 # pcap/pcapng captures (CAN, Modbus/TCP) with tcpdump capturing vcan in the VM
-# test and tshark as the oracle of the pcap tests. Installing
+# test and tshark as the oracle of the pcap tests, libevdev for evdev://
+# gamepads the kernel drives (their state, SYN_DROPPED resync, code names). Installing
 # linux-image-amd64 only adds files under /boot and /lib/modules; it does not
 # change how the machine boots.
 packages=(
@@ -41,6 +42,7 @@ packages=(
   qemu-system-x86 linux-image-amd64 busybox-static cpio can-utils
   libmodbus-dev mbpoll python3-pymodbus python3-serial-asyncio
   libhidapi-dev libusb-1.0-0-dev udev
+  libevdev-dev
   libpcl-dev libopencv-dev libceres-dev libopen3d-dev liboctomap-dev
   libjsoncpp-dev chromium zlib1g-dev
   libssl-dev libcpp-httplib-dev nodejs npm

@@ -140,6 +140,7 @@ bool PanelMapper::attach_hid(std::size_t source, std::span<const uint8_t> descri
   SourceState& s = sources_[source];
   const std::string& name = definition_.sources[source].name;
   s.hid.reset();
+  s.named = 0;
   s.hid_last_us = 0;
   auto fail = [&](std::string message) {
     s.hid_error = name + ": " + std::move(message);
@@ -167,6 +168,54 @@ bool PanelMapper::attach_hid(std::size_t source, std::span<const uint8_t> descri
   s.hid = std::move(decoder);
   s.hid_error.clear();
   return true;
+}
+
+bool PanelMapper::attach_named(std::size_t source, std::span<const std::string> names, std::string* error,
+                               const std::string& missing_note) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  s.hid.reset();
+  s.named = 0;
+  s.hid_last_us = 0;
+  for (std::size_t i = 0; i < definition_.controls.size(); ++i) {
+    const auto& c = definition_.controls[i];
+    if (c.source != source || c.hid_signal.empty()) continue;
+    const auto it = std::find(names.begin(), names.end(), c.hid_signal);
+    if (it == names.end()) {
+      std::string known;
+      for (std::size_t n = 0; n < names.size() && n < 24; ++n) known += (n ? ", " : "") + names[n];
+      s.hid_error = definition_.sources[source].name + ": control '" + c.name + "': the device has no signal '" +
+                    c.hid_signal + "'" + missing_note + " (it has: " + known + (names.size() > 24 ? ", ..." : "") + ")";
+      if (error) *error = s.hid_error;
+      return false;
+    }
+    SignalBinding& b = s.bindings[static_cast<std::size_t>(binding_of_control_[i])];
+    b.hid_signal = static_cast<std::size_t>(it - names.begin());
+    b.last_us = 0;
+  }
+  s.named = names.size();
+  s.hid_error.clear();
+  return true;
+}
+
+bool PanelMapper::on_named_values(std::size_t source, std::span<const double> values, int64_t now_us) {
+  if (source >= sources_.size()) return false;
+  SourceState& s = sources_[source];
+  if (s.named == 0 || values.size() < s.named) return false;
+  bool changed = false;
+  for (SignalBinding& b : s.bindings) changed = take(b, values[b.hid_signal], now_us) || changed;
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.status.frames_ok++;
+  s.last_any_valid_us = now_us;
+  s.hid_last_us = now_us;
+  return changed;
+}
+
+void PanelMapper::on_named_alive(std::size_t source, int64_t now_us) {
+  if (source >= sources_.size() || sources_[source].named == 0 || sources_[source].hid_last_us == 0) return;
+  SourceState& s = sources_[source];
+  for (SignalBinding& b : s.bindings) b.last_us = now_us;
+  s.hid_last_us = now_us;
 }
 
 bool PanelMapper::on_hid_report(std::size_t source, std::span<const uint8_t> report, int64_t now_us) {
@@ -355,7 +404,7 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const Sour
   if (def.is_hid()) {
     // A HID device has no heartbeat: the first report after opening proves
     // it talks; timeout_ms 0 trusts it until it is unplugged.
-    if (!s.hid) {
+    if (!s.hid && s.named == 0) {
       if (!s.hid_error.empty()) return SourceTrouble{FailsafeCause::SourceError, s.hid_error};
       return trouble(FailsafeCause::SourceStale, "no report descriptor yet");
     }

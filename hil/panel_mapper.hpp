@@ -103,6 +103,25 @@ class PanelMapper {
   /// Returns true when a bound value changed. No throw; allocates nothing.
   bool on_hid_report(std::size_t source, std::span<const uint8_t> report, int64_t now_us);
 
+  /// A `hid` source's evdev device (hil/io/evdev_signals.hpp) was (re)opened
+  /// with these signal names: binds every control's signal name to one of
+  /// them. False, with `error` set and the source failsafe until the next
+  /// attach, when a bound name is missing (`missing_note`, when given, is
+  /// added to the message: why, e.g. no SDL mapping for the device).
+  /// Allocates: call at open, not per frame.
+  bool attach_named(std::size_t source, std::span<const std::string> names, std::string* error = nullptr,
+                    const std::string& missing_note = {});
+
+  /// Feeds the values of an attached evdev source's signals, indexed like
+  /// the names given to attach_named(): axes take the value, buttons value
+  /// ≠ 0, switches the value as a position. Refreshes the source's age.
+  /// Returns true when a bound value changed. No throw; allocates nothing.
+  bool on_named_values(std::size_t source, std::span<const double> values, int64_t now_us);
+  /// An attached evdev source's device is open and has nothing new: an
+  /// evdev device sends events only on change and the kernel removes it
+  /// when it goes, so it is fresh. Counts no frame. No throw.
+  void on_named_alive(std::size_t source, int64_t now_us);
+
   /// Feeds one CAN error frame of `source`'s bus (linux/can/error.h): counts
   /// it and takes the controller state it reports. Bus-off makes the source
   /// unsafe until the controller reports its restart or error-active (the
@@ -180,6 +199,7 @@ class PanelMapper {
     explicit SourceState(firmware_protocol::Decoder d) : decoder(d) {}
     std::vector<SignalBinding> bindings;  // dbc, hid and modbus sources
     std::unique_ptr<firmware_protocol::HidReportDecoder> hid;  // hid sources, once attached
+    std::size_t named = 0;  // evdev hid sources, once attached: how many values each frame has
     std::vector<firmware_protocol::HidSignalValue> hid_values;
     std::string hid_error;  // why the last attach failed
     int64_t hid_last_us = 0;  // last decoded report since connecting, 0 = none

@@ -4,6 +4,8 @@
 #include <utility>
 
 #include "hil/can_source.hpp"
+#include "hil/evdev_source.hpp"
+#include "hil/io/evdev_device.hpp"
 #include "hil/hid_source.hpp"
 #include "hil/io/modbus_url.hpp"
 #include "hil/io/replay_modbus_link.hpp"
@@ -63,11 +65,15 @@ std::unique_ptr<SourceTransport> open_source(const panels::PanelDefinition& defi
                                              const std::string& given_url) {
   const panels::SourceDefinition& def = definition.sources[source];
   const std::string url = resolved_url(def, given_url);
-  const bool hid_url = url.rfind("hid://", 0) == 0;
-  if (def.is_hid() ? !io::is_input_device_url(url) : hid_url)
+  const bool evdev = io::is_evdev_url(url);
+  const bool hid_url = url.rfind("hid://", 0) == 0 || evdev;
+  if (def.is_hid() ? !io::is_input_device_url(url) && !evdev : hid_url)
     throw wrong_url(def, url,
-                    def.is_hid() ? "not a hid://VID:PID URL (or - for its device:) or a replay://FILE.hid"
+                    def.is_hid() ? "not a hid://VID:PID or evdev:// URL (or - for its device:) or a replay://FILE.hid"
                                  : "a HID device URL");
+  if (def.is_hid() && !def.mapping.empty() && !evdev)
+    throw wrong_url(def, url, "not an evdev:// URL, which mapping: " + def.mapping + " needs");
+  if (evdev) return std::make_unique<EvdevSource>(std::make_unique<io::EvdevDevice>(url));
   if (def.is_hid()) return std::make_unique<HidSource>(io::open_input_device(url), definition, source);
   if (def.is_modbus()) return std::make_unique<ModbusSource>(open_link(def, url), definition, source);
   if (io::is_modbus_url(url)) throw wrong_url(def, url, "not a CAN URL");
@@ -86,9 +92,10 @@ PanelSources open_panel_sources(const panels::PanelDefinition& definition, std::
     opened.transports.push_back(open_source(definition, i, urls[i]));
     if (!source.is_hid()) continue;
     // Without hot-plug the bridge notes it once (Bridge::take_notes).
-    const auto& hid = static_cast<const HidSource&>(*opened.transports.back());
-    if (urls[i].rfind("hid://", 0) != 0) opened.notes.push_back("source '" + source.name + "': replaying " + urls[i]);
-    else if (hid.device().hotplug_active())
+    const auto* hid = dynamic_cast<const HidSource*>(opened.transports.back().get());
+    if (!hid) opened.notes.push_back("source '" + source.name + "': evdev device, /dev/input watched for its return");
+    else if (urls[i].rfind("hid://", 0) != 0) opened.notes.push_back("source '" + source.name + "': replaying " + urls[i]);
+    else if (hid->device().hotplug_active())
       opened.notes.push_back("source '" + source.name + "': USB hot-plug through libusb");
   }
   for (auto& transport : opened.transports) {

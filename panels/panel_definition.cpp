@@ -10,6 +10,7 @@
 
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/dbc.hpp"
+#include "firmware_protocol/sdl_mapping.hpp"
 #include "panels/yaml_reader.hpp"
 
 #include <filesystem>
@@ -82,11 +83,44 @@ void parse_modbus_binding(const YamlReader& ctx, const YAML::Node& node, const s
              text + " is one bit: two positions at most (a register holds more)");
 }
 
+// A relative path is relative to the definition file.
+std::string beside(const std::string& file, const std::string& path) {
+  std::filesystem::path p(path);
+  if (p.is_relative()) p = std::filesystem::path(file).parent_path() / p;
+  return p.lexically_normal().string();
+}
+
+// A hid source: its device URL (hid:// or evdev://) and an SDL mapping.
+void parse_hid_source(const YamlReader& ctx, const YAML::Node& node, const std::string& where, const std::string& file,
+                      SourceDefinition& s) {
+  s.device = ctx.get<std::string>(node, "device", where, "");
+  if (!s.device.empty() && s.device.rfind("hid://", 0) != 0 && s.device.rfind("evdev://", 0) != 0)
+    ctx.fail(node["device"], where + ".device",
+             "expected hid://VID:PID[?serial=S][&name=TEXT][&interface=N] or evdev://... (/dev/input/eventN, "
+             "by-id/NAME, name/NAME, VID:PID)");
+  for (const char* k : {"node", "max_counter_delta", "poll_hz", "unit"})
+    if (node[k]) ctx.fail(node[k], where + "." + k, "not used by protocol hid");
+  s.mapping = ctx.get<std::string>(node, "mapping", where, "");
+  if (!s.mapping.empty() && s.mapping != "sdl")
+    ctx.fail(node["mapping"], where + ".mapping", "unknown mapping '" + s.mapping + "' (known: sdl)");
+  if (s.mapping.empty()) {
+    if (node["sdl_db"]) ctx.fail(node["sdl_db"], where + ".sdl_db", "only with mapping: sdl");
+    return;
+  }
+  s.sdl_db_file = beside(file, ctx.require<std::string>(node, "sdl_db", where));
+  try {
+    s.sdl_db = std::make_shared<const firmware_protocol::SdlControllerDb>(
+        firmware_protocol::SdlControllerDb::load(s.sdl_db_file));
+  } catch (const std::exception& e) {
+    ctx.fail(node["sdl_db"], where + ".sdl_db", e.what());
+  }
+}
+
 SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std::size_t i, const std::string& file) {
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
                 {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit",
-                 "dbc", "device"});
+                 "dbc", "device", "mapping", "sdl_db"});
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
@@ -94,21 +128,12 @@ SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std
       s.protocol != "hid")
     ctx.fail(node["protocol"], where + ".protocol",
              "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, hid)");
-  if (s.is_hid()) {
-    s.device = ctx.get<std::string>(node, "device", where, "");
-    if (!s.device.empty() && s.device.rfind("hid://", 0) != 0)
-      ctx.fail(node["device"], where + ".device", "expected hid://VID:PID[?serial=S][&name=TEXT][&interface=N]");
-    for (const char* k : {"node", "max_counter_delta", "poll_hz", "unit"})
-      if (node[k]) ctx.fail(node[k], where + "." + k, "not used by protocol hid");
-  } else if (node["device"]) {
-    ctx.fail(node["device"], where + ".device", "only for protocol hid");
-  }
+  if (s.is_hid()) parse_hid_source(ctx, node, where, file, s);
+  else
+    for (const char* k : {"device", "mapping", "sdl_db"})
+      if (node[k]) ctx.fail(node[k], where + "." + k, "only for protocol hid");
   if (s.is_dbc()) {
-    // A relative path is relative to the definition file.
-    s.dbc_file = ctx.require<std::string>(node, "dbc", where);
-    std::filesystem::path path(s.dbc_file);
-    if (path.is_relative()) path = std::filesystem::path(file).parent_path() / path;
-    s.dbc_file = path.lexically_normal().string();
+    s.dbc_file = beside(file, ctx.require<std::string>(node, "dbc", where));
     try {
       s.dbc = std::make_shared<const firmware_protocol::DbcDatabase>(firmware_protocol::DbcDatabase::load(s.dbc_file));
     } catch (const std::exception& e) {
@@ -194,10 +219,20 @@ void parse_dbc_binding(const YamlReader& ctx, const SourceDefinition& source, co
   }
 }
 
-// A hid source's control: the name of a report signal.
-void parse_hid_binding(const YamlReader& ctx, const YAML::Node& node, const std::string& where, ControlDefinition& c) {
+// A hid source's control: the name of a report signal (or an evdev code's,
+// or SDL's sdl.NAME with mapping: sdl).
+void parse_hid_binding(const YamlReader& ctx, const SourceDefinition& source, const YAML::Node& node,
+                       const std::string& where, ControlDefinition& c) {
   c.hid_signal = ctx.require<std::string>(node, "signal", where);
   if (c.hid_signal.empty()) ctx.fail(node["signal"], where + ".signal", "must not be empty");
+  if (c.hid_signal.rfind("sdl.", 0) == 0) {
+    const std::string name = c.hid_signal.substr(4);
+    if (source.mapping != "sdl")
+      ctx.fail(node["signal"], where + ".signal", "sdl.NAME needs mapping: sdl on source '" + source.name + "'");
+    if (!firmware_protocol::is_sdl_axis(name) && !firmware_protocol::is_sdl_button(name))
+      ctx.fail(node["signal"], where + ".signal",
+               "SDL has no '" + name + "' (known: " + firmware_protocol::sdl_names() + ")");
+  }
   if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a hid source");
   // Axes arrive normalised by the report decoder (-1..1 or 0..1).
   c.range_min = -1.0;
@@ -360,7 +395,7 @@ ControlDefinition parse_control(const YamlReader& ctx, const PanelDefinition& de
   }
   if (source.is_generic_modbus()) parse_modbus_binding(ctx, node, where, c);
   else if (node["type"]) ctx.fail(node["type"], where + ".type", "only for controls of a modbus source");
-  if (source.is_hid()) parse_hid_binding(ctx, node, where, c);
+  if (source.is_hid()) parse_hid_binding(ctx, source, node, where, c);
   if (named_signals) {
     // no protocol signal to parse
   } else if (const YAML::Node bits = node["bits"]) {

@@ -14,6 +14,7 @@
 
 namespace rise::firmware_protocol {
 class DbcDatabase;
+class SdlControllerDb;
 struct DbcMessage;
 struct DbcSignal;
 }  // namespace rise::firmware_protocol
@@ -83,8 +84,10 @@ struct ControlDefinition {
   double range_min = 0.0;
   double range_max = 0.0;
   // Controls of a "hid" source: a signal name of the device's report
-  // descriptor (firmware_protocol::hid_signals: x, hat_switch, button_3...).
-  // Known only once the device is open: the bridge checks it then.
+  // descriptor (firmware_protocol::hid_signals: x, hat_switch, button_3...)
+  // or, through evdev://, of the kernel's codes (abs_x, btn_south, hat0_up)
+  // and SDL's (sdl.leftx; hil/io/evdev_signals.hpp). Known only once the
+  // device is open: the bridge checks it then (an sdl.NAME at load).
   std::string hid_signal;
   // Controls of a "modbus" source: the point read (axes: range_min..max of
   // its number → -1..1; buttons: pressed when ≠ 0; switches: the number is
@@ -113,6 +116,14 @@ struct SourceDefinition {
   /// 1000 (many gamepads send reports only on change); 0 = never stale, only
   /// a disconnect makes the source unsafe.
   std::string device;
+  /// A hid source read through evdev:// (a device the kernel drives) may
+  /// name its controls as SDL2's game controller API does: `mapping: sdl`
+  /// with `sdl_db:` SDL_GameControllerDB's gamecontrollerdb.txt (relative to
+  /// the definition file); controls then bind sdl.leftx, sdl.a, sdl.dpup...
+  /// (firmware_protocol/sdl_mapping.hpp) from the line of the device's GUID.
+  std::string mapping;  ///< "" or "sdl"
+  std::string sdl_db_file;
+  std::shared_ptr<const firmware_protocol::SdlControllerDb> sdl_db;
   bool is_hid() const { return protocol == "hid"; }
   /// On a Modbus link: our register map (rise-modbus-v1) or any device's (modbus).
   bool is_modbus() const { return protocol == "rise-modbus-v1" || protocol == "modbus"; }

@@ -150,3 +150,30 @@ TEST_CASE("timelines are read against the definition and refuse what it does not
     CHECK_THROWS_WITH(parse_timeline("0 deadman maybe\n", "t.txt", def), Catch::StartsWith("t.txt:1: deadman"));
   }
 }
+
+TEST_CASE("an evdev hid source: mapping: sdl, sdl.NAME signals, errors with file:line and key", "[panels]") {
+  const std::string head =
+      "panel: pad\n"
+      "sources:\n";
+  const std::string controls =
+      "controls:\n"
+      "  - {name: steer, kind: axis, signal: sdl.leftx, safe: 0}\n";
+  CHECK_THAT(error_of(head + "  - {name: pad, protocol: hid, device: 'evdev://045e:028e'}\n" + controls),
+             Catch::Contains("broken.yaml:5") && Catch::Contains("sdl.NAME needs mapping: sdl on source 'pad'"));
+  CHECK_THAT(error_of(head + "  - {name: pad, protocol: hid, mapping: sdl}\n" + controls),
+             Catch::Contains("broken.yaml:3") && Catch::Contains("sdl_db"));
+  CHECK_THAT(error_of(head + "  - {name: pad, protocol: hid, mapping: steam, sdl_db: x.txt}\n" + controls),
+             Catch::Contains("broken.yaml:3") && Catch::Contains("unknown mapping 'steam' (known: sdl)"));
+  CHECK_THAT(error_of(head + "  - {name: pad, protocol: hid, mapping: sdl, sdl_db: /nonexistent/db.txt}\n" + controls),
+             Catch::Contains("sources[0].sdl_db") && Catch::Contains("/nonexistent/db.txt: cannot read"));
+  CHECK_THAT(error_of(head + "  - {name: pad, protocol: hid, device: 'evdev:/dev/input/event1'}\n" + controls),
+             Catch::Contains("sources[0].device") && Catch::Contains("evdev://"));
+  CHECK_THAT(error_of(head + "  - {name: pad, protocol: rise-can-v1, mapping: sdl}\n" + controls),
+             Catch::Contains("sources[0].mapping") && Catch::Contains("only for protocol hid"));
+  const auto def = parse_panel_definition(
+      head + "  - {name: pad, protocol: hid, device: 'evdev://045e:028e'}\n"
+             "controls:\n  - {name: look, kind: axis, signal: abs_ry, safe: 0}\n",
+      "ok.yaml");
+  CHECK(def.sources[0].device == "evdev://045e:028e");
+  CHECK(def.controls[0].hid_signal == "abs_ry");
+}
