@@ -32,7 +32,7 @@ case "$target" in
   line_protocols) sources=("$root"/hil/io/{slcan_wire,socketcand_wire,can_frame}.cpp) ;;
   command_auth) sources=("$root/msgs/command_auth.cpp") ;;
   configs)
-    sources=("$root"/panels/{panel_definition,yaml_reader,modbus_point}.cpp "$root"/firmware_protocol/{console_can,dbc}.cpp
+    sources=("$root"/panels/{panel_definition,yaml_reader,modbus_point}.cpp "$root"/firmware_protocol/{console_can,dbc,sdl_mapping}.cpp
              "$root"/sim/{robot_description,urdf_robot,world_description}.cpp "$root/sim/training/task_description.cpp"
              "$root/instructor/scenario.cpp")
     ;;
