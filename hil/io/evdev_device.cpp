@@ -1,4 +1,5 @@
 #include "hil/io/evdev_device.hpp"
+#include "hil/io/hid_device.hpp"
 
 #include <fcntl.h>
 #include <libevdev/libevdev.h>
@@ -22,14 +23,6 @@ namespace {
 
 constexpr std::string_view kScheme = "evdev://";
 constexpr const char* kInputDir = "/dev/input";
-
-std::optional<uint16_t> parse_hex16(std::string_view text) {
-  unsigned value = 0;
-  if (text.empty() || text.size() > 4) return std::nullopt;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value, 16);
-  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
-  return static_cast<uint16_t>(value);
-}
 
 // %XX decoded; nullopt for a bad escape.
 std::optional<std::string> percent_decode(std::string_view text) {

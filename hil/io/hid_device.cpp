@@ -32,14 +32,6 @@ std::string narrow(const wchar_t* text) {
   return out;
 }
 
-std::optional<uint16_t> parse_hex16(std::string_view text) {
-  unsigned value = 0;
-  if (text.empty() || text.size() > 4) return std::nullopt;
-  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value, 16);
-  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
-  return static_cast<uint16_t>(value);
-}
-
 bool matches(const HidUrl& url, const hid_device_info& info) {
   if (info.vendor_id != url.vendor_id || info.product_id != url.product_id) return false;
   if (!url.serial.empty() && narrow(info.serial_number) != url.serial) return false;
@@ -82,6 +74,14 @@ void read_sysfs_identity(const std::string& node, HidIdentity& identity) {
 }
 
 }  // namespace
+
+std::optional<uint16_t> parse_hex16(std::string_view text) {
+  unsigned value = 0;
+  if (text.empty() || text.size() > 4) return std::nullopt;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value, 16);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return static_cast<uint16_t>(value);
+}
 
 std::optional<HidUrl> parse_hid_url(std::string_view url, std::string* error) {
   auto fail = [&](const std::string& message) -> std::optional<HidUrl> {

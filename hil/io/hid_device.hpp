@@ -39,6 +39,9 @@ struct HidUrl {
 };
 
 /// Parses a hid:// URL; nullopt (and `error` set when given) if malformed.
+/// Four hex digits at most (a USB vendor or product id), nothing else; nullopt otherwise.
+std::optional<uint16_t> parse_hex16(std::string_view text);
+
 std::optional<HidUrl> parse_hid_url(std::string_view url, std::string* error = nullptr);
 
 class HidDevice final : public InputDevice {
