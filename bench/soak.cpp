@@ -120,7 +120,7 @@ int write_scenario(const fs::path& file, double total_s, double slot_s, uint64_t
 struct Sample {
   double t = 0;
   double rss_mb = 0;
-  int fds = 0;
+  double fds = 0;
 };
 
 struct Proc {
@@ -275,8 +275,10 @@ bool parse(int argc, char** argv, Options& o) {
     const std::string a = argv[i];
     if (a == "--keep") {
       o.keep = true;
-    } else if ((a == "--minutes" || a == "--seed") && i + 1 < argc) {
-      (a == "--minutes" ? o.minutes = std::atof(argv[++i]) : static_cast<double>(o.seed = std::strtoull(argv[++i], nullptr, 10)));
+    } else if (a == "--minutes" && i + 1 < argc) {
+      o.minutes = std::atof(argv[++i]);
+    } else if (a == "--seed" && i + 1 < argc) {
+      o.seed = std::strtoull(argv[++i], nullptr, 10);
     } else {
       return false;
     }
@@ -291,22 +293,16 @@ bool report_processes(const std::vector<Proc*>& procs, double total_s) {
               "restarts", "verdict");
   for (const Proc* p : procs) {
     double peak = 0;
-    int peak_fds = 0;
-    for (const auto& s : p->samples) peak = std::max(peak, s.rss_mb), peak_fds = std::max(peak_fds, s.fds);
+    for (const auto& s : p->samples) peak = std::max(peak, s.rss_mb);
     const double rss0 = median_in(p->samples, 0.2 * total_s, 0.3 * total_s, &Sample::rss_mb);
     const double rss1 = median_in(p->samples, 0.9 * total_s, total_s + 5, &Sample::rss_mb);
-    const auto fds_of = [&](double from, double to) {
-      std::vector<Sample> s = p->samples;
-      for (auto& x : s) x.rss_mb = x.fds;
-      return median_in(s, from, to, &Sample::rss_mb);
-    };
-    const double fd0 = fds_of(0.2 * total_s, 0.3 * total_s), fd1 = fds_of(0.9 * total_s, total_s + 5);
+    const double fd0 = median_in(p->samples, 0.2 * total_s, 0.3 * total_s, &Sample::fds);
+    const double fd1 = median_in(p->samples, 0.9 * total_s, total_s + 5, &Sample::fds);
     const bool grew = p->throughout && (rss1 - rss0 > kRssGrowthMb + kRssGrowthFraction * rss0 || fd1 - fd0 > kFdGrowth);
     const bool bad = grew || p->died;
     ok = ok && !bad;
     std::printf("%-22s %9.1f %10.1f -> %-9.1f %6.0f -> %-5.0f %9d %s\n", p->name.c_str(), peak, rss0, rss1, fd0, fd1,
                 p->restarts, p->died ? "DIED" : grew ? "GREW" : p->throughout ? "ok" : "ok (restarted: peak only)");
-    (void)peak_fds;
   }
   return ok;
 }
