@@ -34,28 +34,34 @@ void VirtualPanels::stop() {
 }
 
 std::optional<VirtualRefusal> VirtualPanels::update(const std::string& id, const VirtualControls& controls,
-                                                    const std::string& client) {
+                                                    const std::string& client, const std::string& page) {
   std::lock_guard lock(mutex_);
+  if (!page.empty()) {
+    const auto closed = closed_page_.find(id);
+    if (closed != closed_page_.end() && closed->second == page)
+      return VirtualRefusal{false, true, "page '" + page + "' of trainee '" + id + "' has closed"};
+  }
   auto& vp = panels_[id];
   if (!vp) {
     // One publisher per station: not beside a console's rise-hild (or another server's panel).
     for (const auto& o : publishers_.others(msgs::monotonic_us()))
       if (o.channel == msgs::panel_state_channel(id)) {
         panels_.erase(id);
-        return VirtualRefusal{true, o.channel + " is already published by " +
+        return VirtualRefusal{true, false, o.channel + " is already published by " +
                                         msgs::describe(o.publisher, msgs::wall_us()) +
                                         ": a virtual panel there would mix with it"};
       }
     vp = std::make_unique<VirtualPanel>(console_, timeout_ms_, client);
   }
-  if (auto e = vp->update(controls, msgs::monotonic_us())) return VirtualRefusal{false, *e};
+  if (auto e = vp->update(controls, msgs::monotonic_us())) return VirtualRefusal{false, false, *e};
   return std::nullopt;
 }
 
-bool VirtualPanels::disconnect(const std::string& id) {
+bool VirtualPanels::disconnect(const std::string& id, const std::string& page) {
   std::lock_guard lock(mutex_);
   const auto it = panels_.find(id);
   if (it == panels_.end()) return false;
+  if (!page.empty()) closed_page_[id] = page;
   it->second->disconnect(msgs::monotonic_us());
   return true;
 }

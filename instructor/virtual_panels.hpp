@@ -33,6 +33,9 @@ struct VirtualRefusal {
   /// Another process publishes the trainee's panel_state: a virtual panel
   /// there would mix with it (else: the controls were refused).
   bool channel_taken = false;
+  /// The update came from a page that has already said it closed (a request
+  /// it sent before closing, overtaken by its close): not taken.
+  bool page_closed = false;
   std::string message;
 };
 
@@ -54,12 +57,16 @@ class VirtualPanels {
   /// Stops publishing; publishes nothing more.
   void stop();
 
-  /// Takes trainee `id`'s page's controls (from `client`), opening its panel
-  /// on the first update unless another process publishes there.
+  /// Takes trainee `id`'s page's controls (from `client`; `page` names the
+  /// page load that sent them, empty: unnamed), opening its panel on the
+  /// first update unless another process publishes there.
   std::optional<VirtualRefusal> update(const std::string& id, const VirtualControls& controls,
-                                       const std::string& client);
-  /// The page of `id` closed: its panel fails safe. False if there is none.
-  bool disconnect(const std::string& id);
+                                       const std::string& client, const std::string& page = {});
+  /// The page of `id` closed: its panel fails safe, and updates still on
+  /// their way from that `page` (if named) are refused, so a request the page
+  /// sent before closing cannot revive the panel after it. False if there is
+  /// no panel.
+  bool disconnect(const std::string& id, const std::string& page = {});
   /// A FaultCommand heard on rise/<trainee>/fault_command. A virtual panel
   /// is a receiver like rise-hild: it takes signed input faults and reports
   /// the rest; commands for other trainees are not ours.
@@ -80,6 +87,8 @@ class VirtualPanels {
   std::unique_ptr<msgs::CommandVerifier> verifier_;
   mutable std::mutex mutex_;
   std::map<std::string, std::unique_ptr<VirtualPanel>> panels_;
+  // By trainee id: the page load that last closed there.
+  std::map<std::string, std::string> closed_page_;
   std::atomic<bool> publishing_{false};
   std::thread thread_;
 };

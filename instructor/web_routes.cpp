@@ -164,13 +164,15 @@ void handle_virtual(const WebRouteContext& ctx, const httplib::Request& req, htt
   std::string error;
   const auto controls = virtual_controls_from_json(*body, &error);
   if (!controls) return reply_error(res, 400, error);
-  if (const auto refused = ctx.virtual_panels.update(id, *controls, req.remote_addr))
-    return reply_error(res, refused->channel_taken ? 409 : 400, refused->message);
+  const std::string page = req.get_param_value("page");
+  if (!valid_trainee_id(page) && !page.empty()) return reply_error(res, 400, "page '" + page + "': letters, digits, _ . - only");
+  if (const auto refused = ctx.virtual_panels.update(id, *controls, req.remote_addr, page))
+    return reply_error(res, refused->channel_taken ? 409 : refused->page_closed ? 410 : 400, refused->message);
   res.status = 204;
 }
 
 void handle_virtual_close(const WebRouteContext& ctx, const httplib::Request& req, httplib::Response& res) {
-  if (!ctx.virtual_panels.disconnect(req.matches[1]))
+  if (!ctx.virtual_panels.disconnect(req.matches[1], req.get_param_value("page")))
     return reply_error(res, 404, "no virtual panel '" + std::string(req.matches[1]) + "'");
   res.status = 204;
 }

@@ -377,6 +377,21 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
       REQUIRE(peer.wait_until([&] { return !peer.panels.empty() && !peer.panels.back().sources[0].connected; }, 5000));
       CHECK(peer.panels.back().failsafe);
     }
+    SECTION("a request the page sent before its goodbye, arriving after it, does not revive the panel") {
+      const std::string page = "/api/virtual/" + f.id + "?page=0a1b2c3d";
+      REQUIRE(http.Post(page, f.auth(), body, "application/json")->status == 204);
+      REQUIRE(http.Post("/api/virtual/" + f.id + "/close?page=0a1b2c3d", f.auth(), "", "text/plain")->status == 204);
+      // The overtaken update: refused as from a closed page.
+      CHECK(http.Post(page, f.auth(), body, "application/json")->status == 410);
+      peer.panels.clear();
+      REQUIRE(peer.wait_until([&] { return peer.panels.size() >= 5; }, 5000));
+      for (const auto& p : peer.panels) CHECK(p.failsafe);
+      // The same trainee's next page (another load) drives again.
+      REQUIRE(peer.wait_until([&] { return !peer.panels.back().failsafe; }, 5000, [&] {
+        REQUIRE(http.Post("/api/virtual/" + f.id + "?page=99aa", f.auth(), body, "application/json")->status == 204);
+      }));
+      CHECK(http.Post("/api/virtual/" + f.id + "?page=no/slash", f.auth(), body, "application/json")->status == 400);
+    }
   }
   server.stop();
 }

@@ -8,6 +8,9 @@ import { getJson, postJson, stream, el, token } from './common.js';
 
 const params = new URLSearchParams(location.search);
 const id = params.get('id') || 't1';
+// This page load: its close refuses the updates still on their way (a beacon
+// can overtake a request in flight, which would revive the panel after it).
+const pageId = Array.from(crypto.getRandomValues(new Uint8Array(8)), (b) => b.toString(16).padStart(2, '0')).join('');
 const SEND_PERIOD_MS = 20;  // 50 Hz, well inside the server's 200 ms timeout
 const STICK = { size: 180, reach: 75, dot: 14, colour: '#1f6feb' };  // the tests find the dot by its colour
 
@@ -197,7 +200,7 @@ async function send() {
   if (inFlight) return;  // a stalled request must not queue up stale states
   inFlight = true;
   try {
-    const r = await postJson('/api/virtual/' + encodeURIComponent(id), state);
+    const r = await postJson('/api/virtual/' + encodeURIComponent(id) + '?page=' + pageId, state);
     sent++;
     const s = document.getElementById('panel-status');
     if (!r.ok) { s.textContent = 'server: HTTP ' + r.status + ' ' + await r.text(); s.className = 'bad'; }
@@ -257,6 +260,6 @@ async function main() {
   setInterval(send, SEND_PERIOD_MS);
   stream(onUpdate);
   // Leaving the page: tell the server at once (it fails safe on the timeout anyway).
-  addEventListener('pagehide', () => navigator.sendBeacon('/api/virtual/' + encodeURIComponent(id) + '/close?token=' + encodeURIComponent(token), ''));
+  addEventListener('pagehide', () => navigator.sendBeacon('/api/virtual/' + encodeURIComponent(id) + '/close?page=' + pageId + '&token=' + encodeURIComponent(token), ''));
 }
 main().catch((e) => { document.getElementById('panel-status').textContent = 'error: ' + e.message; });
