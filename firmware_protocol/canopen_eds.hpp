@@ -18,11 +18,13 @@
 // of byte 0 upwards, each little endian (CiA 301 §7.5.2.36 and §7.1.2): so
 // each mapped object is a little-endian ("Intel") DbcSignal whose start bit
 // is the sum of the lengths before it, and the PDO a DbcMessage, decoded by
-// dbc.hpp's extract_raw / insert_raw. Worked example (the console's TPDO1,
-// mapping 0x20000110 0x20000210 0x20010108 0x20010201 0x20010301):
-//   185#34 12 CC FF 05 03 -> 0x2000:01 = 0x1234 (+4660), 0x2000:02 = 0xFFCC
-//   (INTEGER16: -52), 0x2001:01 = 5, 0x2001:02 = 1 (bit 0 of byte 5),
-//   0x2001:03 = 1 (bit 1 of byte 5).
+// dbc.hpp's extract_raw / insert_raw. Worked example (held by
+// tests/firmware_protocol/canopen_eds_test.cpp), TPDO1 of node 5 mapping
+// 0x20000110 0x20000210 0x20000301 0x00010001 0x20000401 (INTEGER16,
+// UNSIGNED16, BOOLEAN, a 1-bit dummy, BOOLEAN):
+//   185#CC FF 34 12 05 -> 0x2000:01 = 0xFFCC = -52 (bits 0..15),
+//   0x2000:02 = 0x1234 = 4660 (bits 16..31), 0x2000:03 = 1 (bit 32),
+//   0x2000:04 = 1 (bit 34).
 
 #include <cstdint>
 #include <optional>

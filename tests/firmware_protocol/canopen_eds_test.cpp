@@ -93,12 +93,19 @@ TEST_CASE("the shipped console EDS reads as two TPDOs and one RPDO", "[firmware_
   CHECK(s.signal->length_bits == 16);
   CHECK(s.signal->is_signed);
   CHECK_FALSE(eds.pdo_signal(*speed.entry, true).signal);
+  // firmware_protocol/README.md's worked example: 285#0302.
+  const std::vector<uint8_t> tpdo2{0x03, 0x02};
+  const auto& m = eds.tpdo_messages()[1];
+  CHECK(fp::extract_raw(m.signals[0], tpdo2) == 1);  // Dead-man
+  CHECK(fp::extract_raw(m.signals[1], tpdo2) == 1);  // E-stop
+  CHECK(fp::extract_raw(m.signals[2], tpdo2) == 0);  // Horn
+  CHECK(m.signals[5].name == "Camera select");
+  CHECK(fp::extract_raw(m.signals[5], tpdo2) == 2);
 }
 
 TEST_CASE("PDO objects unpack at their bit offsets, little endian, signed or not", "[firmware_protocol][canopen]") {
-  // The worked example of canopen_eds.hpp: INTEGER16, UNSIGNED16, UNSIGNED8...
-  // here INTEGER16 0x2000:01, UNSIGNED16 0x2000:02, BOOLEAN 0x2000:03, a dummy
-  // BOOLEAN, BOOLEAN 0x2000:04.
+  // The worked example of canopen_eds.hpp: INTEGER16 0x2000:01, UNSIGNED16
+  // 0x2000:02, BOOLEAN 0x2000:03, a 1-bit dummy, BOOLEAN 0x2000:04.
   const std::string text =
       device({"0x20000110", "0x20000210", "0x20000301", "0x00010001", "0x20000401"});
   const co::EdsDevice eds = co::EdsDevice::parse(text, "t.eds", 5);
