@@ -523,21 +523,21 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::canopen_trouble(const Sou
                                                                       const panels::SourceDefinition& def,
                                                                       int64_t now_us) const {
   namespace co = fp::canopen;
+  // The text only on the way out: this runs at every evaluation.
   const auto trouble = [&def](msgs::FailsafeCause cause, const std::string& what) {
-    return SourceTrouble{cause, def.name + ": " + what};
+    return SourceTrouble{cause, def.name + ": node " + std::to_string(def.node) + what};
   };
-  const std::string node = "node " + std::to_string(def.node);
-  if (!s.status.heartbeat_seen) return trouble(msgs::FailsafeCause::SourceStale, node + ": no heartbeat yet");
+  if (!s.status.heartbeat_seen) return trouble(msgs::FailsafeCause::SourceStale, ": no heartbeat yet");
   const int64_t heartbeat_age_us = now_us - s.heartbeat_us;
   if (heartbeat_age_us > 1000 * static_cast<int64_t>(def.timeout_ms))
     return trouble(msgs::FailsafeCause::SourceStale,
-                   node + ": stale (no heartbeat for " + std::to_string(heartbeat_age_us / 1000) + " ms)");
+                   ": stale (no heartbeat for " + std::to_string(heartbeat_age_us / 1000) + " ms)");
   if (s.nmt_state != co::NmtState::Operational)
-    return trouble(msgs::FailsafeCause::SourceError, node + " " + std::string(co::to_string(s.nmt_state)));
+    return trouble(msgs::FailsafeCause::SourceError, " " + std::string(co::to_string(s.nmt_state)));
   const auto& messages = def.eds->tpdo_messages();
   for (const auto& b : s.bindings) {
     if (b.last_us == 0)
-      return trouble(msgs::FailsafeCause::SourceStale, node + ": no " + b.message->name + " since operational");
+      return trouble(msgs::FailsafeCause::SourceStale, ": no " + b.message->name + " since operational");
     const fp::canopen::Pdo& pdo = def.eds->tpdos()[static_cast<std::size_t>(b.message - messages.data())];
     int64_t period_us = 1000 * static_cast<int64_t>(pdo.event_timer_ms);
     if (co::is_cyclic_sync(pdo.transmission_type))
@@ -545,9 +545,9 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::canopen_trouble(const Sou
     const int64_t age_us = now_us - b.last_us;
     if (period_us > 0 && age_us > 3 * period_us)
       return trouble(msgs::FailsafeCause::SourceStale,
-                     node + ": stale (no " + b.message->name + " for " + std::to_string(age_us / 1000) + " ms)");
+                     ": stale (no " + b.message->name + " for " + std::to_string(age_us / 1000) + " ms)");
   }
-  if (s.status.check_failed) return trouble(msgs::FailsafeCause::SourceError, node + ": PDOs shorter than their mapping");
+  if (s.status.check_failed) return trouble(msgs::FailsafeCause::SourceError, ": PDOs shorter than their mapping");
   return std::nullopt;
 }
 
