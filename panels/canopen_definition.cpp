@@ -1,7 +1,6 @@
 #include "panels/canopen_definition.hpp"
 
 #include <cmath>
-#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
@@ -12,12 +11,6 @@ namespace rise::panels {
 namespace {
 
 namespace co = rise::firmware_protocol::canopen;
-
-std::string beside(const std::string& file, const std::string& path) {
-  const std::filesystem::path p(path);
-  if (p.is_absolute()) return path;
-  return (std::filesystem::path(file).parent_path() / p).string();
-}
 
 // The object `signal:` names and its place in a PDO of the direction asked.
 co::PdoSignal mapped_object(const YamlReader& ctx, const SourceDefinition& source, const YAML::Node& node,

@@ -84,13 +84,6 @@ void parse_modbus_binding(const YamlReader& ctx, const YAML::Node& node, const s
              text + " is one bit: two positions at most (a register holds more)");
 }
 
-// A relative path is relative to the definition file.
-std::string beside(const std::string& file, const std::string& path) {
-  std::filesystem::path p(path);
-  if (p.is_relative()) p = std::filesystem::path(file).parent_path() / p;
-  return p.lexically_normal().string();
-}
-
 // A hid source: its device URL (hid:// or evdev://) and an SDL mapping.
 void parse_hid_source(const YamlReader& ctx, const YAML::Node& node, const std::string& where, const std::string& file,
                       SourceDefinition& s) {
