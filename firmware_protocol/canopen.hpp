@@ -45,9 +45,11 @@ enum class NmtCommand : uint8_t {
   ResetCommunication = 0x82,
 };
 
-/// A classic CAN frame of the protocol (11-bit identifier).
+/// A classic CAN frame of the protocol (11-bit identifier; a PDO may have
+/// a 29-bit one, bit 29 of its COB-ID entry).
 struct Frame {
   uint32_t cob_id = 0;
+  bool extended = false;
   uint8_t len = 0;
   std::array<uint8_t, 8> data{};
 };

@@ -14,6 +14,7 @@ namespace co = rise::firmware_protocol::canopen;
 io::CanFrame to_can(const co::Frame& f) {
   io::CanFrame c;
   c.id = f.cob_id;
+  c.extended = f.extended;
   c.len = f.len;
   std::copy(f.data.begin(), f.data.end(), c.data.begin());
   return c;
@@ -21,7 +22,7 @@ io::CanFrame to_can(const co::Frame& f) {
 
 bool same_frames(const std::vector<co::Frame>& a, const std::vector<co::Frame>& b) {
   return std::equal(a.begin(), a.end(), b.begin(), b.end(), [](const co::Frame& x, const co::Frame& y) {
-    return x.cob_id == y.cob_id && x.len == y.len && x.data == y.data;
+    return x.cob_id == y.cob_id && x.extended == y.extended && x.len == y.len && x.data == y.data;
   });
 }
 

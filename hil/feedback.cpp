@@ -104,6 +104,7 @@ std::vector<firmware_protocol::canopen::Frame> build_canopen_feedback(const pane
   for (const firmware_protocol::DbcMessage& rpdo : def.eds->rpdo_messages()) {
     firmware_protocol::canopen::Frame frame;
     frame.cob_id = rpdo.id;
+    frame.extended = rpdo.extended;
     frame.len = std::min<uint8_t>(rpdo.dlc, 8);
     const std::span<uint8_t> data(frame.data.data(), frame.len);
     bool used = false;

@@ -131,6 +131,7 @@ void CanopenEmulator::boot(int64_t now_us) {
 bool CanopenEmulator::send(hil::io::CanBus& bus, const co::Frame& frame) {
   hil::io::CanFrame f;
   f.id = frame.cob_id;
+  f.extended = frame.extended;
   f.len = frame.len;
   std::copy(frame.data.begin(), frame.data.end(), f.data.begin());
   if (bus.send(f) != hil::io::IoStatus::Ok) return false;
@@ -143,6 +144,7 @@ bool CanopenEmulator::send_tpdo(hil::io::CanBus& bus, std::size_t pdo, int64_t n
   TpdoState& t = tpdos_[pdo];
   co::Frame frame;
   frame.cob_id = m.id;
+  frame.extended = m.extended;
   frame.len = std::min<uint8_t>(m.dlc, 8);
   for (std::size_t i = 0; i < m.signals.size(); ++i)
     fp::insert_raw(m.signals[i], static_cast<uint64_t>(t.raw[i]), std::span<uint8_t>(frame.data.data(), frame.len));
@@ -201,7 +203,7 @@ void CanopenEmulator::on_sync(hil::io::CanBus& bus, int64_t now_us) {
 bool CanopenEmulator::on_rpdo(const hil::io::CanFrame& frame) {
   const auto& messages = def_.eds->rpdo_messages();
   for (const fp::DbcMessage& m : messages) {
-    if (m.id != frame.id || frame.len < m.dlc) continue;
+    if (m.id != frame.id || m.extended != frame.extended || frame.len < m.dlc) continue;
     const std::span<const uint8_t> data(frame.data.data(), frame.len);
     bool changed = false;
     const auto show = [&](const std::string& name, double value) {
@@ -220,16 +222,16 @@ bool CanopenEmulator::on_rpdo(const hil::io::CanFrame& frame) {
 }
 
 bool CanopenEmulator::on_frame(hil::io::CanBus& bus, const hil::io::CanFrame& frame, int64_t now_us) {
-  if (ended_ || !powered_ || frame.error || frame.remote || frame.fd || frame.extended) return false;
+  if (ended_ || !powered_ || frame.error || frame.remote || frame.fd) return false;
   const std::span<const uint8_t> data(frame.data.data(), frame.len);
-  const co::NmtRequest nmt = co::read_nmt(frame.id, data);
+  const co::NmtRequest nmt = frame.extended ? co::NmtRequest{} : co::read_nmt(frame.id, data);
   if (nmt.addresses(def_.node)) {
     const co::NmtState next = co::next_state(state_, nmt.command);
     if (next == co::NmtState::BootUp) boot_due_ = true;  // reset: boots again at the next tick
     else enter(next);
     return false;
   }
-  if (frame.id == co::kSyncCobId && frame.len <= 1) {
+  if (!frame.extended && frame.id == co::kSyncCobId && frame.len <= 1) {
     on_sync(bus, now_us);
     return false;
   }
