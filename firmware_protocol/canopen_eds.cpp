@@ -243,6 +243,13 @@ class EdsReader {
     return *v;
   }
 
+  // The entry's value, which must fit `max` (the object's data type).
+  uint64_t entry_value(const OdEntry& e, uint64_t max) const {
+    const uint64_t v = entry_value(e);
+    if (v > max) fail(e.line, section_name(e), "DefaultValue", std::to_string(v) + " is out of range 0.." + std::to_string(max));
+    return v;
+  }
+
   static const std::string& section_name(const OdEntry& e) { return e.section; }
 
   std::vector<Pdo> read_pdos(bool transmit) const {
@@ -260,16 +267,16 @@ class EdsReader {
       Pdo pdo;
       pdo.transmit = transmit;
       pdo.number = n + 1u;
-      const uint64_t cob_id = entry_value(*cob);
+      const uint64_t cob_id = entry_value(*cob, 0xFFFFFFFF);
       if (cob_id & 0x80000000u) continue;  // bit 31: PDO not valid (not used)
       pdo.extended = (cob_id & 0x20000000u) != 0;
       pdo.cob_id = static_cast<uint32_t>(cob_id & (pdo.extended ? 0x1FFFFFFFu : 0x7FFu));
       if (const OdEntry* type = device_.find(static_cast<uint16_t>(comm_base + n), 2))
-        pdo.transmission_type = static_cast<uint8_t>(entry_value(*type));
+        pdo.transmission_type = static_cast<uint8_t>(entry_value(*type, 0xFF));
       if (const OdEntry* inhibit = device_.find(static_cast<uint16_t>(comm_base + n), 3))
-        pdo.inhibit_100us = static_cast<uint16_t>(entry_value(*inhibit));
+        pdo.inhibit_100us = static_cast<uint16_t>(entry_value(*inhibit, 0xFFFF));
       if (const OdEntry* timer = device_.find(static_cast<uint16_t>(comm_base + n), 5))
-        pdo.event_timer_ms = static_cast<uint16_t>(entry_value(*timer));
+        pdo.event_timer_ms = static_cast<uint16_t>(entry_value(*timer, 0xFFFF));
       pdo.line = count->line;
       read_mapping(pdo, *count, static_cast<uint16_t>(map_base + n));
       pdos.push_back(std::move(pdo));
@@ -354,12 +361,12 @@ class EdsReader {
     if (!heartbeat)
       fail(1, "", "", "no object 0x1017 (Producer heartbeat time): the bridge watches the node by its heartbeat "
                       "(node guarding is not supported)");
-    device_.heartbeat_ms_ = static_cast<uint16_t>(entry_value(*heartbeat));
+    device_.heartbeat_ms_ = static_cast<uint16_t>(entry_value(*heartbeat, 0xFFFF));
     if (device_.heartbeat_ms_ == 0)
       fail(heartbeat->line, section_name(*heartbeat), "DefaultValue",
            "producer heartbeat time 0: the bridge watches the node by its heartbeat (node guarding is not supported)");
     if (const OdEntry* cycle = device_.find(0x1006, 0))
-      device_.sync_period_us_ = static_cast<uint32_t>(entry_value(*cycle));
+      device_.sync_period_us_ = static_cast<uint32_t>(entry_value(*cycle, 0xFFFFFFFF));
   }
 
   std::string_view text_;

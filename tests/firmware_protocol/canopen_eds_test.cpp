@@ -196,6 +196,14 @@ TEST_CASE("EDS mistakes name file:line, the section and the key", "[firmware_pro
                                 ": [1800sub1] DefaultValue: '$NODE+0x180' is not a number (decimal, 0x-hex, "
                                 "0-octal, $NODEID+N)");
   }
+  SECTION("a value beyond its object's type") {
+    std::string text = device({"0x20000110"});
+    text.replace(text.find("DefaultValue=100"), 16, "DefaultValue=70000");
+    CHECK(error_of(text) == "t.eds:" + std::to_string(line_of(text, "[1017]")) +
+                                ": [1017] DefaultValue: 70000 is out of range 0..65535");
+    CHECK_THAT(error_of(device({"0x20000110"}, "0x100000180")),
+               Catch::Contains("[1800sub1] DefaultValue: 4294967680 is out of range 0..4294967295"));
+  }
   SECTION("a line that is not key=value, a key before any section, a section or key twice") {
     CHECK(error_of("[FileInfo]\nFileName\n") == "t.eds:2: [FileInfo] expected key=value or [section]");
     CHECK(error_of("FileName=x\n") == "t.eds:1: FileName: key before the first [section]");
