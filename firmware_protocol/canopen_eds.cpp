@@ -232,6 +232,14 @@ class EdsReader {
   void read_device_info() {
     if (const Section* info = section("DeviceInfo"))
       if (const Key* name = info->get("productname")) device_.product_name_ = name->value;
+    // A DCF is one node's configuration (CiA 306 §5.3, spelt as the standard spells it).
+    if (const Section* dcf = section("DeviceComissioning"))
+      if (const Key* node = dcf->get("nodeid"); node && !node->value.empty()) {
+        const uint64_t id = number(*dcf, *node, "NodeID");
+        if (id != device_.node_id_)
+          fail(node->line, dcf->name, "NodeID",
+               "the DCF configures node " + std::to_string(id) + ", not node " + std::to_string(device_.node_id_));
+      }
   }
 
   // The entry's value, or a message naming where it is.

@@ -9,7 +9,8 @@
 // Read: object sections `[6000]` and sub-object sections `[6000sub1]` with
 // ParameterName, ObjectType, DataType, AccessType, DefaultValue (a DCF's
 // ParameterValue wins), PDOMapping, LowLimit, HighLimit; values decimal,
-// 0x-hex or 0-octal, with `$NODEID+` formulas (CiA 306 §4.6.3). Other
+// 0x-hex or 0-octal, with `$NODEID+` formulas (CiA 306 §4.6.3); a DCF's
+// [DeviceComissioning] NodeID must be the node's. Other
 // sections ([FileInfo], [DeviceInfo], [MandatoryObjects], [Comments], ...)
 // are skipped. Not read: CompactSubObj and CompactPDO (refused, by name),
 // object links, dynamic PDO mapping at run time.

@@ -196,6 +196,11 @@ TEST_CASE("EDS mistakes name file:line, the section and the key", "[firmware_pro
                                 ": [1800sub1] DefaultValue: '$NODE+0x180' is not a number (decimal, 0x-hex, "
                                 "0-octal, $NODEID+N)");
   }
+  SECTION("a DCF of another node") {
+    const std::string text = "[DeviceComissioning]\nNodeID=6\nBaudrate=500\n\n" + device({"0x20000110"});
+    CHECK(error_of(text) == "t.eds:2: [DeviceComissioning] NodeID: the DCF configures node 6, not node 5");
+    CHECK(co::EdsDevice::parse(text, "t.dcf", 6).tpdos()[0].cob_id == 0x186);
+  }
   SECTION("a value beyond its object's type") {
     std::string text = device({"0x20000110"});
     text.replace(text.find("DefaultValue=100"), 16, "DefaultValue=70000");
