@@ -102,8 +102,8 @@ struct ControlDefinition {
 
 struct SourceDefinition {
   std::string name;
-  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc" or "hid"
-  uint8_t node = 0;               ///< console node id on the bus (0..15), CAN
+  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc", "hid" or "canopen"
+  uint8_t node = 0;               ///< console node id on the bus: rise-can-v1 0..15, canopen 1..127
   double poll_hz = 50.0;          ///< Modbus: input polls per second
   uint8_t unit = 1;               ///< Modbus: slave / unit id (1..247)
   uint32_t timeout_ms = 50;       ///< stale when no valid frame within this
