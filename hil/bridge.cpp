@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "hil/can_source.hpp"
+#include "hil/canopen_source.hpp"
 #include "msgs/clock.hpp"
 
 namespace rise::hil {
@@ -14,8 +15,14 @@ namespace {
 std::vector<std::unique_ptr<SourceTransport>> can_sources(const panels::PanelDefinition& definition,
                                                           std::vector<std::unique_ptr<io::CanBus>> buses) {
   std::vector<std::unique_ptr<SourceTransport>> sources;
-  for (std::size_t i = 0; i < buses.size(); ++i)
-    sources.push_back(buses[i] ? std::make_unique<CanSource>(std::move(buses[i]), definition, i) : nullptr);
+  for (std::size_t i = 0; i < buses.size(); ++i) {
+    std::unique_ptr<SourceTransport> source;
+    if (buses[i] && definition.sources[i].is_canopen())
+      source = std::make_unique<CanopenSource>(std::move(buses[i]), definition, i);
+    else if (buses[i])
+      source = std::make_unique<CanSource>(std::move(buses[i]), definition, i);
+    sources.push_back(std::move(source));
+  }
   return sources;
 }
 

@@ -35,7 +35,8 @@ class Bridge {
  public:
   using PublishFn = std::function<void(const PanelSnapshot&)>;
 
-  /// One bus per source of the definition, in the same order (each a CanSource).
+  /// One bus per source of the definition, in the same order (each a
+  /// CanSource, or a CanopenSource for a canopen source).
   Bridge(panels::PanelDefinition definition, std::vector<std::unique_ptr<io::CanBus>> buses,
          PublishFn publish, BridgeSettings settings = {});
   /// One transport per source of the definition, in the same order

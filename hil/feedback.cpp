@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "firmware_protocol/canopen_eds.hpp"
+#include "firmware_protocol/dbc.hpp"
+
 namespace rise::hil {
 
 int32_t display_raw(float value, uint8_t decimals) {
@@ -78,6 +81,49 @@ std::vector<ModbusWrite> build_modbus_feedback(const panels::PanelDefinition& de
     out.push_back({*display.modbus_point, static_cast<uint16_t>(raw)});
   }
   return out;
+}
+
+namespace {
+// A display's raw value saturated to what the object's bits hold.
+uint64_t saturated_raw(const firmware_protocol::DbcSignal& signal, int32_t raw) {
+  const uint32_t bits = std::min<uint32_t>(signal.length_bits, 63);
+  const int64_t lo = signal.is_signed ? -(int64_t{1} << (bits - 1)) : 0;
+  const int64_t hi = signal.is_signed ? (int64_t{1} << (bits - 1)) - 1 : (int64_t{1} << bits) - 1;
+  return static_cast<uint64_t>(std::clamp<int64_t>(raw, lo, hi));
+}
+}  // namespace
+
+std::vector<firmware_protocol::canopen::Frame> build_canopen_feedback(const panels::PanelDefinition& definition,
+                                                                      std::size_t source,
+                                                                      const FeedbackRequest& request,
+                                                                      const PanelSnapshot& snapshot) {
+  std::vector<firmware_protocol::canopen::Frame> frames;
+  const panels::SourceDefinition& def = definition.sources[source];
+  if (!def.eds) return frames;
+  const bool estop = estop_pressed(definition, snapshot);
+  for (const firmware_protocol::DbcMessage& rpdo : def.eds->rpdo_messages()) {
+    firmware_protocol::canopen::Frame frame;
+    frame.cob_id = rpdo.id;
+    frame.extended = rpdo.extended;
+    frame.len = std::min<uint8_t>(rpdo.dlc, 8);
+    const std::span<uint8_t> data(frame.data.data(), frame.len);
+    bool used = false;
+    for (const auto& led : definition.leds)
+      if (led.source == source && led.pdo_message == &rpdo) {
+        firmware_protocol::insert_raw(*led.pdo_signal, lit(led, request, snapshot, estop) ? 1 : 0, data);
+        used = true;
+      }
+    for (const auto& display : definition.displays) {
+      if (display.source != source || display.pdo_message != &rpdo) continue;
+      int32_t raw = 0;
+      for (const auto& [name, value] : request.displays)
+        if (name == display.name) raw = display_raw(value, display.decimals);
+      firmware_protocol::insert_raw(*display.pdo_signal, saturated_raw(*display.pdo_signal, raw), data);
+      used = true;
+    }
+    if (used) frames.push_back(frame);
+  }
+  return frames;
 }
 
 std::vector<std::vector<uint8_t>> build_hid_feedback(const panels::PanelDefinition& definition, std::size_t source,

@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "firmware_protocol/canopen.hpp"
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/panel_mapper.hpp"
@@ -60,6 +61,16 @@ std::vector<std::string> hid_feedback_problems(const panels::PanelDefinition& de
 /// Allocates: call at the feedback rate.
 std::vector<ModbusWrite> build_modbus_feedback(const panels::PanelDefinition& definition, std::size_t source,
                                                const FeedbackRequest& request, const PanelSnapshot& snapshot);
+
+/// The RPDOs that show a "canopen" source's feedback: one frame per RPDO
+/// that maps an LED or display of `source`, of the RPDO's length, every
+/// mapped object 0 but each LED (1 lit, as build_feedback decides) and
+/// each display (value · 10^decimals, saturated to the object's type), in
+/// the EDS's RPDO order. Allocates: call at the feedback rate.
+std::vector<firmware_protocol::canopen::Frame> build_canopen_feedback(const panels::PanelDefinition& definition,
+                                                                      std::size_t source,
+                                                                      const FeedbackRequest& request,
+                                                                      const PanelSnapshot& snapshot);
 
 /// value → raw display units: round(value · 10^decimals), saturated to int32.
 int32_t display_raw(float value, uint8_t decimals);

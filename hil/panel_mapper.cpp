@@ -1,5 +1,6 @@
 #include "hil/panel_mapper.hpp"
 
+#include "firmware_protocol/canopen_eds.hpp"
 #include "firmware_protocol/dbc.hpp"
 
 #include <algorithm>
@@ -110,6 +111,63 @@ bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, s
     s.status.check_failed = true;
     s.ok_in_row = 0;
     return false;
+  }
+  s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+  s.status.frames_ok++;
+  s.last_any_valid_us = now_us;
+  count_valid(s);
+  return changed;
+}
+
+bool PanelMapper::on_canopen_frame(SourceState& s, const panels::SourceDefinition& def, uint32_t can_id,
+                                   bool extended, std::span<const uint8_t> data, int64_t now_us) {
+  namespace co = fp::canopen;
+  const co::HeartbeatResult hb = extended ? co::HeartbeatResult{} : co::read_heartbeat(def.node, can_id, data);
+  switch (hb.read) {
+    case co::HeartbeatRead::NotHeartbeat: break;
+    case co::HeartbeatRead::BadLength: s.status.errors[static_cast<std::size_t>(fp::DecodeError::BadLength)]++; return false;
+    case co::HeartbeatRead::BadState: s.status.errors[static_cast<std::size_t>(fp::DecodeError::BadValue)]++; return false;
+    case co::HeartbeatRead::Ok: {
+      const bool changed = !s.status.heartbeat_seen || hb.state != s.nmt_state;
+      // Outside Operational the node sends no PDOs (CiA 301 §7.3.2.2.4): what
+      // it sent before is no state to trust once it is back, so each bound
+      // object waits for a PDO sent since.
+      if (hb.state != co::NmtState::Operational)
+        for (auto& b : s.bindings) b.last_us = 0;
+      s.nmt_state = hb.state;
+      s.heartbeat_us = now_us;
+      s.status.heartbeat_seen = true;
+      s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
+      s.status.frames_ok++;
+      s.last_any_valid_us = now_us;
+      return changed;
+    }
+  }
+  const auto& tpdos = def.eds->tpdo_messages();
+  const bool is_tpdo = std::any_of(tpdos.begin(), tpdos.end(),
+                                   [&](const fp::DbcMessage& m) { return m.id == can_id && m.extended == extended; });
+  if (!is_tpdo) {
+    // SYNC, NMT, other nodes: the bus is shared.
+    s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
+    return false;
+  }
+  // Taken once the node was heard, whatever state its last heartbeat said: a
+  // node sends PDOs only in Operational (so one after a boot-up means it was
+  // started), and canopen_trouble() trusts the values only while the
+  // heartbeat says Operational.
+  if (!s.status.heartbeat_seen) return false;
+  bool changed = false;
+  for (SignalBinding& b : s.bindings) {
+    if (b.message->id != can_id || b.message->extended != extended) continue;
+    if (!fp::signal_fits(*b.signal, data.size())) {
+      // Shorter than its mapping: CiA 301 §7.2.2.2 has the node discard it
+      // (EMCY 0x8210); so does the bridge, counted and failing the check.
+      s.status.errors[static_cast<std::size_t>(fp::DecodeError::BadLength)]++;
+      s.status.check_failed = true;
+      s.ok_in_row = 0;
+      return false;
+    }
+    changed = take(b, fp::physical_value(*b.signal, fp::extract_raw(*b.signal, data)), now_us) || changed;
   }
   s.status.errors[static_cast<std::size_t>(fp::DecodeError::None)]++;
   s.status.frames_ok++;
@@ -272,6 +330,8 @@ bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const 
   if (source >= sources_.size()) return false;
   SourceState& s = sources_[source];
   if (definition_.sources[source].is_dbc()) return on_dbc_frame(s, can_id, extended, data, now_us);
+  if (definition_.sources[source].is_canopen())
+    return on_canopen_frame(s, definition_.sources[source], can_id, extended, data, now_us);
   if (extended) {
     s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
     return false;
@@ -383,6 +443,8 @@ void PanelMapper::on_connection(std::size_t source, bool connected, int64_t now_
     s.decoder.reset();
     s.last_valid_us.fill(0);
     s.status.heartbeat_seen = false;
+    s.heartbeat_us = 0;
+    s.nmt_state = fp::canopen::NmtState::BootUp;
     s.axes_seen[0] = s.axes_seen[1] = false;
     s.buttons_seen = s.switches_seen = false;
   }
@@ -421,6 +483,7 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const Sour
     if (age_us > timeout_us) return stale("poll answered", age_us);
     return std::nullopt;
   }
+  if (def.is_canopen()) return canopen_trouble(s, def, now_us);
   if (def.is_dbc()) {
     // A DBC device has no heartbeat or status of ours: every bound message
     // must keep arriving, and its frames must fit the DBC.
@@ -449,6 +512,42 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const Sour
   if (s.status.console_status != fp::PanelStatus::Operational)
     return trouble(FailsafeCause::SourceError, "console status " + std::string(fp::to_string(s.status.console_status)));
   if (s.status.check_failed) return trouble(FailsafeCause::ProtectionFailed, "protection check failed");
+  return std::nullopt;
+}
+
+// A CANopen node is trusted while its heartbeat comes within the consumer
+// time (timeout_ms) and says Operational, and each bound object came in a
+// PDO since it entered Operational; a cyclic PDO (every n-th SYNC, or an
+// event timer) must also keep coming: within three of its periods.
+std::optional<PanelMapper::SourceTrouble> PanelMapper::canopen_trouble(const SourceState& s,
+                                                                      const panels::SourceDefinition& def,
+                                                                      int64_t now_us) const {
+  namespace co = fp::canopen;
+  // The text only on the way out: this runs at every evaluation.
+  const auto trouble = [&def](msgs::FailsafeCause cause, const std::string& what) {
+    return SourceTrouble{cause, def.name + ": node " + std::to_string(def.node) + what};
+  };
+  if (!s.status.heartbeat_seen) return trouble(msgs::FailsafeCause::SourceStale, ": no heartbeat yet");
+  const int64_t heartbeat_age_us = now_us - s.heartbeat_us;
+  if (heartbeat_age_us > 1000 * static_cast<int64_t>(def.timeout_ms))
+    return trouble(msgs::FailsafeCause::SourceStale,
+                   ": stale (no heartbeat for " + std::to_string(heartbeat_age_us / 1000) + " ms)");
+  if (s.nmt_state != co::NmtState::Operational)
+    return trouble(msgs::FailsafeCause::SourceError, " " + std::string(co::to_string(s.nmt_state)));
+  const auto& messages = def.eds->tpdo_messages();
+  for (const auto& b : s.bindings) {
+    if (b.last_us == 0)
+      return trouble(msgs::FailsafeCause::SourceStale, ": no " + b.message->name + " since operational");
+    const fp::canopen::Pdo& pdo = def.eds->tpdos()[static_cast<std::size_t>(b.message - messages.data())];
+    int64_t period_us = 1000 * static_cast<int64_t>(pdo.event_timer_ms);
+    if (co::is_cyclic_sync(pdo.transmission_type))
+      period_us = static_cast<int64_t>(def.sync_period_us) * pdo.transmission_type;
+    const int64_t age_us = now_us - b.last_us;
+    if (period_us > 0 && age_us > 3 * period_us)
+      return trouble(msgs::FailsafeCause::SourceStale,
+                     ": stale (no " + b.message->name + " for " + std::to_string(age_us / 1000) + " ms)");
+  }
+  if (s.status.check_failed) return trouble(msgs::FailsafeCause::SourceError, ": PDOs shorter than their mapping");
   return std::nullopt;
 }
 

@@ -12,6 +12,7 @@
 #include <string_view>
 #include <vector>
 
+#include "firmware_protocol/canopen.hpp"
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/hid_report.hpp"
 #include "hil/control_transforms.hpp"
@@ -76,7 +77,9 @@ class PanelMapper {
   /// and dropped. Returns true when a bound control's raw value changed (the
   /// bridge then publishes at once). No throw; allocates nothing.
   /// For a `dbc` source every bound MESSAGE.SIGNAL is read from the frames
-  /// with its message's id (`extended` for 29-bit ids).
+  /// with its message's id (`extended` for 29-bit ids). For a `canopen`
+  /// source the node's heartbeat gives its NMT state, and its TPDOs, taken
+  /// only while it is Operational, the bound objects.
   bool on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
                 int64_t now_us, bool extended = false);
 
@@ -217,6 +220,9 @@ class PanelMapper {
     bool axes_seen[firmware_protocol::kAxisFrames] = {};
     bool buttons_seen = false;
     bool switches_seen = false;
+    // canopen sources: the node's NMT state from its last heartbeat.
+    firmware_protocol::canopen::NmtState nmt_state = firmware_protocol::canopen::NmtState::BootUp;
+    int64_t heartbeat_us = 0;  // 0 = none since connecting
   };
 
   void count_valid(SourceState& s);
@@ -254,6 +260,10 @@ class PanelMapper {
   std::vector<InputFault> input_faults_;  // injection order
 
   bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);
+  bool on_canopen_frame(SourceState& s, const panels::SourceDefinition& def, uint32_t can_id, bool extended,
+                        std::span<const uint8_t> data, int64_t now_us);
+  std::optional<SourceTrouble> canopen_trouble(const SourceState& s, const panels::SourceDefinition& def,
+                                               int64_t now_us) const;
 };
 
 /// Age after which a missing heartbeat makes a source stale: three heartbeat

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "hil/can_source.hpp"
+#include "hil/canopen_source.hpp"
 #include "hil/evdev_source.hpp"
 #include "hil/io/evdev_device.hpp"
 #include "hil/hid_source.hpp"
@@ -77,6 +78,7 @@ std::unique_ptr<SourceTransport> open_source(const panels::PanelDefinition& defi
   if (def.is_hid()) return std::make_unique<HidSource>(io::open_input_device(url), definition, source);
   if (def.is_modbus()) return std::make_unique<ModbusSource>(open_link(def, url), definition, source);
   if (io::is_modbus_url(url)) throw wrong_url(def, url, "not a CAN URL");
+  if (def.is_canopen()) return std::make_unique<CanopenSource>(io::open_can_bus(url), definition, source);
   return std::make_unique<CanSource>(io::open_can_bus(url), definition, source);
 }
 

@@ -33,7 +33,7 @@ panels::PanelDefinition virtual_definition(panels::PanelDefinition definition, u
     throw std::runtime_error(definition.file + ": a virtual panel needs a definition with one source, this one has " +
                              std::to_string(definition.sources.size()));
   auto& source = definition.sources[0];
-  if (source.is_hid() || source.is_dbc() || source.is_generic_modbus())
+  if (source.is_hid() || source.is_dbc() || source.is_generic_modbus() || source.is_canopen())
     throw std::runtime_error(definition.file + ": source '" + source.name +
                              "': a virtual panel needs a rise-can-v1 or rise-modbus-v1 console, not " + source.protocol);
   source.name = kVirtualSourceName;

@@ -11,6 +11,7 @@
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/dbc.hpp"
 #include "firmware_protocol/sdl_mapping.hpp"
+#include "panels/canopen_definition.hpp"
 #include "panels/yaml_reader.hpp"
 
 #include <filesystem>
@@ -83,13 +84,6 @@ void parse_modbus_binding(const YamlReader& ctx, const YAML::Node& node, const s
              text + " is one bit: two positions at most (a register holds more)");
 }
 
-// A relative path is relative to the definition file.
-std::string beside(const std::string& file, const std::string& path) {
-  std::filesystem::path p(path);
-  if (p.is_relative()) p = std::filesystem::path(file).parent_path() / p;
-  return p.lexically_normal().string();
-}
-
 // A hid source: its device URL (hid:// or evdev://) and an SDL mapping.
 void parse_hid_source(const YamlReader& ctx, const YAML::Node& node, const std::string& where, const std::string& file,
                       SourceDefinition& s) {
@@ -120,14 +114,17 @@ SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
                 {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit",
-                 "dbc", "device", "mapping", "sdl_db"});
+                 "dbc", "device", "mapping", "sdl_db", "eds", "sync_ms"});
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
   if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "modbus" && s.protocol != "dbc" &&
-      s.protocol != "hid")
+      s.protocol != "hid" && !s.is_canopen())
     ctx.fail(node["protocol"], where + ".protocol",
-             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, hid)");
+             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, hid, canopen)");
+  if (!s.is_canopen())
+    for (const char* k : kCanopenSourceKeys)
+      if (node[k]) ctx.fail(node[k], where + "." + k, "only for protocol canopen");
   if (s.is_hid()) parse_hid_source(ctx, node, where, file, s);
   else
     for (const char* k : {"device", "mapping", "sdl_db"})
@@ -160,7 +157,8 @@ SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std
   if (unit < 1 || unit > 247) ctx.fail(node["unit"], where + ".unit", "must be 1..247");
   s.unit = static_cast<uint8_t>(unit);
   const int node_id = ctx.get<int>(node, "node", where, 0);
-  if (node_id < 0 || node_id > 15) ctx.fail(node["node"], where + ".node", "must be 0..15");
+  if (node_id < 0 || node_id > (s.is_canopen() ? 127 : 15))
+    ctx.fail(node["node"], where + ".node", s.is_canopen() ? "a CANopen node id is 1..127" : "must be 0..15");
   s.node = static_cast<uint8_t>(node_id);
   const int timeout = ctx.get<int>(node, "timeout_ms", where, s.is_hid() ? 1000 : 50);
   if ((timeout < 5 && !(s.is_hid() && timeout == 0)) || timeout > 10000)
@@ -174,6 +172,7 @@ SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std
   if (delta < 1 || delta > 14)
     ctx.fail(node["max_counter_delta"], where + ".max_counter_delta", "must be 1..14");
   s.max_counter_delta = static_cast<uint8_t>(delta);
+  if (s.is_canopen()) parse_canopen_source(ctx, node, where, file, s);
   return s;
 }
 
@@ -387,11 +386,13 @@ ControlDefinition parse_control(const YamlReader& ctx, const PanelDefinition& de
   c.source = resolve_source(ctx, def, node, where);
   const SourceDefinition& source = def.sources[c.source];
   // Sources whose controls bind names of the device, not axis.N / button.N / switch.N.
-  const bool named_signals = source.is_dbc() || source.is_hid() || source.is_generic_modbus();
+  const bool named_signals = source.is_dbc() || source.is_hid() || source.is_generic_modbus() || source.is_canopen();
   if (source.is_dbc()) {
     parse_dbc_binding(ctx, source, node, where, c);
+  } else if (source.is_canopen()) {
+    parse_canopen_binding(ctx, source, node, where, c);
   } else if (node["range"] && !source.is_generic_modbus()) {
-    ctx.fail(node["range"], where + ".range", "only for controls of a dbc or modbus source");
+    ctx.fail(node["range"], where + ".range", "only for controls of a dbc, canopen or modbus source");
   }
   if (source.is_generic_modbus()) parse_modbus_binding(ctx, node, where, c);
   else if (node["type"]) ctx.fail(node["type"], where + ".type", "only for controls of a modbus source");
@@ -446,6 +447,7 @@ void parse_feedback(const YamlReader& ctx, PanelDefinition& def, const YAML::Nod
   ctx.only_keys(node, "feedback", {"leds", "displays", "buzzer", "rumble"});
   std::set<std::string> names;
   std::set<std::pair<std::size_t, ModbusPoint>> written;  // modbus sources' points
+  std::set<std::pair<std::size_t, const void*>> pdo_written;  // canopen sources' RPDO objects
   if (const YAML::Node leds = node["leds"]) {
     if (!leds.IsSequence()) ctx.fail(leds, "feedback.leds", "expected a list");
     std::set<std::pair<std::size_t, int>> bits;
@@ -466,6 +468,14 @@ void parse_feedback(const YamlReader& ctx, PanelDefinition& def, const YAML::Nod
           ctx.fail(n["bit"], where + ".bit",
                    "a hid source's LED is an output signal of the device: signal: NAME (e.g. usage_0008_0001)");
         led.hid_signal = hid_output_signal(ctx, n, where, led.source, hid_signals, "LED");
+        def.leds.push_back(led);
+        continue;
+      }
+      if (def.sources[led.source].is_canopen()) {
+        if (n["bit"]) ctx.fail(n["bit"], where + ".bit", "a canopen source's LED is an RPDO-mapped object: signal: NAME");
+        parse_canopen_output(ctx, def.sources[led.source], n, where, led.pdo_message, led.pdo_signal);
+        if (!pdo_written.insert({led.source, led.pdo_signal}).second)
+          ctx.fail(n["signal"], where + ".signal", "already written by another LED or display");
         def.leds.push_back(led);
         continue;
       }
@@ -519,7 +529,13 @@ void parse_feedback(const YamlReader& ctx, PanelDefinition& def, const YAML::Nod
       if (!names.insert(d.name).second) ctx.fail(n["name"], where, "duplicate feedback name");
       d.source = resolve_source(ctx, def, n, where);
       if (def.sources[d.source].is_hid()) ctx.fail(n, where + ".source", "a hid source has no displays");
-      if (def.sources[d.source].is_generic_modbus()) {
+      if (def.sources[d.source].is_canopen()) {
+        for (const char* k : {"index", "type"})
+          if (n[k]) ctx.fail(n[k], where + "." + k, "a canopen source's display is an RPDO-mapped object: signal: NAME");
+        parse_canopen_output(ctx, def.sources[d.source], n, where, d.pdo_message, d.pdo_signal);
+        if (!pdo_written.insert({d.source, d.pdo_signal}).second)
+          ctx.fail(n["signal"], where + ".signal", "already written by another LED or display");
+      } else if (def.sources[d.source].is_generic_modbus()) {
         if (n["index"])
           ctx.fail(n["index"], where + ".index", "a modbus source's display is a holding register: signal: holding_register.N");
         d.modbus_point = read_written_point(ctx, n, where, false, written, d.source);
@@ -541,6 +557,8 @@ void parse_feedback(const YamlReader& ctx, PanelDefinition& def, const YAML::Nod
     ctx.only_keys(buzzer, "feedback.buzzer", {"source"});
     def.buzzer_source = resolve_source(ctx, def, buzzer, "feedback.buzzer");
     if (def.sources[*def.buzzer_source].is_hid()) ctx.fail(buzzer, "feedback.buzzer.source", "a hid source has no buzzer");
+    if (def.sources[*def.buzzer_source].is_canopen())
+      ctx.fail(buzzer, "feedback.buzzer.source", "a canopen source has no buzzer (light an RPDO-mapped LED instead)");
     if (def.sources[*def.buzzer_source].is_generic_modbus())
       ctx.fail(buzzer, "feedback.buzzer.source", "a modbus source has no buzzer (light an LED on its coil instead)");
   }

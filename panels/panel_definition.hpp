@@ -17,6 +17,9 @@ class DbcDatabase;
 class SdlControllerDb;
 struct DbcMessage;
 struct DbcSignal;
+namespace canopen {
+class EdsDevice;
+}
 }  // namespace rise::firmware_protocol
 
 namespace rise::panels {
@@ -99,8 +102,8 @@ struct ControlDefinition {
 
 struct SourceDefinition {
   std::string name;
-  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc" or "hid"
-  uint8_t node = 0;               ///< console node id on the bus (0..15), CAN
+  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc", "hid" or "canopen"
+  uint8_t node = 0;               ///< console node id on the bus: rise-can-v1 0..15, canopen 1..127
   double poll_hz = 50.0;          ///< Modbus: input polls per second
   uint8_t unit = 1;               ///< Modbus: slave / unit id (1..247)
   uint32_t timeout_ms = 50;       ///< stale when no valid frame within this
@@ -124,6 +127,18 @@ struct SourceDefinition {
   std::string mapping;  ///< "" or "sdl"
   std::string sdl_db_file;
   std::shared_ptr<const firmware_protocol::SdlControllerDb> sdl_db;
+  /// protocol "canopen": a CANopen node (CiA 301) its EDS/DCF describes
+  /// (`eds:`, beside the definition; `node:` 1..127). Controls bind objects
+  /// its TPDOs map (by ParameterName or index:subindex), read as the dbc
+  /// path reads signals (`eds->tpdo_messages()`); feedback writes objects
+  /// its RPDOs map. timeout_ms is the heartbeat consumer time (default 1.5
+  /// times the EDS's producer heartbeat time, 0x1017); `sync_period_us` the
+  /// SYNC the bridge produces when a TPDO is synchronous (the EDS's 0x1006
+  /// unless `sync_ms:` gives it), 0 = none.
+  std::string eds_file;
+  std::shared_ptr<const firmware_protocol::canopen::EdsDevice> eds;
+  uint32_t sync_period_us = 0;
+  bool is_canopen() const { return protocol == "canopen"; }
   bool is_hid() const { return protocol == "hid"; }
   /// On a Modbus link: our register map (rise-modbus-v1) or any device's (modbus).
   bool is_modbus() const { return protocol == "rise-modbus-v1" || protocol == "modbus"; }
@@ -144,6 +159,9 @@ struct LedDefinition {
   std::string hid_signal;
   /// modbus sources: the coil (or holding register, written 1 / 0) that lights it.
   std::optional<ModbusPoint> modbus_point;
+  /// canopen sources: the RPDO-mapped object that lights it (1 / 0).
+  const firmware_protocol::DbcMessage* pdo_message = nullptr;
+  const firmware_protocol::DbcSignal* pdo_signal = nullptr;
   int line = 0;  ///< line in the definition file (for messages)
 };
 /// Rumble / force feedback of a hid source: PanelFeedback.rumble (0..1) is
@@ -164,6 +182,10 @@ struct DisplayDefinition {
   /// (value · 10^decimals, saturated to the type's range).
   std::optional<ModbusPoint> modbus_point;
   ModbusValueType modbus_type = ModbusValueType::UInt16;
+  /// canopen sources: the RPDO-mapped object written with the raw value
+  /// (value · 10^decimals, saturated to the object's type).
+  const firmware_protocol::DbcMessage* pdo_message = nullptr;
+  const firmware_protocol::DbcSignal* pdo_signal = nullptr;
 };
 
 struct PanelDefinition {

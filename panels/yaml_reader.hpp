@@ -17,6 +17,10 @@ namespace rise::panels {
 /// ("cannot read 'lots' as a number"), the simulator's files only quote the text.
 enum class ValueWording { QuoteOnly, NameType };
 
+/// `path` as a file named in `file` means it: a relative path is relative
+/// to `file`'s folder (a panel definition's dbc:, eds:, sdl_db:).
+std::string beside(const std::string& file, const std::string& path);
+
 /// `text` with each control character as \xNN, so that an error quoting
 /// the file's text stays on one line.
 std::string printable(const std::string& text);

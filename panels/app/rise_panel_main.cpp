@@ -16,6 +16,7 @@
 #include "hil/io/uhid_device.hpp"
 #include "msgs/clock.hpp"
 #include "panels/app/replay_command.hpp"
+#include "panels/canopen_emulator.hpp"
 #include "panels/console_emulator.hpp"
 #include "panels/data_path.hpp"
 #include "panels/hid_emulator.hpp"
@@ -170,6 +171,44 @@ int run_emulate_hid(const EmulateOptions& o, const rise::panels::PanelDefinition
   return 0;
 }
 
+// CANopen: the node of a protocol canopen source on the CAN transport; the
+// script starts (with --start-on-feedback) once the master started the node.
+int run_emulate_canopen(const EmulateOptions& o, const rise::panels::PanelDefinition& definition, std::size_t source,
+                        const rise::panels::Timeline& timeline, rise::hil::io::CanBus& bus) {
+  using namespace rise;
+  using firmware_protocol::canopen::NmtState;
+  panels::CanopenEmulator emulator(definition, source);
+  spdlog::info("rise-panel ready: emulating '{}' source '{}' as CANopen node {} on {}", definition.name,
+               definition.sources[source].name, definition.sources[source].node, o.can_url);
+  ScriptClock script(timeline, o);
+  script.start(msgs::monotonic_us());
+  bool started = !o.start_on_feedback;
+  NmtState shown = emulator.state();
+  hil::io::CanFrame frame;
+  while (!g_stop) {
+    const int64_t now = msgs::monotonic_us();
+    if (!started) {
+      script.start(now);
+      if (emulator.state() == NmtState::Operational) {
+        started = true;
+        spdlog::info("node started by the master: script starts");
+      }
+    }
+    if (!script.step(now, definition, emulator) || emulator.ended()) break;
+    if (bus.is_open()) emulator.tick(bus, now);
+    else bus.reopen();
+    while (bus.is_open() && bus.receive(frame, 1) == hil::io::IoStatus::Ok)
+      if (emulator.on_frame(bus, frame, msgs::monotonic_us())) spdlog::info("feedback: {}", emulator.feedback_text());
+    if (emulator.state() != shown) {
+      shown = emulator.state();
+      spdlog::info("NMT state: {}", firmware_protocol::canopen::to_string(shown));
+    }
+    if (!bus.is_open()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  spdlog::info("rise-panel stopped: {} frames sent, {} SYNC seen", emulator.frames_sent(), emulator.syncs_seen());
+  return 0;
+}
+
 int run_emulate(const EmulateOptions& o) {
   using namespace rise;
   panels::PanelDefinition definition;
@@ -203,6 +242,8 @@ int run_emulate(const EmulateOptions& o) {
     spdlog::error("{}", e.what());
     return 2;
   }
+  if (bus && definition.sources[source].is_canopen())
+    return run_emulate_canopen(o, definition, source, timeline, *bus);
   panels::ConsoleEmulator emulator(definition, source);
 
   const uint16_t port = server ? server->port() : hil::io::listening_port(*bus);
@@ -263,7 +304,7 @@ int main(int argc, char** argv) {
 
   EmulateOptions emulate;
   CLI::App* em = app.add_subcommand(
-      "emulate", "act as the console's firmware on a CAN transport, as a Modbus slave, or as a HID device (uhid)");
+      "emulate", "act as the console's firmware on a CAN transport (rise-can-v1, or a CANopen node from its EDS for a canopen source), as a Modbus slave, or as a HID device (uhid)");
   em->add_option("--panel", emulate.panel, "panel definition (YAML)")->capture_default_str();
   em->add_option("--source", emulate.source, "which source of the panel to emulate (default: the first)");
   CLI::Option* can_option = em->add_option("--can", emulate.can_url,

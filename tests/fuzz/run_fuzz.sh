@@ -5,7 +5,7 @@
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
-# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
+# TARGET is console_can, console_modbus, dbc, canopen_eds, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
 # line_protocols, command_auth, configs, training_graph, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
@@ -15,6 +15,7 @@ case "$target" in
   console_can) sources=("$root/firmware_protocol/console_can.cpp") ;;
   console_modbus) sources=("$root"/firmware_protocol/console_{can,modbus}.cpp) ;;
   dbc) sources=("$root/firmware_protocol/dbc.cpp") ;;
+  canopen_eds) sources=("$root"/firmware_protocol/{canopen,canopen_eds,dbc}.cpp) ;;
   hid_descriptor) sources=("$root"/firmware_protocol/hid_{descriptor,report,text}.cpp) ;;
   # The semantic readers: PLY/XYZ and 3DTK/sim poses without PCL; the PCD
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
@@ -32,7 +33,8 @@ case "$target" in
   line_protocols) sources=("$root"/hil/io/{slcan_wire,socketcand_wire,can_frame}.cpp) ;;
   command_auth) sources=("$root/msgs/command_auth.cpp") ;;
   configs)
-    sources=("$root"/panels/{panel_definition,yaml_reader,modbus_point}.cpp "$root"/firmware_protocol/{console_can,dbc,sdl_mapping}.cpp
+    sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
+             "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
              "$root"/sim/{robot_description,urdf_robot,world_description}.cpp "$root/sim/training/task_description.cpp"
              "$root/instructor/scenario.cpp")
     ;;
@@ -136,6 +138,13 @@ case "$target" in
     fi
     printf 'VERSION ""\nBO_ 2147483905 Ext: 8 N\n SG_ Mux M : 0|8@1+ (1,0) [0|0] "" N\n SG_ A m1 : 15|12@0- (0.5,-3) [0|0] "u" N\nVAL_ 2147483905 A -1 "minus" ;\nSIG_VALTYPE_ 2147483905 A : 0;\n' >"$corpus/seed.dbc"
     extra=(-dict="$root/tests/fuzz/dbc.dict")
+    ;;
+  canopen_eds)
+    # A byte first: the node id - 1. The shipped console's EDS; a DCF with
+    # ParameterValue, 0-octal, a 29-bit COB-ID, dummies and a REAL32 object.
+    { printf '\x04'; cat "$root/panels/definitions/rise_console_canopen.eds"; } >"$corpus/console.eds"
+    printf '\x10[1017]\nParameterName=HB\nDataType=0x0006\nDefaultValue=50\nParameterValue=020\n[1800sub1]\nParameterName=C\nDataType=0x0007\nDefaultValue=0x20000180+$NODEID\n[1800sub2]\nParameterName=T\nDataType=0x0005\nDefaultValue=0\n[1A00sub0]\nParameterName=N\nDataType=0x0005\nDefaultValue=3\n[1A00sub1]\nParameterName=M1\nDataType=0x0007\nDefaultValue=0x20000120\n[1A00sub2]\nParameterName=M2\nDataType=0x0007\nDefaultValue=0x00050008\n[1A00sub3]\nParameterName=M3\nDataType=0x0007\nDefaultValue=0x20000201\n[2000]\nParameterName=R\nObjectType=0x9\nSubNumber=3\n[2000sub1]\nParameterName=Speed\nDataType=0x0008\nPDOMapping=1\nLowLimit=-10\nHighLimit=10\n[2000sub2]\nParameterName=On\nDataType=0x0001\nPDOMapping=1\n' >"$corpus/dcf.dcf"
+    extra=(-dict="$root/tests/fuzz/canopen_eds.dict")
     ;;
   hid_descriptor)
     # Gravis GamePad Pro (Android CTS) as bytes, the hid-recorder descriptors

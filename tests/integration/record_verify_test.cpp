@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -67,9 +68,10 @@ int verify(const std::vector<std::string>& args, const std::string& log, std::st
 // exits; rise-hild records it and is stopped by SIGTERM once the console is gone.
 void record_live_session(const std::string& panel, const std::string& hild_source,
                          const std::vector<std::string>& emulator_transport, const std::string& id,
-                         const std::string& dir) {
-  std::vector<std::string> emulate{kBin + "/rise-panel", "emulate", "--panel", panel, "--script",
-                                   kSource + "/tests/data/replay/session.txt", "--start-on-feedback"};
+                         const std::string& dir,
+                         const std::string& script = kSource + "/tests/data/replay/session.txt") {
+  std::vector<std::string> emulate{kBin + "/rise-panel", "emulate", "--panel", panel, "--script", script,
+                                   "--start-on-feedback"};
   emulate.insert(emulate.end(), emulator_transport.begin(), emulator_transport.end());
   ChildProcess panel_process(emulate, dir + "/rise-panel.log");
   ChildProcess hild({kBin + "/rise-hild", "--panel", panel, "--source", hild_source, "--id", id, "--lcm", kLcm,
@@ -243,6 +245,36 @@ TEST_CASE("a live Modbus TCP session recorded with --record verifies against its
   INFO("logs in " << dir.path);
   CHECK(verify({"--panel", panel, "--record-dir", rec}, dir.path + "/verify.log", out) == 0);
   CHECK(out.rfind("pass: ", 0) == 0);
+}
+
+TEST_CASE("a live CANopen session recorded with --record verifies against its own PanelState log",
+          "[integration][canopen]") {
+  TempDir dir("rise-record-canopen");
+  const std::string bus = "127.0.0.1:" + port_text(2) + "/can0";
+  const std::string id = "corec" + std::to_string(::getpid());
+  const std::string panel = kSource + "/panels/definitions/rise_console_canopen.yaml";
+  record_live_session(panel, "socketcand://" + bus, {"--can", "socketcand+listen://" + bus}, id, dir.path,
+                      kSource + "/tests/integration/canopen_script.txt");
+  const std::string rec = dir.path + "/rec";
+  const std::string log = slurp(rec + "/console.log");
+  INFO("logs in " << dir.path);
+  // What the bridge sent (T) and the node answered (R), in CiA 301's bytes.
+  CHECK(log.find(" 000#8205 T") != std::string::npos);  // reset communication at open
+  CHECK(log.find(" 705#00 R") != std::string::npos);    // boot-up
+  CHECK(log.find(" 000#0105 T") != std::string::npos);  // start remote node
+  CHECK(log.find(" 080# T") != std::string::npos);      // SYNC
+  CHECK(log.find(" 705#7F R") != std::string::npos);    // pre-operational (@status fault)
+  CHECK(log.find(" 205#") != std::string::npos);        // RPDO1: the LEDs and the display
+  const auto states = read_states(rec + "/panel_state.lcmlog");
+  const auto preop = std::find_if(states.begin(), states.end(), [](const rise_msgs::PanelState& s) {
+    return s.failsafe_reason.find("node 5 pre-operational") != std::string::npos;
+  });
+  REQUIRE(preop != states.end());
+  // Started again after the power cycle (the end is failsafe: the emulator is gone).
+  CHECK(std::any_of(preop, states.end(), [](const rise_msgs::PanelState& s) { return !s.failsafe; }));
+  std::string out;
+  CHECK(verify({"--panel", panel, "--record-dir", rec}, dir.path + "/verify.log", out) == 0);
+  CHECK(out.rfind("pass: " + std::to_string(states.size()) + " of " + std::to_string(states.size()), 0) == 0);
 }
 
 TEST_CASE("python-can's log reader reads every frame kind of a candump log we write as we read it", "[integration]") {
