@@ -5,6 +5,7 @@
 #include <poll.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cmath>
@@ -153,7 +154,21 @@ Answer send_fault(lcm::LCM& lcm, rise_msgs::FaultCommand c, double confirm_s) {
   lcm::Subscription* s1 = lcm.subscribe(msgs::panel_state_channel(c.trainee_id), &RawHandler::on, &h);
   lcm::Subscription* s2 = lcm.subscribe(msgs::sim_event_channel(c.trainee_id), &RawHandler::on, &h);
   lcm.publish(msgs::fault_command_channel(c.trainee_id), &c);
-  if (confirm_s > 0) handle_until(lcm, confirm_s, [&] { return answer.confirmed || !answer.refusal.empty(); });
+  // One UDP datagram can be lost (a receiver's socket buffer full under
+  // load): an inject not confirmed within a second goes again, signed afresh
+  // (the same signature again would be a replay). Receivers replace a fault of
+  // the same id, so a second copy of one that did arrive changes nothing.
+  const auto answered = [&] { return answer.confirmed || !answer.refusal.empty(); };
+  const auto deadline = Clock::now() + std::chrono::microseconds(static_cast<int64_t>(confirm_s * 1e6));
+  const auto seconds_left = [&] { return std::chrono::duration<double>(deadline - Clock::now()).count(); };
+  const double resend_s = c.action == "inject" ? 1.0 : confirm_s;
+  for (int copies = 2; confirm_s > 0; ++copies) {
+    if (handle_until(lcm, std::min(resend_s, seconds_left()), answered) || seconds_left() <= 0 || g_stop) break;
+    c.utime = msgs::wall_us() + receiver_offset_us(lcm, c.trainee_id);
+    msgs::sign(c, instructor_key());
+    spdlog::info("inject {}: no confirmation within a second, sent again (copy {})", c.fault_id, copies);
+    lcm.publish(msgs::fault_command_channel(c.trainee_id), &c);
+  }
   lcm.unsubscribe(s1);
   lcm.unsubscribe(s2);
   return answer;

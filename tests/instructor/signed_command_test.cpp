@@ -138,6 +138,32 @@ rise::msgs::InstructorKey other_key() {
 }
 }  // namespace
 
+TEST_CASE("rise-instructor inject goes again, signed afresh, until the daemon confirms it", "[instructor]") {
+  // The first copy goes to nobody (rise-hild starts a second later): lost
+  // like a datagram dropped under load; a later copy is taken, not as a replay.
+  const std::string id = "fr" + std::to_string(::getpid());
+  KeyDir keys("rise-fault-resend-");
+  INFO("logs in " << keys.dir);
+  Station station(id);
+  REQUIRE(station.good());
+  const std::string out = (keys.dir / "cli.out").string();
+  rise::process::ChildProcess cli({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "inject", "--lcm", kLcm,
+                                   "--instructor-key", keys.key_file, "--trainee", id, "offset", "drive_x", "--value",
+                                   "0.2", "--id", "late", "--confirm", "20"},
+                                  out);
+  REQUIRE(station.wait_until([] { return false; }, 1500) == false);
+  rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
+                                    "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",
+                                    "--source", "mem://" + id, "--instructor-key", keys.key_file},
+                                   (keys.dir / "rise-hild.log").string());
+  CHECK(cli.wait_for(30000) == 0);
+  const std::string said = read_file(out);
+  CHECK_THAT(said, Catch::Contains("sent again"));
+  CHECK_THAT(said, Catch::Contains("inject late on " + id + ": confirmed"));
+  CHECK(station.panel_shows("late: offset drive_x"));
+  CHECK_THAT(read_file((keys.dir / "rise-hild.log").string()), !Catch::Contains("replayed"));
+}
+
 TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wrongly signed and replayed ones",
           "[instructor]") {
   const std::string id = "fh" + std::to_string(::getpid());
