@@ -76,7 +76,9 @@ class PanelMapper {
   /// and dropped. Returns true when a bound control's raw value changed (the
   /// bridge then publishes at once). No throw; allocates nothing.
   /// For a `dbc` source every bound MESSAGE.SIGNAL is read from the frames
-  /// with its message's id (`extended` for 29-bit ids).
+  /// with its message's id (`extended` for 29-bit ids). For a `j1939`
+  /// source the frame is a whole J1939 message (up to 1785 bytes, from the
+  /// transport protocol) from the console's address, matched by its PGN.
   bool on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
                 int64_t now_us, bool extended = false);
 
@@ -253,7 +255,8 @@ class PanelMapper {
   std::vector<int> binding_of_control_;  // index into the source's bindings, -1 if none
   std::vector<InputFault> input_faults_;  // injection order
 
-  bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);
+  bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us,
+                    bool j1939);
 };
 
 /// Age after which a missing heartbeat makes a source stale: three heartbeat
