@@ -47,7 +47,7 @@ io::IoStatus J1939Source::reopen(SourcePanel&) {
   return status;
 }
 
-uint8_t J1939Source::console_address() const {
+uint8_t J1939Source::current_console_address() const {
   if (definition_.console_name) {
     const uint8_t claimed = claimer_.address_of(*definition_.console_name);
     if (claimed != j1939::kNullAddress) return claimed;
@@ -118,7 +118,7 @@ void J1939Source::on_frame(SourcePanel& panel, const j1939::Frame& frame, int64_
 }
 
 void J1939Source::deliver(SourcePanel& panel, const j1939::Id& id, std::span<const uint8_t> data) {
-  if (id.sa != console_address()) {
+  if (id.sa != current_console_address()) {
     foreign_++;
     return;
   }
@@ -138,7 +138,10 @@ void J1939Source::note_changes(SourcePanel& panel) {
     else if (claimer_.state() == j1939::AddressClaimer::State::CannotClaim)
       panel.note("source '" + definition_.name + "': J1939 address lost to a lower NAME, none free (Cannot Claim)");
   }
-  const uint8_t console = console_address();
+  const uint8_t console = current_console_address();
+  seen_own_ = own;
+  seen_console_ = console;
+  seen_tp_messages_ = tp_.counters().messages;
   if (console != noted_console_) {
     noted_console_ = console;
     if (console != j1939::kNullAddress)

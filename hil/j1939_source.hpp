@@ -10,6 +10,7 @@
 // Messages from other addresses share the bus and are only counted. No
 // feedback: a J1939 DBC of a console's inputs has no frames of ours.
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 
@@ -36,11 +37,13 @@ class J1939Source final : public SourceTransport {
   }
   void decorate(IoDecorator& decorator) override { bus_ = decorator.wrap(std::move(bus_)); }
 
+  // What the source's thread last saw, readable from any thread.
   /// Our address while claimed, else kNullAddress (254).
-  uint8_t own_address() const { return claimer_.address(); }
+  uint8_t own_address() const { return seen_own_; }
   /// Where the console's messages are taken from now; 254 while unknown.
-  uint8_t console_address() const;
-  const firmware_protocol::j1939::TpCounters& transport_counters() const { return tp_.counters(); }
+  uint8_t console_address() const { return seen_console_; }
+  /// Messages the transport protocol reassembled.
+  uint64_t transport_messages() const { return seen_tp_messages_; }
   /// Whole messages from addresses other than the console's (dropped).
   uint64_t foreign_messages() const { return foreign_; }
 
@@ -50,6 +53,7 @@ class J1939Source final : public SourceTransport {
   void on_frame(SourcePanel& panel, const firmware_protocol::j1939::Frame& frame, int64_t now_ms);
   void deliver(SourcePanel& panel, const firmware_protocol::j1939::Id& id, std::span<const uint8_t> data);
   void note_changes(SourcePanel& panel);
+  uint8_t current_console_address() const;
 
   std::unique_ptr<io::CanBus> bus_;
   const panels::SourceDefinition definition_;  // a copy: the transport may outlive the caller's definition
@@ -58,7 +62,10 @@ class J1939Source final : public SourceTransport {
   bool claim_started_ = false;
   uint8_t noted_own_ = firmware_protocol::j1939::kNullAddress;
   uint8_t noted_console_ = firmware_protocol::j1939::kNullAddress;
-  uint64_t foreign_ = 0;
+  std::atomic<uint64_t> foreign_{0};
+  std::atomic<uint8_t> seen_own_{firmware_protocol::j1939::kNullAddress};
+  std::atomic<uint8_t> seen_console_{firmware_protocol::j1939::kNullAddress};
+  std::atomic<uint64_t> seen_tp_messages_{0};
   io::CanFrame frame_;
 };
 

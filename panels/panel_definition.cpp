@@ -130,8 +130,10 @@ uint64_t read_j1939_name(const YamlReader& ctx, const YAML::Node& node, const st
 }
 
 uint8_t read_j1939_address(const YamlReader& ctx, const YAML::Node& map, const char* key, const std::string& where,
-                           int fallback, int last) {
-  const int address = ctx.get<int>(map, key, where, fallback);
+                           int fallback) {
+  constexpr int last = 253;  // 254 is "no address", 255 "everyone"
+  if (!map[key]) return static_cast<uint8_t>(fallback);
+  const int address = ctx.require<int>(map, key, where);
   if (address < 0 || address > last)
     ctx.fail(map[key], where + "." + key, "must be 0.." + std::to_string(last) + " (a J1939 source address)");
   return static_cast<uint8_t>(address);
@@ -139,10 +141,10 @@ uint8_t read_j1939_address(const YamlReader& ctx, const YAML::Node& map, const c
 
 // A j1939 source: the bridge's own address and NAME, and how the console is found.
 void parse_j1939_source(const YamlReader& ctx, const YAML::Node& node, const std::string& where, SourceDefinition& s) {
-  s.j1939_address = read_j1939_address(ctx, node, "address", where, 0x80, 253);
+  s.j1939_address = read_j1939_address(ctx, node, "address", where, 0x80);
   if (node["j1939_name"]) s.j1939_name = read_j1939_name(ctx, node["j1939_name"], where + ".j1939_name");
   if (node["console_name"]) s.console_name = read_j1939_name(ctx, node["console_name"], where + ".console_name");
-  s.console_address = read_j1939_address(ctx, node, "console_address", where, 254, 253);
+  s.console_address = read_j1939_address(ctx, node, "console_address", where, 254);
   if (!s.console_name && s.console_address == 254)
     ctx.fail(node, where + ".console_name",
              "missing: a j1939 source needs the console's NAME (console_name) or its fixed console_address");
