@@ -5,7 +5,7 @@
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
-# TARGET is console_can, console_modbus, dbc, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
+# TARGET is console_can, console_modbus, dbc, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
 # line_protocols, command_auth, configs, training_graph, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
@@ -15,6 +15,7 @@ case "$target" in
   console_can) sources=("$root/firmware_protocol/console_can.cpp") ;;
   console_modbus) sources=("$root"/firmware_protocol/console_{can,modbus}.cpp) ;;
   dbc) sources=("$root/firmware_protocol/dbc.cpp") ;;
+  j1939) sources=("$root/firmware_protocol/j1939.cpp") ;;
   hid_descriptor) sources=("$root"/firmware_protocol/hid_{descriptor,report,text}.cpp) ;;
   # The semantic readers: PLY/XYZ and 3DTK/sim poses without PCL; the PCD
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
@@ -136,6 +137,15 @@ case "$target" in
     fi
     printf 'VERSION ""\nBO_ 2147483905 Ext: 8 N\n SG_ Mux M : 0|8@1+ (1,0) [0|0] "" N\n SG_ A m1 : 15|12@0- (0.5,-3) [0|0] "u" N\nVAL_ 2147483905 A -1 "minus" ;\nSIG_VALTYPE_ 2147483905 A : 0;\n' >"$corpus/seed.dbc"
     extra=(-dict="$root/tests/fuzz/dbc.dict")
+    ;;
+  j1939)
+    # Our address 0x80. A 20-byte BAM of PGN 0xFF20 from 0x21 (CM + 3 DT);
+    # an RTS/CTS of 10 bytes to 0x80 (RTS, 2 DT); a contending claim of 0x80
+    # by a lower NAME; an RTS left to time out (time step 15 x 100 ms).
+    printf '\x80\x21\xff\xec\x1c\x08\x20\x14\x00\x03\xff\x20\xff\x00\x21\xff\xeb\x1c\x08\x01\x01\x02\x03\x04\x05\x06\x07\x21\xff\xeb\x1c\x08\x02\x08\x09\x0a\x0b\x0c\x0d\x0e\x21\xff\xeb\x1c\x08\x03\x0f\x10\x11\x12\x13\x14\xff' >"$corpus/bam"
+    printf '\x80\x21\x80\xec\x1c\x08\x10\x0a\x00\x02\xff\x00\xff\x00\x21\x80\xeb\x1c\x08\x01\x01\x02\x03\x04\x05\x06\x07\x21\x80\xeb\x1c\x08\x02\x08\x09\x0a\xff\xff\xff\xff' >"$corpus/rts_cts"
+    printf '\x80\x80\xff\xee\x18\x08\x01\x00\x00\x00\x00\x00\x00\x00\x21\xff\xea\x18\x03\x00\xee\x00' >"$corpus/claim"
+    printf '\x80\x21\x80\xec\x1c\x08\x10\x0a\x00\x02\xff\x00\xff\x00\x21\x80\xeb\x1c\xf8\x01\x01\x02\x03\x04\x05\x06\x07' >"$corpus/timeout"
     ;;
   hid_descriptor)
     # Gravis GamePad Pro (Android CTS) as bytes, the hid-recorder descriptors
