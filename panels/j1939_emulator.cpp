@@ -98,8 +98,7 @@ bool J1939Emulator::send(hil::io::CanBus& bus, const j1939::Frame& frame) {
 std::vector<uint8_t> J1939Emulator::encode(const Message& m) const {
   std::vector<fp::SignalValue> values;
   for (std::size_t i : m.controls) values.push_back({definition_.controls[i].dbc_signal->name, values_[i]});
-  auto data = definition_.sources[source_].dbc->encode(*m.dbc, values);
-  return data;
+  return definition_.sources[source_].dbc->encode(*m.dbc, values);
 }
 
 int J1939Emulator::send_message(hil::io::CanBus& bus, Message& m, int64_t now_us) {
