@@ -49,6 +49,7 @@ packages=(
   universal-ctags
   iproute2 faketime curl jq
   libasound2-dev sox
+  libassimp-dev
   libpcap-dev tcpdump tshark
 )
 

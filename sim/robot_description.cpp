@@ -393,13 +393,103 @@ void parse_control(const YamlReader& r, const YAML::Node& root,
   if (arm_control) d.control.arm = parse_arm_mapping(r, arm_control, urdf_arm_limits);
 }
 
+// control.joints.<name>: one panel-driven joint of a urdf_tree robot.
+JointControl parse_joint_control(const YamlReader& r, const YAML::Node& n, const std::string& name,
+                                 const UrdfTree& tree) {
+  const std::string where = "control.joints." + name;
+  r.only_keys(n, where, {"mode", "axis", "max", "invert", "mix", "buttons", "enable", "max_effort", "gain_per_s"});
+  JointControl c;
+  c.joint = name;
+  const std::size_t j = tree.joint_index(name);
+  if (j == tree.joints.size()) r.fail(n, where, "no joint '" + name + "' in the URDF");
+  const UrdfJoint& joint = tree.joints[j];
+  if (joint.type == UrdfJointType::Fixed) r.fail(n, where, "joint '" + name + "' is fixed");
+  if (n["mode"]) {
+    const auto mode = r.as<std::string>(n["mode"], where + ".mode");
+    if (mode == "position") c.mode = JointControlMode::Position;
+    else if (mode == "velocity") c.mode = JointControlMode::Velocity;
+    else if (mode == "effort") c.mode = JointControlMode::Effort;
+    else r.fail(n["mode"], where + ".mode", "expected position, velocity or effort");
+  }
+  if (c.mode == JointControlMode::Position && joint.type == UrdfJointType::Continuous)
+    r.fail(n["mode"], where + ".mode", "a continuous joint has no position limits: use velocity or effort");
+  if (!n["axis"] && !n["buttons"]) r.fail(n, where + ".axis", "missing (axis or buttons)");
+  if (n["axis"]) c.axis.axis = r.as<std::string>(n["axis"], where + ".axis");
+  if (!n["max"]) r.fail(n, where + ".max", "missing: the command at full deflection");
+  c.axis.max = r.positive(n, "max", where, 0.0);
+  if (n["invert"]) c.axis.invert = r.as<bool>(n["invert"], where + ".invert");
+  if (const YAML::Node m = n["mix"]) {
+    r.only_keys(m, where + ".mix", {"axis", "max", "invert"});
+    if (!m["axis"] || !m["max"]) r.fail(m, where + ".mix", "needs axis and max");
+    AxisMapping mix;
+    mix.axis = r.as<std::string>(m["axis"], where + ".mix.axis");
+    mix.max = r.positive(m, "max", where + ".mix", 0.0);
+    if (m["invert"]) mix.invert = r.as<bool>(m["invert"], where + ".mix.invert");
+    c.mix = mix;
+  }
+  if (const YAML::Node b = n["buttons"]) {
+    if (!b.IsSequence() || b.size() != 2) r.fail(b, where + ".buttons", "expected [plus, minus]");
+    c.buttons = std::make_pair(r.as<std::string>(b[0], where + ".buttons"), r.as<std::string>(b[1], where + ".buttons"));
+  }
+  if (const YAML::Node e = n["enable"]) c.enable = parse_enable(r, e, where + ".enable");
+  c.max_effort = r.positive(n, "max_effort", where, joint.effort > 0 ? joint.effort : 0.0, true);
+  if (!(c.max_effort > 0))
+    r.fail(n, where + ".max_effort", "missing: the URDF joint's limit gives no effort");
+  c.gain_per_s = r.positive(n, "gain_per_s", where, c.gain_per_s);
+  return c;
+}
+
+// A urdf_tree robot: the URDF's tree, its links' friction and the joints the panel drives.
+void parse_tree_robot(const YamlReader& r, const YAML::Node& root, RobotDescription& d) {
+  for (const char* key : {"chassis", "wheels", "tracks", "arm"})
+    if (root[key]) r.fail(root[key], key, "a urdf_tree robot takes its body from the URDF");
+  const YAML::Node urdf = root["urdf"];
+  if (!urdf) r.fail(root, "urdf", "missing: a urdf_tree robot's links and joints");
+  const auto name = r.as<std::string>(urdf, "urdf");
+  const std::filesystem::path path = std::filesystem::path(r.file()).parent_path() / name;
+  try {
+    d.tree = read_urdf_tree(path.string());
+  } catch (const std::runtime_error& e) {
+    r.fail(urdf, "urdf", name + ": " + e.what());
+  }
+  if (const YAML::Node links = root["links"]) {
+    if (!links.IsMap()) r.fail(links, "links", "expected a mapping of link names to {friction}");
+    for (const auto& kv : links) {
+      const auto link = r.as<std::string>(kv.first, "links");
+      const std::string where = "links." + link;
+      if (d.tree->link_index(link) == d.tree->links.size()) r.fail(kv.first, where, "no link '" + link + "' in the URDF");
+      r.only_keys(kv.second, where, {"friction"});
+      d.link_friction.emplace_back(link, r.positive(kv.second, "friction", where, 1.0, true));
+    }
+  }
+  const YAML::Node control = root["control"];
+  if (!control) r.fail(root, "control", "missing: which panel controls drive the robot's joints");
+  r.only_keys(control, "control", {"enable", "speed_scale", "estop", "joints"});
+  if (const YAML::Node e = control["enable"]) d.control.enable = parse_enable(r, e, "control.enable");
+  if (const YAML::Node s = control["speed_scale"]) d.control.speed_scale = parse_speed_scale(r, s);
+  if (const YAML::Node e = control["estop"]) {
+    r.only_keys(e, "control.estop", {"button"});
+    if (!e["button"]) r.fail(e, "control.estop.button", "missing");
+    d.control.estop_button = r.as<std::string>(e["button"], "control.estop.button");
+  }
+  const YAML::Node joints = control["joints"];
+  if (!joints || !joints.IsMap() || joints.size() == 0)
+    r.fail(joints ? joints : control, "control.joints", "missing: a mapping of URDF joint names to controls");
+  for (const auto& kv : joints) {
+    const auto joint = r.as<std::string>(kv.first, "control.joints");
+    for (const auto& other : d.control.joints)
+      if (other.joint == joint) r.fail(kv.first, "control.joints." + joint, "joint mapped twice");
+    d.control.joints.push_back(parse_joint_control(r, kv.second, joint, *d.tree));
+  }
+}
+
 }  // namespace
 
 RobotDescription parse_robot_description(const std::string& text, const std::string& file) {
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with robot, chassis, wheels, control");
-  r.only_keys(root, "", {"robot", "kind", "urdf", "chassis", "wheels", "tracks", "arm", "control", "sensors",
+  r.only_keys(root, "", {"robot", "kind", "urdf", "chassis", "wheels", "tracks", "arm", "links", "control", "sensors",
                          "sounds"});
   RobotDescription d;
   d.file = file;
@@ -409,8 +499,16 @@ RobotDescription parse_robot_description(const std::string& text, const std::str
     const auto kind = r.as<std::string>(k, "kind");
     if (kind == "skid_steer") d.kind = RobotKind::SkidSteer;
     else if (kind == "tracked") d.kind = RobotKind::Tracked;
-    else r.fail(k, "kind", "expected skid_steer or tracked");
+    else if (kind == "urdf_tree") d.kind = RobotKind::UrdfTree;
+    else r.fail(k, "kind", "expected skid_steer, tracked or urdf_tree");
   }
+  if (d.kind == RobotKind::UrdfTree) {
+    parse_tree_robot(r, root, d);
+    if (const YAML::Node sensors = root["sensors"]) d.sensors = parse_sensors(r, sensors);
+    if (const YAML::Node sounds = root["sounds"]) d.sounds = parse_sounds(r, sounds, true);
+    return d;
+  }
+  if (const YAML::Node links = root["links"]) r.fail(links, "links", "only for kind: urdf_tree");
 
   const YAML::Node urdf = root["urdf"];
   std::vector<std::pair<double, double>> urdf_arm_limits;

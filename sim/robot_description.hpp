@@ -13,10 +13,13 @@
 
 #include "sim/sensor_description.hpp"
 #include "sim/sound_description.hpp"
+#include "sim/urdf_tree.hpp"
 
 namespace rise::sim {
 
-enum class RobotKind { SkidSteer, Tracked };
+/// skid_steer and tracked fit the simulator's fixed model (chassis, running
+/// gear, optional 3-joint arm); urdf_tree is any URDF tree (sim/urdf_tree.hpp).
+enum class RobotKind { SkidSteer, Tracked, UrdfTree };
 
 struct ChassisDescription {
   std::array<double, 3> size_m{0.8, 0.5, 0.25};  ///< length (x), width (y), height (z)
@@ -102,6 +105,27 @@ struct ArmMapping {
   bool operator==(const ArmMapping&) const = default;
 };
 
+enum class JointControlMode { Position, Velocity, Effort };
+
+/// A urdf_tree robot's joint driven by the panel: the command is
+/// axis value · max (+ mix), or ±max while its plus or minus button is held.
+/// Position: target in rad or m, clamped to the joint's limits, reached at
+/// up to the joint's velocity limit; velocity: rad/s or m/s (scaled by
+/// speed_scale); effort: N·m or N. Motors hold (position, velocity) or go
+/// slack (effort) while motion is not allowed.
+struct JointControl {
+  std::string joint;  ///< URDF joint name
+  JointControlMode mode = JointControlMode::Velocity;
+  AxisMapping axis;                                            ///< axis.axis empty: buttons only
+  std::optional<AxisMapping> mix;                              ///< added, e.g. turn into a wheel's speed
+  std::optional<std::pair<std::string, std::string>> buttons;  ///< plus, minus
+  std::optional<std::pair<std::string, std::string>> enable;   ///< default: control.enable
+  double max_effort = 0.0;  ///< motor limit, N·m or N: the URDF's effort unless given here
+  double gain_per_s = 10.0;  ///< position: commanded rate = gain · error
+
+  bool operator==(const JointControl&) const = default;
+};
+
 struct ControlMapping {
   AxisMapping linear;
   AxisMapping angular;
@@ -113,6 +137,8 @@ struct ControlMapping {
   std::optional<std::string> estop_button;
   /// Present iff the robot has an arm.
   std::optional<ArmMapping> arm;
+  /// urdf_tree: the panel-driven joints, in file order.
+  std::vector<JointControl> joints;
 
   bool operator==(const ControlMapping&) const = default;
 };
@@ -125,6 +151,9 @@ struct RobotDescription {
   WheelsDescription wheels;  ///< skid_steer only
   TracksDescription tracks;  ///< tracked only
   std::optional<ArmDescription> arm;
+  std::optional<UrdfTree> tree;  ///< urdf_tree only
+  /// urdf_tree: Coulomb μ of a link's collision shapes (e.g. a caster's), by link name.
+  std::vector<std::pair<std::string, double>> link_friction;
   ControlMapping control;
   SensorsDescription sensors;  ///< optional `sensors` section
   std::vector<SoundCueDescription> sounds;  ///< optional `sounds` section, in file order

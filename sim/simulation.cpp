@@ -45,7 +45,9 @@ void Simulation::Impl::build(std::vector<RobotSpec> specs) {
   add_robots(std::move(specs));
   create_ode_world();
   // Feedback pointers into breakables must stay valid.
-  breakables.reserve(world_desc.doors.size() + 8 * robots.size());
+  std::size_t robot_joints = 0;
+  for (const auto& r : robots) robot_joints += 8 + (r->desc.tree ? r->desc.tree->joints.size() : 0);
+  breakables.reserve(world_desc.doors.size() + robot_joints);
 
   build_world();
   for (std::size_t i = 0; i < robots.size(); ++i) {
@@ -55,7 +57,10 @@ void Simulation::Impl::build(std::vector<RobotSpec> specs) {
     // another's, nor one robot's another robot's (the first robot's
     // streams are those of a one-robot world).
     const uint64_t seed = r.desc.sensors.seed + 0x9E3779B97F4A7C15ull * static_cast<uint64_t>(i);
-    const double gauge = r.desc.kind == RobotKind::Tracked ? r.desc.tracks.gauge_m : r.desc.wheels.track_m;
+    // A urdf_tree's odometry reads the base's own motion (side_speeds_mps) with a 1 m gauge.
+    const double gauge = r.desc.kind == RobotKind::Tracked  ? r.desc.tracks.gauge_m
+                         : r.desc.kind == RobotKind::UrdfTree ? 1.0
+                                                              : r.desc.wheels.track_m;
     r.odometry.emplace(r.desc.sensors.odometry, gauge, r.start.xy_m, r.start.yaw_rad, seed * 2 + 1);
     r.imu.emplace(r.desc.sensors.imu, Eigen::Vector3d(0, 0, -9.81), seed * 2 + 2);
   }
@@ -108,6 +113,11 @@ void Simulation::Impl::create_ode_world() {
 }
 
 void Simulation::Impl::build_robot(Robot& r, int index) {
+  if (r.desc.kind == RobotKind::UrdfTree) {
+    build_urdf_tree(r, index);
+    place_robot(r);
+    return;
+  }
   if (r.desc.kind == RobotKind::Tracked) build_tracked(r, index);
   else build_skid_steer(r, index);
   if (r.desc.arm && r.desc.control.arm) build_arm(r, index);
@@ -132,6 +142,7 @@ void Simulation::Impl::step() {
     Robot& r = *rp;
     for (std::size_t i = 0; i < 2; ++i) r.track_travel_m[i] += r.track_speed_mps[i] * kStepS;
     update_arm_efforts(r);
+    if (!r.tree_joints.empty()) unwrap_tree_joints(r);
     update_sensors(r);
   }
   check_breakables();
@@ -142,6 +153,8 @@ Simulation::Impl::~Impl() {
   if (ray) dGeomDestroy(ray);
   if (contacts) dJointGroupDestroy(contacts);
   if (space) dSpaceDestroy(space);
+  for (auto& r : robots)
+    for (dTriMeshDataID d : r->trimeshes) dGeomTriMeshDataDestroy(d);
   if (static_space) dSpaceDestroy(static_space);
   if (world) dWorldDestroy(world);
 }
@@ -150,6 +163,7 @@ Simulation::Impl::~Impl() {
 // radius; wheels with the motor torque on them.
 std::vector<WheelState> Simulation::Impl::wheel_states(const Robot& s) {
   std::vector<WheelState> wheels;
+  if (s.desc.kind == RobotKind::UrdfTree) return wheels;  // its wheels are joints
   if (s.desc.kind == RobotKind::Tracked) {
     const double radius = s.desc.tracks.radius_m;
     for (std::size_t i = 0; i < 2; ++i)
@@ -181,6 +195,7 @@ std::vector<JointState> Simulation::Impl::joint_states(const Robot& s) const {
       j.position = a.slider ? dJointGetSliderPosition(a.joint) : dJointGetHingeAngle(a.joint);
       j.velocity = a.slider ? dJointGetSliderPositionRate(a.joint) : dJointGetHingeAngleRate(a.joint);
       j.effort = s.arm_efforts[i];
+      if (i < s.tree_joints.size() && s.tree_joints[i].continuous) j.position = s.tree_joints[i].turned_rad;
     }
     joints.push_back(j);
   }
@@ -226,8 +241,8 @@ RobotSnapshot Simulation::snapshot(std::size_t robot) const {
   RobotSnapshot r;
   r.time_s = time_s();
   for (const auto& f : s.faults) r.active_faults.push_back(f.id + ": " + to_string(f.kind) + " " + f.target);
-  const dReal* p = dBodyGetPosition(s.chassis);
   const dReal* q = dBodyGetQuaternion(s.chassis);
+  const Eigen::Vector3d p = Impl::T_world_base(s).translation();
   r.position_m = {p[0], p[1], p[2]};
   r.orientation_wxyz = {q[0], q[1], q[2], q[3]};
   dVector3 v, w;
@@ -272,9 +287,15 @@ double stop_time_s(const RobotDescription& robot, double speed_mps) {
     scale = values[static_cast<std::size_t>(best)];
   }
   if (m.estop_button) in.buttons[*m.estop_button] = false;
-  const double full = scale * m.linear.max;
-  const double value = std::clamp(speed_mps / full, 0.0, 1.0);
-  in.axes[m.linear.axis] = static_cast<float>(m.linear.invert ? -value : value);
+  if (robot.kind == RobotKind::UrdfTree) {
+    // Its velocity joints (wheels) at full command: the fastest it goes.
+    for (const auto& j : m.joints)
+      if (j.mode == JointControlMode::Velocity && !j.axis.axis.empty()) in.axes[j.axis.axis] = j.axis.invert ? -1.0f : 1.0f;
+  } else {
+    const double full = scale * m.linear.max;
+    const double value = std::clamp(speed_mps / full, 0.0, 1.0);
+    in.axes[m.linear.axis] = static_cast<float>(m.linear.invert ? -value : value);
+  }
   sim.set_input(in);
   // Spin up until the speed settles (or 10 s), then take motion away.
   double last = -1.0;

@@ -140,6 +140,16 @@ struct ArmCommand {
 };
 ArmCommand map_arm_controls(const ControlMapping& mapping, const ControlInput& input);
 
+/// A urdf_tree robot's joint commands (order of ControlMapping::joints):
+/// rad or m (position), rad/s or m/s (velocity), N·m or N (effort); each
+/// joint's enabled is false (command 0) while its motion is not allowed.
+/// Pure function, no ODE.
+struct JointCommand {
+  std::vector<double> values;
+  std::vector<bool> enabled;
+};
+JointCommand map_joint_controls(const ControlMapping& mapping, const ControlInput& input);
+
 /// One robot of a Simulation.
 struct RobotSpec {
   /// Names the robot in events and sound cues: unique, not empty, no '/'.
@@ -199,6 +209,11 @@ class Simulation {
   /// forward, y left, z up) in the world (an index past the end reads the
   /// last robot). Safe in the cyclic path.
   Eigen::Isometry3d T_world_base(std::size_t robot = 0) const;
+  /// A urdf_tree robot's link frames in the world, in the order of its
+  /// description's tree.links (empty for other robots or an index out of
+  /// range): what a viewer needs to draw the links' visual shapes. Safe in
+  /// the cyclic path apart from the vector's allocation.
+  std::vector<Eigen::Isometry3d> T_world_links(std::size_t robot = 0) const;
   /// The true world pose of the robot file's camera `camera`
   /// (sensors.cameras), nullopt for an unknown name. Safe in the cyclic path.
   std::optional<Eigen::Isometry3d> T_world_camera(const std::string& camera, std::size_t robot = 0) const;

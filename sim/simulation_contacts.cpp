@@ -147,6 +147,8 @@ void Simulation::Impl::set_surface(dContact& contact, const GeomInfo& ia, const 
       for (int k = 0; k < 3; ++k) contact.fdir1[k] = f[k] / len;
       s.motion1 = owner->track_speed_mps[static_cast<std::size_t>(ia.side)];
     }
+  } else if (ia.friction >= 0.0) {
+    s.mu = ia.friction * (on_ground ? world_desc.ground_friction : 1.0);
   } else if (!is_robot(ia.kind) || on_ground) {
     s.mu = world_desc.ground_friction * kObstacleFriction * 2.0;
   }

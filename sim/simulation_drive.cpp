@@ -64,6 +64,33 @@ DriveCommand map_controls(const ControlMapping& mapping, const ControlInput& inp
   return c;
 }
 
+JointCommand map_joint_controls(const ControlMapping& mapping, const ControlInput& input) {
+  JointCommand c;
+  c.values.assign(mapping.joints.size(), 0.0);
+  c.enabled.assign(mapping.joints.size(), false);
+  double scale = 1.0;
+  if (mapping.speed_scale) {
+    const auto it = input.switches.find(mapping.speed_scale->first);
+    const auto& values = mapping.speed_scale->second;
+    // An unknown position stops the velocity joints, as it stops driving.
+    scale = it == input.switches.end() || it->second < 0 || static_cast<std::size_t>(it->second) >= values.size()
+                ? 0.0
+                : values[static_cast<std::size_t>(it->second)];
+  }
+  for (std::size_t i = 0; i < mapping.joints.size(); ++i) {
+    const JointControl& j = mapping.joints[i];
+    std::string reason;
+    if (!allowed(j.enable ? j.enable : mapping.enable, mapping, input, reason)) continue;
+    double v = j.axis.axis.empty() ? 0.0 : axis_value(j.axis, input);
+    if (j.mix) v += axis_value(*j.mix, input);
+    if (j.buttons && pressed(input, j.buttons->first) != pressed(input, j.buttons->second))
+      v = pressed(input, j.buttons->first) ? j.axis.max : -j.axis.max;
+    c.values[i] = j.mode == JointControlMode::Velocity ? v * scale : v;
+    c.enabled[i] = true;
+  }
+  return c;
+}
+
 ArmCommand map_arm_controls(const ControlMapping& mapping, const ControlInput& input) {
   ArmCommand c;
   if (!mapping.arm) {
@@ -83,8 +110,13 @@ ArmCommand map_arm_controls(const ControlMapping& mapping, const ControlInput& i
 
 void Simulation::Impl::apply_command(Robot& r) {
   r.command = map_controls(r.desc.control, r.input);
-  set_drive_speeds(r);
-  if (!r.arm_joints.empty()) {
+  if (r.desc.kind == RobotKind::UrdfTree) {
+    r.joint_command = map_joint_controls(r.desc.control, r.input);
+    set_tree_joints(r);
+  } else {
+    set_drive_speeds(r);
+  }
+  if (!r.arm_joints.empty() && r.desc.kind != RobotKind::UrdfTree) {
     r.arm_command = map_arm_controls(r.desc.control, r.input);
     set_arm_rates(r);
   }

@@ -41,6 +41,7 @@ struct Simulation::Impl {
     int side = 0;      ///< tracks: 0 left, 1 right
     bool loose = false;  ///< a door off its broken hinge: it meets the floor too
     int robot = -1;    ///< robot parts: the robot's index
+    double friction = -1.0;  ///< urdf_tree links: the robot file's μ (links.<name>.friction); -1: default
   };
   static bool is_static(GeomKind k) { return k == GeomKind::Ground || k == GeomKind::Obstacle; }
   static bool is_robot(GeomKind k) {
@@ -95,7 +96,22 @@ struct Simulation::Impl {
     std::array<double, 2> track_speed_mps{};
     std::array<double, 2> track_travel_m{};
     std::vector<dBodyID> bodies;
-    std::vector<ArmJoint> arm_joints;  // yaw, pitch, elbow, gripper
+    std::vector<ArmJoint> arm_joints;  // yaw, pitch, elbow, gripper; urdf_tree: its moving joints in URDF order
+    // urdf_tree: per moving joint (parallel to arm_joints) its URDF joint and
+    // its control (index into desc.control.joints, -1: none); per link its
+    // body and the link frame in that body's frame.
+    struct TreeJoint {
+      std::size_t urdf = 0;
+      int control = -1;
+      bool continuous = false;
+      double turned_rad = 0.0;  // continuous: ODE's angle (±π) unwrapped, step by step
+      double last_rad = 0.0;
+    };
+    std::vector<TreeJoint> tree_joints;
+    std::vector<dBodyID> link_bodies;
+    std::vector<Eigen::Isometry3d> T_body_link;
+    std::vector<dTriMeshDataID> trimeshes;  // destroyed with the world
+    JointCommand joint_command;
     dBodyID finger = nullptr;
     std::vector<double> arm_efforts;
     std::set<std::string> touching;
@@ -178,6 +194,12 @@ struct Simulation::Impl {
   void add_arm_joint(Robot& r, int index, const std::string& name, dJointID j, dBodyID child, double break_nm);
   void build_arm(Robot& r, int index);
   static void place_robot(Robot& r);
+
+  // simulation_tree.cpp
+  void build_urdf_tree(Robot& r, int index);
+  static void set_tree_joints(Robot& r);
+  static void unwrap_tree_joints(Robot& r);
+  static void lift_onto_ground(Robot& r, const std::vector<dGeomID>& geoms);
 
   // simulation_contacts.cpp
   static void near_callback(void* data, dGeomID a, dGeomID b);

@@ -44,13 +44,24 @@ Eigen::Isometry3d Simulation::Impl::T_world_base(const Robot& r) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.translate(Eigen::Vector3d(p[0], p[1], p[2]));
   T.rotate(Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized());
-  return T;
+  // A urdf_tree's base frame is its root link's, not its body's centre of mass.
+  return r.T_body_link.empty() ? T : T * r.T_body_link[0];
 }
 
 // Left and right belt speeds (tracks) or mean rim speeds of each side's
 // wheels (fl, fr, rl, rr), m/s.
 std::array<double, 2> Simulation::Impl::side_speeds_mps(const Robot& r) {
   if (r.desc.kind == RobotKind::Tracked) return r.track_speed_mps;
+  if (r.desc.kind == RobotKind::UrdfTree) {
+    // No fixed running gear: the base's forward and turn rates, as the two
+    // sides of a 1 m gauge (the gauge Simulation::Impl::build gives its odometry).
+    const dReal* v = dBodyGetLinearVel(r.chassis);
+    const dReal* w = dBodyGetAngularVel(r.chassis);
+    const Eigen::Isometry3d T = T_world_base(r);
+    const double forward = T.linear().col(0).dot(Eigen::Vector3d(v[0], v[1], v[2]));
+    const double turn = T.linear().col(2).dot(Eigen::Vector3d(w[0], w[1], w[2]));
+    return {forward - turn / 2, forward + turn / 2};
+  }
   const double radius = r.desc.wheels.radius_m;
   return {radius * (dJointGetHingeAngleRate(r.hinges[0]) + dJointGetHingeAngleRate(r.hinges[2])) / 2,
           radius * (dJointGetHingeAngleRate(r.hinges[1]) + dJointGetHingeAngleRate(r.hinges[3])) / 2};

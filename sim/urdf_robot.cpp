@@ -1,7 +1,6 @@
 #include "sim/urdf_robot.hpp"
 
-#include <console_bridge/console.h>
-#include <urdf_parser/urdf_parser.h>
+#include "sim/urdf_model.hpp"
 
 #include <cerrno>
 #include <cmath>
@@ -22,42 +21,7 @@ constexpr std::array<double, 3> kFingerSize_m{0.03, 0.02, 0.12};
 constexpr double kFingerMass_kg = 0.3;
 constexpr double kUpperRise_rad = M_PI / 4;
 
-/// liburdfdom logs through console_bridge: collect its messages instead of
-/// printing them (libraries do not print). console_bridge's handler is
-/// process-wide, so robot files are loaded from one thread at a time.
-class CapturedLog : public console_bridge::OutputHandler {
- public:
-  CapturedLog() { console_bridge::useOutputHandler(this); }
-  ~CapturedLog() override { console_bridge::restorePreviousOutputHandler(); }
-  CapturedLog(const CapturedLog&) = delete;
-  CapturedLog& operator=(const CapturedLog&) = delete;
-
-  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level < console_bridge::CONSOLE_BRIDGE_LOG_ERROR) return;
-    errors_ += (errors_.empty() ? "" : "; ") + text;
-  }
-  const std::string& errors() const { return errors_; }
-
- private:
-  std::string errors_;
-};
-
 [[noreturn]] void fail(const std::string& what) { throw std::runtime_error(what); }
-
-// Whether `text` is whole UTF-8 sequences: tinyxml 2.6 (liburdfdom's XML
-// parser) takes a lead byte's length on trust and reads past the end of a
-// text cut inside a sequence (a heap overflow found by the urdf fuzz target).
-bool whole_utf8(const std::string& text) {
-  for (std::size_t i = 0; i < text.size();) {
-    const auto c = static_cast<unsigned char>(text[i]);
-    const std::size_t n = c < 0x80 ? 1 : (c >> 5) == 0x6 ? 2 : (c >> 4) == 0xE ? 3 : (c >> 3) == 0x1E ? 4 : 0;
-    if (n == 0 || n > text.size() - i) return false;
-    for (std::size_t k = 1; k < n; ++k)
-      if ((static_cast<unsigned char>(text[i + k]) & 0xC0) != 0x80) return false;
-    i += n;
-  }
-  return true;
-}
 
 std::string text(const urdf::Vector3& v) {
   std::ostringstream s;
@@ -287,20 +251,7 @@ UrdfRobot read_urdf_robot(const std::string& path, const UrdfJointNames& joints)
 }
 
 UrdfRobot parse_urdf_robot(const std::string& xml, const UrdfJointNames& joints) {
-  if (!whole_utf8(xml)) fail("not UTF-8 text");
-  urdf::ModelInterfaceSharedPtr model;
-  std::string errors;
-  {
-    CapturedLog log;
-    try {
-      model = urdf::parseURDF(xml);
-    } catch (const std::exception& e) {
-      fail(std::string("liburdfdom: ") + e.what());
-    }
-    errors = log.errors();
-  }
-  // liburdfdom drops an element it cannot read and goes on: its logged error is the refusal.
-  if (!model || !errors.empty()) fail("liburdfdom: " + (errors.empty() ? std::string("cannot parse") : errors));
+  const urdf::ModelInterfaceSharedPtr model = parse_urdf_model(xml);
   const auto root = model->getRoot();
   if (!root) fail("no root link");
   UrdfRobot out;

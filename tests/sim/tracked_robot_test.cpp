@@ -96,7 +96,7 @@ TEST_CASE("a broken tracked robot file is refused with file:line and the key", "
     const char* replace;
     const char* expected;
   };
-  const auto c = GENERATE(Case{"kind: tracked", "kind: legged", "t.yaml:2: kind: expected skid_steer or tracked"},
+  const auto c = GENERATE(Case{"kind: tracked", "kind: legged", "t.yaml:2: kind: expected skid_steer, tracked or urdf_tree"},
                           Case{"radius_m: 0.09", "radius_m: 0", "t.yaml:4: tracks.radius_m: must be > 0"},
                           Case{"min_deg: -90", "min_deg: 10", "t.yaml:12: control.arm.elbow_pitch.min_deg: limits"},
                           Case{"    shoulder_pitch: {axis: arm_y, max_radps: 1}\n", "",
