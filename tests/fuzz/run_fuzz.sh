@@ -36,7 +36,7 @@ case "$target" in
   configs)
     sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
-             "$root"/sim/{robot_description,urdf_robot,world_description}.cpp "$root/sim/training/task_description.cpp"
+             "$root"/sim/{robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp "$root/sim/training/task_description.cpp"
              "$root/instructor/scenario.cpp")
     ;;
   # The training graph without its tasks (TaskResult is apart from the
@@ -45,7 +45,7 @@ case "$target" in
     sources=("$root"/sim/training/{training_graph,task_result,task_description}.cpp "$root"/sim/world_description.cpp
              "$root/panels/yaml_reader.cpp")
     ;;
-  urdf) sources=("$root/sim/urdf_robot.cpp") ;;
+  urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
   # The messages of the multicast group as the instructor takes them (every type by lcm-gen here).
   lcm_messages)
     sources=("$root"/msgs/{channels,publisher_session,failsafe}.cpp "$root"/instructor/{web_json,trainee_directory}.cpp
@@ -94,11 +94,11 @@ if [ $rebuild -eq 1 ]; then
       flags=(-I"$work/lcmgen-all" -isystem /usr/include/jsoncpp -isystem /usr/include/eigen3)
       libs=(-ljsoncpp -llcm -lyaml-cpp)
       ;;
-    urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge) ;;
+    urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge -lassimp) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
-      libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge)
+      libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
       ;;
   esac
   "$clangxx" -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
@@ -250,15 +250,18 @@ case "$target" in
     printf '\x02training: t\nnodes:\n  - name: a\n    task: a.yaml\n  - name: b\n    task: b.yaml\ntransitions:\n  - {from: START, to: a}\n  - {from: a, to: b}\n  - {from: b, to: a}\n  - {from: c, to: END}\n' >"$corpus/closed.yaml"
     ;;
   urdf)
-    # A byte first: the joints asked for (bit 0 skid4's wheels, bit 1 tracked_eod's arm); the project's robots.
+    # A byte first: the joints asked for (bit 0 skid4's wheels, bit 1 tracked_eod's arm; bit 2: the
+    # general tree, sim/urdf_tree.hpp, meshes by name only); the project's robots and the tree test rig.
     # No leak detection: liburdfdom 3.0 leaks part of its tree on some refused
     # files (parseURDF's error path, not our code; a robot file is loaded once).
     export ASAN_OPTIONS=detect_leaks=0
     extra=(-dict="$root/tests/fuzz/urdf.dict")
     # The smallest robot our checks take, where a mutation reaches every number.
     printf '\x00<robot name="r"><link name="base"><inertial><mass value="6"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial><collision><geometry><box size="1 1 1"/></geometry></collision></link></robot>\n' >"$corpus/box.urdf"
-    for b in 0 1 2 3; do
-      for f in "$root"/sim/robots/*.urdf; do { printf "\\x0$b"; cat "$f"; } >"$corpus/$b-$(basename "$f")"; done
+    for b in 0 1 2 3 4; do
+      for f in "$root"/sim/robots/*.urdf "$root/tests/sim/data/pan_tilt.urdf"; do
+        { printf "\\x0$b"; cat "$f"; } >"$corpus/$b-$(basename "$f")"
+      done
     done
     ;;
   web_requests)

@@ -187,3 +187,51 @@ TEST_CASE("rise-sim with two robots publishes a RobotState and sound cues per ro
   CHECK(sim.stop() == 0);
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+// RobotState's joint `name` (position, velocity), NaNs if absent.
+std::pair<double, double> joint_of(const rise_msgs::RobotState& s, const std::string& name) {
+  for (std::size_t i = 0; i < s.joint_names.size(); ++i)
+    if (s.joint_names[i] == name) return {s.joint_positions[i], s.joint_velocities[i]};
+  return {NAN, NAN};
+}
+}  // namespace
+
+TEST_CASE("rise-sim drives the urdf_tree TurtleBot3 Burger's wheel joints as its robot file maps the panel",
+          "[sim]") {
+  const std::string id = "tb" + std::to_string(::getpid());
+  const std::string dir = std::filesystem::temp_directory_path() / ("rise-sim-tb-" + id);
+  std::filesystem::create_directories(dir);
+  INFO("rise-sim log in " << dir);
+  WorldPeer peer({id});
+  REQUIRE(peer.good());
+  const std::string robots = std::string(RISE_SOURCE_DIR) + "/sim/robots/";
+  rise::process::ChildProcess sim({std::string(RISE_BINARY_DIR) + "/bin/rise-sim", "--lcm", kLcm, "--robot",
+                                   id + "=" + robots + "turtlebot3_burger.yaml", "--panel-timeout-ms", "10000"},
+                                  dir + "/rise-sim.log");
+  REQUIRE(peer.wait_until([&] { return peer.states_.count(id) > 0; }, 20000));
+  peer.ids_seen_ = 1;
+  REQUIRE(peer.command(id, "pause", 1));
+  const auto s0 = peer.states_[id];
+  REQUIRE(s0.num_joints == 2);  // the two wheels: the caster and the scanner are fixed
+  CHECK(s0.joint_names[0] == "wheel_left_joint");
+
+  peer.panel(id, true, false);  // full forward, dead-man held
+  REQUIRE(peer.command(id, "step", 2, 2000));
+  const auto s1 = peer.states_[id];
+  CHECK(s1.motors_enabled);
+  CHECK(s1.position_m[0] - s0.position_m[0] == Approx(0.4).margin(0.06));  // 0.22 m/s for 2 s, less the spin-up
+  CHECK(joint_of(s1, "wheel_left_joint").second == Approx(6.67).margin(0.1));
+  CHECK(joint_of(s1, "wheel_right_joint").second == Approx(6.67).margin(0.1));
+  CHECK(joint_of(s1, "wheel_left_joint").first - joint_of(s0, "wheel_left_joint").first > 10.0);  // > 1.5 turns
+
+  peer.panel(id, false, false);  // dead-man released: the wheel motors hold
+  REQUIRE(peer.command(id, "step", 3, 1000));
+  const auto s2 = peer.states_[id];
+  CHECK_FALSE(s2.motors_enabled);
+  CHECK(std::fabs(joint_of(s2, "wheel_left_joint").second) < 0.05);
+  CHECK(s2.position_m[0] - s1.position_m[0] < 0.05);
+
+  CHECK(sim.stop() == 0);
+  std::filesystem::remove_all(dir);
+}
