@@ -113,6 +113,64 @@ Json::Value world_json(const sim::WorldDescription& w) {
   return out;
 }
 
+Json::Value pose_json(const sim::UrdfPose& p) {
+  Json::Value v;
+  v["xyz"] = xyz(p.xyz_m.data());
+  Json::Value q(Json::arrayValue);
+  for (double c : p.wxyz) q.append(c);
+  v["wxyz"] = q;
+  return v;
+}
+
+// A visual shape: a primitive's sizes, or a mesh's triangles as flat arrays
+// (x, y, z per vertex in metres; three vertex indices per triangle).
+Json::Value visual_json(const sim::UrdfShape& s) {
+  static const char* const kTypes[] = {"box", "cylinder", "sphere", "mesh"};
+  Json::Value v;
+  v["type"] = kTypes[static_cast<int>(s.type)];
+  v["size"] = xyz(s.size_m.data());
+  v["origin"] = pose_json(s.origin);
+  if (s.type == sim::UrdfShapeType::Mesh) {
+    Json::Value vertices(Json::arrayValue), triangles(Json::arrayValue);
+    // A tenth of a millimetre is enough to draw, and keeps the text short.
+    for (float c : s.mesh.vertices_m) vertices.append(std::round(static_cast<double>(c) * 1e4) / 1e4);
+    for (uint32_t i : s.mesh.triangles) triangles.append(i);
+    v["vertices"] = vertices;
+    v["triangles"] = triangles;
+  }
+  return v;
+}
+
+// A urdf_tree robot's links with their visual shapes and the joints between
+// them, for the 3D view to pose by RobotState's joint positions.
+void tree_json(const sim::UrdfTree& t, Json::Value& v) {
+  static const char* const kJointTypes[] = {"revolute", "continuous", "prismatic", "fixed"};
+  Json::Value links(Json::arrayValue), joints(Json::arrayValue);
+  for (const auto& l : t.links) {
+    Json::Value lv;
+    lv["name"] = l.name;
+    Json::Value rgba(Json::arrayValue);
+    for (double c : l.rgba) rgba.append(c);
+    lv["rgba"] = rgba;
+    Json::Value visuals(Json::arrayValue);
+    for (const auto& s : l.visuals) visuals.append(visual_json(s));
+    lv["visuals"] = visuals;
+    links.append(lv);
+  }
+  for (const auto& j : t.joints) {
+    Json::Value jv;
+    jv["name"] = j.name;
+    jv["type"] = kJointTypes[static_cast<int>(j.type)];
+    jv["parent"] = static_cast<Json::UInt>(j.parent);
+    jv["child"] = static_cast<Json::UInt>(j.child);
+    jv["origin"] = pose_json(j.origin);
+    jv["axis"] = xyz(j.axis.data());
+    joints.append(jv);
+  }
+  v["links"] = links;
+  v["joints"] = joints;
+}
+
 Json::Value robot_json(const sim::RobotDescription& r) {
   Json::Value v;
   v["name"] = r.name;
@@ -127,6 +185,7 @@ Json::Value robot_json(const sim::RobotDescription& r) {
     cameras.append(cv);
   }
   v["cameras"] = cameras;
+  if (r.tree) tree_json(*r.tree, v);
   return v;
 }
 
@@ -266,6 +325,14 @@ Json::Value robot_json(const rise_msgs::RobotState& m) {
   Json::Value faults(Json::arrayValue);
   for (const auto& f : m.active_faults) faults.append(f);
   v["active_faults"] = faults;  // "id: kind target", as rise-sim lists them
+  Json::Value joints(Json::arrayValue);
+  for (int i = 0; i < m.num_joints; ++i) {
+    Json::Value j;
+    j["name"] = m.joint_names[static_cast<std::size_t>(i)];
+    j["position"] = m.joint_positions[static_cast<std::size_t>(i)];
+    joints.append(j);
+  }
+  v["joints"] = joints;  // a urdf_tree robot's links are posed by them
   return v;
 }
 

@@ -40,7 +40,10 @@ std::string json_text(const Json::Value& v);
 /// regions and the movable objects' start.
 Json::Value world_json(const sim::WorldDescription& w);
 /// What the 3D view draws of the robot: its chassis box and its camera
-/// mounts (base frame, x forward, z up; rpy in radians).
+/// mounts (base frame, x forward, z up; rpy in radians); a urdf_tree robot's
+/// `links` (name, rgba, visuals: type, size, origin {xyz, wxyz}, a mesh's
+/// flat `vertices` and `triangles`) and `joints` (name, type, parent and
+/// child link index, origin, axis).
 Json::Value robot_json(const sim::RobotDescription& r);
 /// The controls the virtual panel page draws, with the panel's publish rate
 /// and the timeout after which it fails safe.

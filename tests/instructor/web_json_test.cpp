@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "instructor/web_json.hpp"
+#include "sim/robot_description.hpp"
 #include "sim/world_description.hpp"
 
 namespace {
@@ -77,6 +78,40 @@ TEST_CASE("the RobotState JSON gives the yaw of the orientation and names the ob
   REQUIRE(v["objects"].size() == 1);
   CHECK(v["objects"][0]["name"].asString() == "crate");
   CHECK(v["objects"][0]["position"][1].asDouble() == Approx(2.0).margin(1e-12));
+}
+
+TEST_CASE("a urdf_tree robot's JSON carries its links' visual meshes and its joints; RobotState its joint positions",
+          "[instructor]") {
+  const auto d = rise::sim::load_robot_description(std::string(RISE_SOURCE_DIR) + "/sim/robots/turtlebot3_burger.yaml");
+  const Json::Value v = robot_json(d);
+  REQUIRE(v["links"].size() == 5);
+  CHECK(v["links"][0]["name"].asString() == "base_link");
+  const Json::Value& body = v["links"][0]["visuals"][0];
+  CHECK(body["type"].asString() == "mesh");
+  CHECK(body["triangles"].size() == 3 * 28);
+  CHECK(body["vertices"].size() % 3 == 0);
+  CHECK(body["origin"]["xyz"][2].asDouble() == Approx(0.070));
+  REQUIRE(v["joints"].size() == 4);
+  Json::Value left;
+  for (const auto& j : v["joints"])
+    if (j["name"].asString() == "wheel_left_joint") left = j;
+  CHECK(left["type"].asString() == "continuous");
+  CHECK(v["links"][left["child"].asUInt()]["name"].asString() == "wheel_left_link");
+  CHECK(left["parent"].asUInt() == 0);
+  // The fixed-model robots carry no tree.
+  CHECK_FALSE(robot_json(rise::sim::load_robot_description(std::string(RISE_SOURCE_DIR) + "/sim/robots/skid4.yaml"))
+                  .isMember("links"));
+
+  rise_msgs::RobotState m{};
+  m.num_joints = 1;
+  m.joint_names = {"wheel_left_joint"};
+  m.joint_positions = {12.5};
+  m.joint_velocities = {1.0};
+  m.joint_efforts = {0.0};
+  const Json::Value s = robot_json(m);
+  REQUIRE(s["joints"].size() == 1);
+  CHECK(s["joints"][0]["name"].asString() == "wheel_left_joint");
+  CHECK(s["joints"][0]["position"].asDouble() == Approx(12.5));
 }
 
 TEST_CASE("the SoundCue JSON carries what the trainee page plays", "[instructor]") {

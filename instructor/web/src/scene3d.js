@@ -4,6 +4,7 @@
 // placed from RobotState's base pose and the robot file's camera mount.
 import * as THREE from 'three';
 import { ROBOT_COLOUR } from './common.js';
+import { robotTree, poseTree } from './robot_tree.js';
 
 const KIND_COLOURS = { wall: 0xc9c9c9, door: 0x8b4513, stairs: 0x5c7cfa, box: 0x8d8d8d, prop: 0x9775fa };
 // How far an open door is drawn swung: RobotState carries no door angles,
@@ -101,7 +102,9 @@ export function placeObjects(objects, robotState) {
 
 // The robot: its chassis box (unlit, so that its colour reaches the screen as
 // it is: the tests look for it) with a dark nose.
+// A urdf_tree robot file draws its links' visual shapes instead.
 export function robotMesh(world) {
+  if (world.robot && world.robot.links) return robotTree(world.robot);
   const g = new THREE.Group();
   const size = (world.robot && world.robot.chassis_size) || [0.8, 0.5, 0.25];
   g.add(new THREE.Mesh(new THREE.BoxGeometry(...size), new THREE.MeshBasicMaterial({ color: ROBOT_COLOUR })));
@@ -114,6 +117,7 @@ export function poseRobot(group, robotState) {
   const q = robotState.orientation_wxyz;
   group.position.set(...robotState.position);
   group.quaternion.set(q[1], q[2], q[3], q[0]);
+  poseTree(group, robotState);
 }
 
 // The onboard camera: the robot file's first camera mount (`sensors.cameras`,
