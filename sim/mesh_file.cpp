@@ -4,7 +4,10 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -55,24 +58,65 @@ TriangleMesh from_scene(const aiScene* scene, const Assimp::Importer& importer, 
   return out;
 }
 
+// assimp 5.2's COLLADA reader misreads an index list with a non-digit in it
+// and asks for gigabytes (found by the mesh fuzz target): the index lists
+// (<p>, <v>, <vcount>) must be digits and white space before it sees them.
+void check_collada_indices(const std::string& text, const std::string& where) {
+  for (const std::string tag : {"p", "v", "vcount"}) {
+    const std::string open = "<" + tag, close = "</" + tag + ">";
+    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
+      const std::size_t after = at + open.size();
+      if (after >= text.size()) break;
+      const char c = text[after];
+      if (c != '>' && !std::isspace(static_cast<unsigned char>(c))) continue;  // another element: <param>, <vertices>
+      const std::size_t start = text.find('>', after);
+      if (start == std::string::npos) break;
+      if (text[start - 1] == '/') continue;  // empty: <p/>
+      const std::size_t end = text.find(close, start);
+      if (end == std::string::npos) fail(where + ": <" + tag + "> without </" + tag + ">");
+      for (std::size_t i = start + 1; i < end; ++i)
+        if (!std::isdigit(static_cast<unsigned char>(text[i])) && !std::isspace(static_cast<unsigned char>(text[i])))
+          fail(where + ": <" + tag + "> holds a non-digit (an index list is digits and white space)");
+    }
+  }
+}
+
+bool looks_like_collada(const std::string& bytes, const std::string& hint) {
+  if (hint == "dae" || hint == "DAE") return true;
+  std::string lower = bytes.substr(0, std::min<std::size_t>(bytes.size(), 4096));
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower.find("collada") != std::string::npos;
+}
+
+TriangleMesh read(const std::string& bytes, const std::string& hint, const std::array<double, 3>& scale,
+                  const std::string& where);
+
 // Triangles only, shared vertices merged; no normals, no materials (the
 // simulator and the browser's flat shading need neither).
 constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
                             aiProcess_FindInvalidData | aiProcess_ValidateDataStructure;
+
+TriangleMesh read(const std::string& bytes, const std::string& hint, const std::array<double, 3>& scale,
+                  const std::string& where) {
+  if (looks_like_collada(bytes, hint)) check_collada_indices(bytes, where);
+  Assimp::Importer importer;
+  return from_scene(importer.ReadFileFromMemory(bytes.data(), bytes.size(), kFlags, hint.c_str()), importer, scale,
+                    where);
+}
 
 }  // namespace
 
 TriangleMesh read_mesh_file(const std::string& path, const std::array<double, 3>& scale) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path + ": cannot open: " + std::strerror(errno));
-  Assimp::Importer importer;
-  return from_scene(importer.ReadFile(path, kFlags), importer, scale, path);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  const std::string ext = std::filesystem::path(path).extension().string();
+  return read(bytes.str(), ext.empty() ? "" : ext.substr(1), scale, path);
 }
 
 TriangleMesh parse_mesh(const std::string& bytes, const std::string& hint, const std::array<double, 3>& scale) {
-  Assimp::Importer importer;
-  return from_scene(importer.ReadFileFromMemory(bytes.data(), bytes.size(), kFlags, hint.c_str()), importer, scale,
-                    "mesh");
+  return read(bytes, hint, scale, "mesh");
 }
 
 std::string binary_stl(const TriangleMesh& mesh) {

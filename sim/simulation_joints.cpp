@@ -66,7 +66,8 @@ void Simulation::Impl::break_joint(Breakable& b, double load) {
   }
 }
 
-// Motor + limit effort along each arm joint's axis, on the child.
+// Motor + limit effort along each arm joint's axis, on the child (a
+// urdf_tree's: along its URDF axis).
 void Simulation::Impl::update_arm_efforts(Robot& r) {
   for (std::size_t i = 0; i < r.arm_joints.size(); ++i) {
     const Breakable& b = breakables[r.arm_joints[i].breakable];
@@ -79,6 +80,22 @@ void Simulation::Impl::update_arm_efforts(Robot& r) {
     if (r.arm_joints[i].slider) dJointGetSliderAxis(r.arm_joints[i].joint, axis);
     else dJointGetHingeAxis(r.arm_joints[i].joint, axis);
     r.arm_efforts[i] = t[0] * axis[0] + t[1] * axis[1] + t[2] * axis[2];
+    if (i < r.tree_joints.size()) {
+      // A urdf_tree hinge's effort is taken about its anchor, where the
+      // constraint force has no moment: ODE's t2 is about the child's centre
+      // of mass, so add (com - anchor) x f2. Its ODE axis is the URDF axis
+      // negated (simulation_tree.cpp make_joint).
+      if (!r.arm_joints[i].slider) {
+        dVector3 anchor;
+        dJointGetHingeAnchor(r.arm_joints[i].joint, anchor);
+        const dReal* c = dBodyGetPosition(b.child);
+        const dReal* f = b.feedback.f2;
+        const double d[3] = {c[0] - anchor[0], c[1] - anchor[1], c[2] - anchor[2]};
+        const double m[3] = {d[1] * f[2] - d[2] * f[1], d[2] * f[0] - d[0] * f[2], d[0] * f[1] - d[1] * f[0]};
+        r.arm_efforts[i] += m[0] * axis[0] + m[1] * axis[1] + m[2] * axis[2];
+      }
+      r.arm_efforts[i] = -r.arm_efforts[i];
+    }
   }
 }
 

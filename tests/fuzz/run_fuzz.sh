@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, configs, training_graph, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, configs, training_graph, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -46,6 +46,7 @@ case "$target" in
              "$root/panels/yaml_reader.cpp")
     ;;
   urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
+  mesh) sources=("$root/sim/mesh_file.cpp") ;;
   # The messages of the multicast group as the instructor takes them (every type by lcm-gen here).
   lcm_messages)
     sources=("$root"/msgs/{channels,publisher_session,failsafe}.cpp "$root"/instructor/{web_json,trainee_directory}.cpp
@@ -95,6 +96,7 @@ if [ $rebuild -eq 1 ]; then
       libs=(-ljsoncpp -llcm -lyaml-cpp)
       ;;
     urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge -lassimp) ;;
+    mesh) libs=(-lassimp) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
@@ -263,6 +265,15 @@ case "$target" in
         { printf "\\x0$b"; cat "$f"; } >"$corpus/$b-$(basename "$f")"
       done
     done
+    ;;
+  mesh)
+    # A byte first: bit 0 COLLADA, else STL. The shipped robot's binary STLs, an ASCII STL and the COLLADA cube.
+    # No leak detection: libassimp 5.2 leaks its half-built mesh on a malformed
+    # ASCII STL (its importer's error path, not our code; a mesh is read once).
+    export ASAN_OPTIONS=detect_leaks=0
+    for f in "$root"/sim/robots/meshes/*.stl; do { printf '\x00'; cat "$f"; } >"$corpus/$(basename "$f")"; done
+    printf '\x00solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n' >"$corpus/ascii.stl"
+    { printf '\x01'; cat "$root/tests/sim/data/cube.dae"; } >"$corpus/cube.dae"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.
