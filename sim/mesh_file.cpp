@@ -29,8 +29,10 @@ void collect(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent
       const aiVector3D p = T * m.mVertices[v];
       const double xyz[3] = {p.x * scale[0], p.y * scale[1], p.z * scale[2]};
       for (double c : xyz) {
-        if (!std::isfinite(c)) fail(where + ": a vertex coordinate is not finite");
-        out.vertices_m.push_back(static_cast<float>(c));
+        // Scaled, a finite float can leave float's range: test what is stored.
+        const auto f = static_cast<float>(c);
+        if (!std::isfinite(f)) fail(where + ": a vertex coordinate is not finite");
+        out.vertices_m.push_back(f);
       }
     }
     for (unsigned f = 0; f < m.mNumFaces; ++f) {
@@ -81,8 +83,36 @@ void check_collada_indices(const std::string& text, const std::string& where) {
   }
 }
 
+// ... and it follows a null pointer for an array or a primitive list without
+// its count (the fuzz target's next find): each must carry count="digits".
+void check_collada_counts(const std::string& text, const std::string& where) {
+  for (const std::string tag : {"float_array", "int_array", "accessor", "triangles", "polylist", "polygons", "tristrips",
+                                "trifans", "lines", "linestrips"}) {
+    const std::string open = "<" + tag;
+    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
+      const std::size_t after = at + open.size();
+      if (after >= text.size()) break;
+      if (text[after] != '>' && text[after] != '/' && !std::isspace(static_cast<unsigned char>(text[after]))) continue;
+      const std::size_t end = text.find('>', after);
+      if (end == std::string::npos) fail(where + ": <" + tag + " without its '>'");
+      const std::string attrs = text.substr(after, end - after);
+      std::size_t c = std::string::npos;
+      for (const char* key : {" count=\"", "\tcount=\"", "\ncount=\""})
+        if (c == std::string::npos) c = attrs.find(key);
+      bool ok = c != std::string::npos;
+      if (ok) {
+        std::size_t i = c + 8, digits = 0;
+        while (i < attrs.size() && std::isdigit(static_cast<unsigned char>(attrs[i]))) ++i, ++digits;
+        ok = digits > 0 && digits <= 9 && i < attrs.size() && attrs[i] == '"';
+      }
+      if (!ok) fail(where + ": <" + tag + "> needs count=\"N\"");
+    }
+  }
+}
+
 bool looks_like_collada(const std::string& bytes, const std::string& hint) {
   if (hint == "dae" || hint == "DAE") return true;
+  if (hint == "stl" || hint == "STL") return false;
   std::string lower = bytes.substr(0, std::min<std::size_t>(bytes.size(), 4096));
   for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return lower.find("collada") != std::string::npos;
@@ -96,9 +126,23 @@ TriangleMesh read(const std::string& bytes, const std::string& hint, const std::
 constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_SortByPType |
                             aiProcess_FindInvalidData | aiProcess_ValidateDataStructure;
 
+// An STL is ASCII ("solid ...") or binary: 80 bytes, a count, 50 bytes per
+// triangle. Checked here so that assimp never guesses another format for it.
+void check_stl(const std::string& bytes, const std::string& where) {
+  if (bytes.rfind("solid", 0) == 0) return;
+  uint32_t count = 0;
+  if (bytes.size() >= 84) std::memcpy(&count, bytes.data() + 80, 4);
+  if (bytes.size() < 84 || bytes.size() != 84 + 50 * static_cast<uint64_t>(count))
+    fail(where + ": not an STL (neither \"solid\" text nor 84 + 50 x its triangle count bytes)");
+}
+
 TriangleMesh read(const std::string& bytes, const std::string& hint, const std::array<double, 3>& scale,
                   const std::string& where) {
-  if (looks_like_collada(bytes, hint)) check_collada_indices(bytes, where);
+  if (hint == "stl" || hint == "STL") check_stl(bytes, where);
+  else if (looks_like_collada(bytes, hint)) {
+    check_collada_indices(bytes, where);
+    check_collada_counts(bytes, where);
+  }
   Assimp::Importer importer;
   return from_scene(importer.ReadFileFromMemory(bytes.data(), bytes.size(), kFlags, hint.c_str()), importer, scale,
                     where);

@@ -217,6 +217,8 @@ TEST_CASE("assimp reads STL and COLLADA meshes, COLLADA's unit and up axis appli
   for (float v : stl.vertices_m) top = std::max(top, v);
   CHECK(top == Approx(1.0f));
   CHECK(error_of([] { parse_mesh("solid nothing\nendsolid\n", "stl"); }).find("mesh") == 0);
+  const std::string cut = binary_stl(cube).substr(0, 84 + 50 * 5);  // says 12 triangles, holds 5
+  CHECK(error_of([&] { parse_mesh(cut, "stl"); }).find("mesh: not an STL") == 0);
   // A non-digit in an index list is refused before assimp 5.2 reads it (it
   // would ask for 2.4 GB: the mesh fuzz target's find).
   std::string bad = slurp(kData + "cube.dae");
