@@ -7,11 +7,14 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <filesystem>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 namespace rise::sim {
 namespace {
@@ -110,6 +113,60 @@ void check_collada_counts(const std::string& text, const std::string& where) {
   }
 }
 
+// The integers of the element `tag` (its first, within [from, to)), or
+// nullopt when there is none; check_collada_indices has made them digits.
+std::optional<std::vector<uint64_t>> numbers_in(const std::string& text, const std::string& tag, std::size_t from,
+                                                std::size_t to) {
+  const std::string open = "<" + tag + ">";
+  const std::size_t at = text.find(open, from);
+  if (at == std::string::npos || at >= to) return std::nullopt;
+  const std::size_t end = text.find("</" + tag + ">", at);
+  if (end == std::string::npos || end > to) return std::nullopt;
+  std::vector<uint64_t> out;
+  std::istringstream in(text.substr(at + open.size(), end - at - open.size()));
+  std::string word;
+  while (in >> word) out.push_back(word.size() > 9 ? UINT32_MAX : std::stoull(word));
+  return out;
+}
+
+// ... and aborts (an ai_assert) when a primitive list's count does not
+// match its indices: each <triangles count="N"> must hold 3 N vertices in
+// its <p>, each <polylist count="N"> N <vcount>s and their sum in <p>, a
+// vertex being one index per input offset. Other primitives are refused.
+void check_collada_primitives(const std::string& text, const std::string& where) {
+  for (const char* tag : {"polygons", "tristrips", "trifans", "lines", "linestrips"})
+    if (text.find("<" + std::string(tag)) != std::string::npos)
+      fail(where + ": <" + tag + ">: only <triangles> and <polylist> meshes are read");
+  for (const std::string tag : {"triangles", "polylist"}) {
+    const std::string open = "<" + tag;
+    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
+      const std::size_t head_end = text.find('>', at);
+      const std::size_t end = text.find("</" + tag + ">", at);
+      if (head_end == std::string::npos || end == std::string::npos) fail(where + ": <" + tag + "> without its end");
+      const std::string head = text.substr(at, head_end - at);
+      const std::size_t c = head.find("count=\"");
+      const uint64_t count = c == std::string::npos ? 0 : std::strtoull(head.c_str() + c + 7, nullptr, 10);
+      // One index per distinct input offset.
+      uint64_t stride = 1;
+      for (std::size_t i = text.find("<input", at); i != std::string::npos && i < end; i = text.find("<input", i + 1)) {
+        const std::size_t o = text.find("offset=\"", i);
+        const std::size_t e = text.find('>', i);
+        if (o != std::string::npos && o < e) stride = std::max<uint64_t>(stride, std::strtoull(text.c_str() + o + 8, nullptr, 10) + 1);
+      }
+      const auto p = numbers_in(text, "p", at, end);
+      uint64_t vertices = 3 * count;
+      if (tag == "polylist") {
+        const auto v = numbers_in(text, "vcount", at, end);
+        if (!v || v->size() != count) fail(where + ": <polylist count> does not match its <vcount>");
+        vertices = 0;
+        for (uint64_t n : *v) vertices += n;
+      }
+      if (!p || p->size() != vertices * stride)
+        fail(where + ": <" + tag + " count=\"" + std::to_string(count) + "\"> does not match its <p>");
+    }
+  }
+}
+
 bool looks_like_collada(const std::string& bytes, const std::string& hint) {
   if (hint == "dae" || hint == "DAE") return true;
   if (hint == "stl" || hint == "STL") return false;
@@ -142,6 +199,7 @@ TriangleMesh read(const std::string& bytes, const std::string& hint, const std::
   else if (looks_like_collada(bytes, hint)) {
     check_collada_indices(bytes, where);
     check_collada_counts(bytes, where);
+    check_collada_primitives(bytes, where);
   }
   Assimp::Importer importer;
   return from_scene(importer.ReadFileFromMemory(bytes.data(), bytes.size(), kFlags, hint.c_str()), importer, scale,

@@ -224,6 +224,14 @@ TEST_CASE("assimp reads STL and COLLADA meshes, COLLADA's unit and up axis appli
   std::string bad = slurp(kData + "cube.dae");
   bad.replace(bad.find("1 2 6 1 6 5"), 11, "1 2 xx 1 6 5");
   CHECK(error_of([&] { parse_mesh(bad, "dae"); }) == "mesh: <p> holds a non-digit (an index list is digits and white space)");
+  // ... an array without its count (a null pointer in assimp), a primitive
+  // count its indices do not match (an ai_assert abort in assimp).
+  std::string uncounted = slurp(kData + "cube.dae");
+  uncounted.replace(uncounted.find(" count=\"24\""), 11, "");
+  CHECK(error_of([&] { parse_mesh(uncounted, "dae"); }) == "mesh: <float_array> needs count=\"N\"");
+  std::string miscounted = slurp(kData + "cube.dae");
+  miscounted.replace(miscounted.find("<triangles count=\"12\">"), 22, "<triangles count=\"11\">");
+  CHECK(error_of([&] { parse_mesh(miscounted, "dae"); }) == "mesh: <triangles count=\"11\"> does not match its <p>");
   CHECK(error_of([] { read_mesh_file(kData + "no_such.stl"); }).find("cannot open") != std::string::npos);
 }
 
