@@ -111,7 +111,7 @@ sanitize() {
   case "$kind" in
     asan) flags="address,undefined"
       tests="firmware_protocol_test firmware_protocol_hid_test msgs_test panels_test hil_io_test hil_io_slcan_test
-             hil_io_capture_test hil_test hil_fault_test hil_capture_commands_test sim_test sim_control_test
+             hil_io_capture_test hil_test hil_fault_test hil_capture_commands_test sim_test sim_control_test sim_urdf_tree_test
              instructor_test instructor_process_test training_test" ;;
     tsan) flags="thread"
       tests="hil_test hil_io_test instructor_web_test trainer_test" ;;
