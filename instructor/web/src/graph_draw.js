@@ -3,7 +3,7 @@
 // arrows with their order number and condition, a repeat (a task to itself)
 // as a loop over its box. No library: the graph is small.
 const NS = 'http://www.w3.org/2000/svg';
-const BOX_W = 150, BOX_H = 54, COL_W = 230, ROW_H = 120, MARGIN = 60;
+const BOX_W = 150, BOX_H = 54, COL_W = 300, ROW_H = 150, MARGIN = 60;
 
 function svg(tag, attrs = {}, text) {
   const e = document.createElementNS(NS, tag);
@@ -41,7 +41,16 @@ export function layout(graph) {
 }
 
 function edgePath(a, b, bend) {
-  // Forward: right side to left side; otherwise under the boxes.
+  // Forward: right side to left side; in one column: down (or up) the left
+  // side, clear of the repeat loops on top and of the edges coming in from
+  // the left; backward: under the boxes.
+  if (b.x === a.x) {
+    const down = b.y > a.y;
+    const p0 = { x: a.x + BOX_W * 0.85, y: down ? a.y + BOX_H : a.y };
+    const p2 = { x: b.x + BOX_W * 0.85, y: down ? b.y : b.y + BOX_H };
+    const c = { x: p0.x + 40 + bend, y: (p0.y + p2.y) / 2 };
+    return { d: `M${p0.x},${p0.y} Q${c.x},${c.y} ${p2.x},${p2.y}`, mid: mid(p0, c, p2) };
+  }
   if (b.x > a.x) {
     const p0 = { x: a.x + BOX_W, y: a.y + BOX_H / 2 }, p2 = { x: b.x, y: b.y + BOX_H / 2 };
     const c = { x: (p0.x + p2.x) / 2, y: (p0.y + p2.y) / 2 + bend };
@@ -73,8 +82,7 @@ export function edgeLabel(graph, i) {
 export function draw(el, graph, { bad = new Set(), picked = '', fresh = -1, onPick = () => {} } = {}) {
   const { pos, width, height } = layout(graph);
   el.replaceChildren();
-  el.setAttribute('width', width);
-  el.setAttribute('height', height);
+  el.style.maxWidth = width + 'px';  // scaled down to the page's width, never up
   el.setAttribute('viewBox', `0 0 ${width} ${height}`);
   const defs = svg('defs');
   for (const [id, colour] of [['arrow', '#8b949e'], ['arrow-new', '#7ee787'], ['arrow-bad', '#ff7b72']]) {
