@@ -196,10 +196,14 @@ std::string line_text(const std::string& text, int line) {
   return text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
 }
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
+// Without blanks at either end; control characters (a CR, a NUL) as blanks,
+// so the comment is one line of text when written again.
+std::string trim(std::string s) {
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  const auto b = s.find_first_not_of(' ');
   if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+  return s.substr(b, s.find_last_not_of(' ') - b + 1);
 }
 
 // The `# ...` that ends line `line`: a # after a blank, outside quotes (YAML

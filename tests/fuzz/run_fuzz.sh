@@ -41,7 +41,7 @@ case "$target" in
   # The training graph without its tasks (TaskResult is apart from the
   # executor, so neither the executor nor the simulator is linked).
   training_graph)
-    sources=("$root"/sim/training/{training_graph,task_result,task_description}.cpp "$root"/sim/world_description.cpp
+    sources=("$root"/sim/training/{training_graph,training_writer,task_result,task_description}.cpp "$root"/sim/world_description.cpp
              "$root/panels/yaml_reader.cpp")
     ;;
   urdf) sources=("$root/sim/urdf_robot.cpp") ;;
@@ -237,6 +237,8 @@ case "$target" in
     { printf '\x00'; cat "$root/sim/training/examples/fig10_training.yaml"; } >"$corpus/fig10.yaml"
     { printf '\x35'; cat "$root/sim/training/examples/fig10_training.yaml"; } >"$corpus/fig10-b.yaml"
     printf '\x11training: t\nnodes:\n  - {name: a, task: a.yaml, max_attempts: 3}\n  - {name: b, task: /b.yaml}\ntransitions:\n  - {from: START, to: a}\n  - {from: a, if: "events.neutralized GE 1", to: b}\n  - {from: a, if: "time_s LE 1e2", to: a}\n  - {from: b, if: "success NE false", to: END}\n  - {from: b, to: a}\n' >"$corpus/loop.yaml"
+    # Comments and strings the writer must quote (the Training Builder saves through it).
+    printf '\x07# head\n#  two\n\ntraining: "a: \\"b\\" #c"\ntitle: \x27it\x27\x27s\x27\nnodes:\n  - {name: "yes", task: "../x y.yaml"}  # n # m\ntransitions:\n  - {from: START, to: "yes"}   #s\n  - {from: "yes", if: "result GE 1e1", to: END} # \x27q\x27\n' >"$corpus/quoted.yaml"
     printf '\x02training: t\nnodes:\n  - name: a\n    task: a.yaml\n  - name: b\n    task: b.yaml\ntransitions:\n  - {from: START, to: a}\n  - {from: a, to: b}\n  - {from: b, to: a}\n  - {from: c, to: END}\n' >"$corpus/closed.yaml"
     ;;
   urdf)
