@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <semaphore>
@@ -74,6 +75,9 @@ int serve(const ServeOptions& o) {
   s.scenarios_dir = o.scenarios_dir.empty() ? "" : panels::find_data_file(o.scenarios_dir);
   s.scenario_program = process::executable_dir() + "/rise-instructor";
   s.designs_dir = o.designs.empty() ? "" : panels::find_data_file(o.designs);
+  if (!s.designs_dir.empty() && !std::filesystem::is_directory(s.designs_dir))
+    throw std::runtime_error(s.designs_dir + ": cannot open: " +
+                             std::strerror(std::filesystem::exists(s.designs_dir) ? ENOTDIR : ENOENT));
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
