@@ -18,10 +18,16 @@ bool plain_safe(const std::string& s) {
   return true;
 }
 
-// A comment on one line: line breaks become blanks.
-std::string one_line(std::string s) {
+// A comment as the loader reads it back (training_graph.cpp): control
+// characters (line breaks too) as blanks, none at the end, and for one on an
+// entry's line none at the start either; so writing is a fixed point.
+std::string comment_text(std::string s, bool keep_leading) {
   for (char& c : s)
-    if (c == '\n' || c == '\r') c = ' ';
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  const auto last = s.find_last_not_of(' ');
+  if (last == std::string::npos) return "";
+  s.erase(last + 1);
+  if (!keep_leading) s.erase(0, s.find_first_not_of(' '));
   return s;
 }
 
@@ -30,9 +36,10 @@ class Lines {
  public:
   int add(const std::string& entry, const std::string& comment) {
     std::string line = entry;
-    if (!comment.empty()) {
+    const std::string text = comment_text(comment, false);
+    if (!text.empty()) {
       if (line.size() < 60) line.append(60 - line.size(), ' ');
-      line += "  # " + one_line(comment);
+      line += "  # " + text;
     }
     text_ += line + "\n";
     return ++count_;
@@ -40,7 +47,10 @@ class Lines {
   void comment_block(const std::string& comment) {
     std::istringstream in(comment);
     std::string l;
-    while (std::getline(in, l)) add(l.empty() ? "#" : "# " + l, "");
+    while (std::getline(in, l)) {
+      l = comment_text(l, true);
+      add(l.empty() ? "#" : "# " + l, "");
+    }
   }
   const std::string& text() const { return text_; }
 
