@@ -69,12 +69,13 @@ void handle_read(const DesignFolder& folder, const Req& req, Res& res) {
   v["version"] = file.version;
   v["text"] = file.text;
   try {
-    const auto g = sim::training::parse_training_graph(file.text, folder.path(name), false);
+    // Unvalidated: a graph with errors opens, and the check lists them
+    // beside its entries as rise-trainer check would (tasks loaded).
+    const auto g = sim::training::parse_training_graph(file.text, folder.path(name), false, false);
     v["graph"] = training_graph_json(g);
-    // The tasks too, as rise-trainer check loads them: the page shows what is wrong.
     v["check"] = check_json(check_training(g, folder.path(name)));
   } catch (const std::exception& e) {
-    v["load_error"] = e.what();  // the page shows it; the graph cannot be edited until the file loads
+    v["load_error"] = e.what();  // not a training graph's form: the page shows the text and the error
   }
   reply(res, v);
 }

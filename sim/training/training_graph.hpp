@@ -74,7 +74,10 @@ struct TrainingGraph {
 /// std::runtime_error "file:line: key: message"; validation errors, all of
 /// them, one per line.
 TrainingGraph load_training_graph(const std::string& path, bool load_tasks = true);
-TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks = true);
+/// `validate` false: the graph as written, its graph errors not checked (a
+/// builder shows them beside the entries); errors of the file's form still throw.
+TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks = true,
+                                   bool validate = true);
 /// The graph's errors, each "file:line: message": a transition from or to an
 /// unknown node, no transition from START, a node unreachable from START, a
 /// loop with no transition leaving it, a node with no path to END, a

@@ -198,6 +198,20 @@ TEST_CASE("the Training Builder's endpoints read, check, save and refuse a file 
     // Overwriting knowingly: with the version on disk now.
     CHECK(http.Post(url, save_body(graph, conflict["current_version"].asString()), "application/json")->status == 200);
   }
+  SECTION("a file whose graph has errors opens with them listed; one of the wrong form shows its error") {
+    std::ofstream(f.dir / "designs" / "broken.yaml")
+        << "training: broken\nnodes:\n  - {name: a, task: approach_object.yaml}\n  - {name: b, task: "
+           "approach_object.yaml}\ntransitions:\n  - {from: START, to: a}\n  - {from: a, to: END}\n";
+    const auto broken = parse_json(http.Get("/api/builder/training/broken.yaml", f.auth())->body);
+    CHECK(broken["graph"]["nodes"].size() == 2);
+    REQUIRE(broken["check"]["errors"].size() == 1);
+    CHECK(broken["check"]["errors"][0]["key"].asString() == "nodes[1]");
+    CHECK(broken["check"]["errors"][0]["message"].asString() == "node 'b' is unreachable from START");
+    std::ofstream(f.dir / "designs" / "form.yaml") << "training: t\nnodes: 3\n";
+    const auto form = parse_json(http.Get("/api/builder/training/form.yaml", f.auth())->body);
+    CHECK_FALSE(form.isMember("graph"));
+    CHECK(form["load_error"].asString().find("form.yaml:2: nodes: expected a non-empty list") != std::string::npos);
+  }
   SECTION("no file outside the folder, no body of the wrong shape") {
     CHECK(http.Get("/api/builder/training/..%2Finstructor.key", f.auth())->status != 200);
     CHECK(http.Get("/api/builder/training/missing.yaml", f.auth())->status == 404);
