@@ -84,7 +84,13 @@ SaveOutcome DesignFolder::save(const std::string& name, const std::string& text,
   const auto now = read_bytes(p);
   const std::string on_disk = now ? content_version(*now) : "";
   if (on_disk != expected_version) return {SaveStatus::Conflict, on_disk};
-  sim::training::write_file_atomically(p, text);
+  // Through a link to the file it names (a link into a checkout stays a link),
+  // and with the file's permissions (the temporary is made 0644).
+  std::error_code ec;
+  const std::string target = fs::is_symlink(p, ec) ? fs::canonical(p).string() : p;
+  const auto perms = now ? std::optional<fs::perms>(fs::status(target).permissions()) : std::nullopt;
+  sim::training::write_file_atomically(target, text);
+  if (perms) fs::permissions(target, *perms, ec);
   return {SaveStatus::Saved, content_version(text)};
 }
 

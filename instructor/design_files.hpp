@@ -49,7 +49,8 @@ class DesignFolder {
   DesignText read(const std::string& name) const;
   /// Writes `text` as `name` when the file on disk is still at
   /// `expected_version` ("": it must not exist yet); else writes nothing and
-  /// returns Conflict. Saves through this folder are one at a time; a
+  /// returns Conflict. A link is written through (it stays a link) and the
+  /// file keeps its permissions. Saves through this folder are one at a time; a
   /// process writing between the check and the rename is not seen (no lock
   /// binds every editor). Throws std::runtime_error when the write fails.
   SaveOutcome save(const std::string& name, const std::string& text, const std::string& expected_version);

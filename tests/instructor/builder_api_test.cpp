@@ -91,6 +91,18 @@ TEST_CASE("a design's version changes with its bytes and saving checks it", "[in
     CHECK(out.version == rise::instructor::content_version(theirs));
     CHECK(slurp(f.training()) == theirs);
   }
+  SECTION("a link stays a link to the file it names, and the file keeps its permissions") {
+    fs::create_directories(f.dir / "elsewhere");
+    std::ofstream(f.dir / "elsewhere" / "real.yaml") << "x: 0\n";
+    fs::permissions(f.dir / "elsewhere" / "real.yaml", fs::perms::owner_read | fs::perms::owner_write |
+                                                           fs::perms::group_read | fs::perms::group_write);
+    fs::create_symlink(f.dir / "elsewhere" / "real.yaml", f.dir / "designs" / "linked.yaml");
+    const auto v = folder.read("linked.yaml").version;
+    REQUIRE(folder.save("linked.yaml", "x: 1\n", v).status == SaveStatus::Saved);
+    CHECK(fs::is_symlink(f.dir / "designs" / "linked.yaml"));
+    CHECK(slurp(f.dir / "elsewhere" / "real.yaml") == "x: 1\n");
+    CHECK((fs::status(f.dir / "elsewhere" / "real.yaml").permissions() & fs::perms::group_write) != fs::perms::none);
+  }
   SECTION("a new file is saved with the empty version, and only then") {
     CHECK(folder.save("new.yaml", "x: 1\n", "").status == SaveStatus::Saved);
     CHECK(folder.save("new.yaml", "x: 2\n", "").status == SaveStatus::Conflict);
