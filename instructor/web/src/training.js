@@ -5,6 +5,7 @@
 // their line and key; Save writes the YAML atomically, or says that the file
 // changed on disk since it was loaded (409) and offers to reload or overwrite.
 import { getJson, postJson, el } from './common.js';
+import { ConflictBanner, saveDesign } from './design_file.js';
 import { draw } from './graph_draw.js';
 
 const $ = (id) => document.getElementById(id);
@@ -13,6 +14,7 @@ const state = {
   file: '', version: '', graph: null, tasks: [], fields: [], ops: [],
   check: null, checkSeq: 0, dirty: false, picked: [], fresh: -1,
 };
+let conflict = null;  // the ConflictBanner, once the page is up
 
 async function loadListing() {
   const l = await getJson('/api/builder/trainings');
@@ -32,7 +34,7 @@ async function openFile(file) {
   state.version = r.version;
   state.dirty = false;
   state.fresh = -1;
-  hideConflict();
+  conflict.hide();
   $('version').textContent = 'version ' + r.version;
   $('save-state').textContent = '';
   if (r.load_error) {
@@ -222,23 +224,19 @@ function move(i, by) {
   changed();
 }
 
-function hideConflict() { $('conflict').hidden = true; }
-
 async function save(version) {
   $('save').disabled = true;
-  const r = await postJson('/api/builder/training/' + encodeURIComponent(state.file), { version, graph: state.graph });
-  const body = await r.json();
-  if (r.status === 200) {
+  const { status, body } = await saveDesign('/api/builder/training/' + encodeURIComponent(state.file), version,
+                                            { graph: state.graph });
+  if (status === 200) {
     state.version = body.version;
     state.dirty = false;
     $('version').textContent = 'version ' + body.version;
     $('save-state').textContent = 'saved';
     $('save-state').className = 'ok';
-    hideConflict();
-  } else if (r.status === 409) {
-    $('conflict-text').textContent = body.error;
-    $('conflict').hidden = false;
-    $('conflict').dataset.current = body.current_version;
+    conflict.hide();
+  } else if (status === 409) {
+    conflict.show(body);
     $('save-state').textContent = 'not saved: changed on disk';
     $('save-state').className = 'bad';
   } else {
@@ -250,6 +248,7 @@ async function save(version) {
 }
 
 async function main() {
+  conflict = new ConflictBanner($('conflict'), { onReload: () => openFile(state.file), onOverwrite: (v) => save(v) });
   const trainings = await loadListing();
   $('console-link').href = '/?token=' + encodeURIComponent(params.get('token') || '');
   $('file').addEventListener('change', () => openFile($('file').value));
@@ -258,8 +257,6 @@ async function main() {
   $('add-node').addEventListener('click', addNode);
   $('add-edge').addEventListener('click', addEdge);
   $('save').addEventListener('click', () => save(state.version));
-  $('reload').addEventListener('click', () => openFile(state.file));
-  $('overwrite').addEventListener('click', () => save($('conflict').dataset.current));
   const first = params.get('file') || (trainings[0] && trainings[0].file);
   if (first) await openFile(first);
   document.body.dataset.ready = '1';
