@@ -7,6 +7,7 @@
 
 #include "hil/can_source.hpp"
 #include "hil/canopen_source.hpp"
+#include "hil/j1939_source.hpp"
 #include "msgs/clock.hpp"
 
 namespace rise::hil {
@@ -19,6 +20,8 @@ std::vector<std::unique_ptr<SourceTransport>> can_sources(const panels::PanelDef
     std::unique_ptr<SourceTransport> source;
     if (buses[i] && definition.sources[i].is_canopen())
       source = std::make_unique<CanopenSource>(std::move(buses[i]), definition, i);
+    else if (buses[i] && definition.sources[i].is_j1939())
+      source = std::make_unique<J1939Source>(std::move(buses[i]), definition, i);
     else if (buses[i])
       source = std::make_unique<CanSource>(std::move(buses[i]), definition, i);
     sources.push_back(std::move(source));

@@ -2,6 +2,7 @@
 
 #include "firmware_protocol/canopen_eds.hpp"
 #include "firmware_protocol/dbc.hpp"
+#include "firmware_protocol/j1939.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -87,10 +88,14 @@ PanelMapper::PanelMapper(panels::PanelDefinition definition) : definition_(std::
 }
 
 bool PanelMapper::on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data,
-                               int64_t now_us) {
+                               int64_t now_us, bool j1939) {
   bool matched = false, changed = false, bad = false;
   for (SignalBinding& b : s.bindings) {
-    if (b.message->id != can_id || b.message->extended != extended) continue;
+    // A J1939 message is its PGN, whatever priority and addresses the DBC's
+    // id holds (the source already took only the console's).
+    const bool same_id = j1939 ? fp::j1939::pgn_of(b.message->id) == fp::j1939::pgn_of(can_id)
+                               : b.message->id == can_id;
+    if (!same_id || b.message->extended != extended) continue;
     matched = true;
     if (!fp::signal_fits(*b.signal, data.size()) ||
         (b.multiplexer && !fp::signal_fits(*b.multiplexer, data.size()))) {
@@ -329,9 +334,10 @@ bool PanelMapper::on_frame(std::size_t source, uint32_t can_id, std::span<const 
                            int64_t now_us, bool extended) {
   if (source >= sources_.size()) return false;
   SourceState& s = sources_[source];
-  if (definition_.sources[source].is_dbc()) return on_dbc_frame(s, can_id, extended, data, now_us);
   if (definition_.sources[source].is_canopen())
     return on_canopen_frame(s, definition_.sources[source], can_id, extended, data, now_us);
+  if (definition_.sources[source].is_dbc())
+    return on_dbc_frame(s, can_id, extended, data, now_us, definition_.sources[source].is_j1939());
   if (extended) {
     s.status.errors[static_cast<std::size_t>(fp::DecodeError::UnknownId)]++;
     return false;
@@ -490,7 +496,11 @@ std::optional<PanelMapper::SourceTrouble> PanelMapper::source_trouble(const Sour
     for (const auto& b : s.bindings) {
       if (b.last_us == 0) return trouble(FailsafeCause::SourceStale, "no " + b.message->name + " frame yet");
       const int64_t age_us = now_us - b.last_us;
-      if (age_us > timeout_us) return stale(b.message->name + " frame", age_us);
+      // A J1939 console sends slow PGNs (a BAM takes 50 ms a packet) at
+      // their own cycle: three GenMsgCycleTimes of it, if longer.
+      const int64_t limit_us =
+          def.is_j1939() ? std::max<int64_t>(timeout_us, 3000 * int64_t{b.message->cycle_time_ms}) : timeout_us;
+      if (age_us > limit_us) return stale(b.message->name + " frame", age_us);
     }
     if (s.status.check_failed) return trouble(FailsafeCause::SourceError, "frames do not fit the DBC");
     return std::nullopt;

@@ -79,7 +79,9 @@ class PanelMapper {
   /// For a `dbc` source every bound MESSAGE.SIGNAL is read from the frames
   /// with its message's id (`extended` for 29-bit ids). For a `canopen`
   /// source the node's heartbeat gives its NMT state, and its TPDOs, taken
-  /// only while it is Operational, the bound objects.
+  /// only while it is Operational, the bound objects. For a `j1939` source
+  /// the frame is a whole J1939 message (up to 1785 bytes, from the
+  /// transport protocol) from the console's address, matched by its PGN.
   bool on_frame(std::size_t source, uint32_t can_id, std::span<const uint8_t> data,
                 int64_t now_us, bool extended = false);
 
@@ -259,7 +261,8 @@ class PanelMapper {
   std::vector<int> binding_of_control_;  // index into the source's bindings, -1 if none
   std::vector<InputFault> input_faults_;  // injection order
 
-  bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us);
+  bool on_dbc_frame(SourceState& s, uint32_t can_id, bool extended, std::span<const uint8_t> data, int64_t now_us,
+                    bool j1939);
   bool on_canopen_frame(SourceState& s, const panels::SourceDefinition& def, uint32_t can_id, bool extended,
                         std::span<const uint8_t> data, int64_t now_us);
   std::optional<SourceTrouble> canopen_trouble(const SourceState& s, const panels::SourceDefinition& def,

@@ -14,6 +14,7 @@
 #include "hil/io/can_log.hpp"
 #include "hil/io/hid_recording.hpp"
 #include "hil/io/modbus_trace.hpp"
+#include "hil/j1939_input.hpp"
 #include "hil/panel_state_message.hpp"
 #include "hil/source_input.hpp"
 #include "msgs/failsafe.hpp"
@@ -39,12 +40,26 @@ bool ends_with(std::string_view text, std::string_view tail) {
   return text.size() >= tail.size() && text.substr(text.size() - tail.size()) == tail;
 }
 
-// A CAN log: every frame the recorder received, at its timestamp.
+// A CAN log: every frame the recorder received, at its timestamp. A j1939
+// source's go through J1939Input as live (our claim starts at the first
+// frame; what we would answer is in the log as sent, so it is not sent).
 class CanFeed final : public CaptureReplay::Feed {
  public:
-  CanFeed(const std::string& path, std::size_t source) : Feed(source), reader_(path) { fetch(); }
+  CanFeed(const std::string& path, const panels::SourceDefinition& definition, std::size_t source)
+      : Feed(source), reader_(path) {
+    if (definition.is_j1939()) j1939_.emplace(definition);
+    fetch();
+  }
   void apply(PanelMapper& mapper) override {
-    apply_can_frame(mapper, source, record_.frame, *time_us);
+    if (j1939_) {
+      J1939Replies unsent;
+      if (!j1939_started_) j1939_->start(*time_us / 1000, unsent);
+      j1939_started_ = true;
+      j1939_->tick(*time_us / 1000, unsent);
+      j1939_->on_frame(mapper, source, record_.frame, *time_us, unsent);
+    } else {
+      apply_can_frame(mapper, source, record_.frame, *time_us);
+    }
     fetch();
   }
   bool records_link() const override { return false; }
@@ -70,6 +85,8 @@ class CanFeed final : public CaptureReplay::Feed {
 
   io::CanLogReader reader_;
   io::CanLogRecord record_;
+  std::optional<J1939Input> j1939_;
+  bool j1939_started_ = false;
 };
 
 // A Modbus trace, replayed as the bridge's poll cycle (modbus_source_loop)
@@ -295,7 +312,7 @@ CaptureReplay::CaptureReplay(const panels::PanelDefinition& definition, std::vec
     else if (s.is_modbus())
       feeds_.push_back(std::make_unique<ModbusFeed>(c.path, c.source, modbus_poll_reads(definition, c.source)));
     else
-      feeds_.push_back(std::make_unique<CanFeed>(c.path, c.source));
+      feeds_.push_back(std::make_unique<CanFeed>(c.path, s, c.source));
   }
   bool any = false;
   for (const auto& f : feeds_) {

@@ -10,6 +10,7 @@
 #include "hil/hid_source.hpp"
 #include "hil/io/modbus_url.hpp"
 #include "hil/io/replay_modbus_link.hpp"
+#include "hil/j1939_source.hpp"
 #include "hil/modbus_source.hpp"
 
 namespace rise::hil {
@@ -79,6 +80,7 @@ std::unique_ptr<SourceTransport> open_source(const panels::PanelDefinition& defi
   if (def.is_modbus()) return std::make_unique<ModbusSource>(open_link(def, url), definition, source);
   if (io::is_modbus_url(url)) throw wrong_url(def, url, "not a CAN URL");
   if (def.is_canopen()) return std::make_unique<CanopenSource>(io::open_can_bus(url), definition, source);
+  if (def.is_j1939()) return std::make_unique<J1939Source>(io::open_can_bus(url), definition, source);
   return std::make_unique<CanSource>(io::open_can_bus(url), definition, source);
 }
 

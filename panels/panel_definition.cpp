@@ -110,18 +110,56 @@ void parse_hid_source(const YamlReader& ctx, const YAML::Node& node, const std::
   }
 }
 
+// A J1939 NAME: 64 bits, written in hex (0x8000000000001939) as J1939-81
+// tools print it; yaml-cpp would read 0-prefixed text as octal.
+uint64_t read_j1939_name(const YamlReader& ctx, const YAML::Node& node, const std::string& key) {
+  const auto text = ctx.as<std::string>(node, key);
+  std::size_t used = 0;
+  try {
+    const uint64_t value = std::stoull(text, &used, 16);
+    if (used == text.size() && text.size() <= 18 && text[0] != '-') return value;
+  } catch (const std::exception&) {
+  }
+  ctx.fail(node, key, "expected a 64-bit NAME in hex (0x0123456789ABCDEF), not '" + text + "'");
+}
+
+uint8_t read_j1939_address(const YamlReader& ctx, const YAML::Node& map, const char* key, const std::string& where,
+                           int fallback) {
+  constexpr int last = 253;  // 254 is "no address", 255 "everyone"
+  if (!map[key]) return static_cast<uint8_t>(fallback);
+  const int address = ctx.require<int>(map, key, where);
+  if (address < 0 || address > last)
+    ctx.fail(map[key], where + "." + key, "must be 0.." + std::to_string(last) + " (a J1939 source address)");
+  return static_cast<uint8_t>(address);
+}
+
+// A j1939 source: the bridge's own address and NAME, and how the console is found.
+void parse_j1939_source(const YamlReader& ctx, const YAML::Node& node, const std::string& where, SourceDefinition& s) {
+  s.j1939_address = read_j1939_address(ctx, node, "address", where, 0x80);
+  if (node["j1939_name"]) s.j1939_name = read_j1939_name(ctx, node["j1939_name"], where + ".j1939_name");
+  if (node["console_name"]) s.console_name = read_j1939_name(ctx, node["console_name"], where + ".console_name");
+  s.console_address = read_j1939_address(ctx, node, "console_address", where, 254);
+  if (!s.console_name && s.console_address == 254)
+    ctx.fail(node, where + ".console_name",
+             "missing: a j1939 source needs the console's NAME (console_name) or its fixed console_address");
+  if (s.console_address == s.j1939_address)
+    ctx.fail(node["console_address"], where + ".console_address", "is the bridge's own address");
+}
+
 SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std::size_t i, const std::string& file) {
   const std::string where = "sources[" + std::to_string(i) + "]";
   ctx.only_keys(node, where,
                 {"name", "protocol", "node", "timeout_ms", "recovery_frames", "max_counter_delta", "poll_hz", "unit",
-                 "dbc", "device", "mapping", "sdl_db", "eds", "sync_ms"});
+                 "dbc", "device", "mapping", "sdl_db", "eds", "sync_ms", "address", "j1939_name", "console_name",
+                 "console_address"});
   SourceDefinition s;
   s.name = ctx.require<std::string>(node, "name", where);
   s.protocol = ctx.require<std::string>(node, "protocol", where);
   if (s.protocol != "rise-can-v1" && s.protocol != "rise-modbus-v1" && s.protocol != "modbus" && s.protocol != "dbc" &&
-      s.protocol != "hid" && !s.is_canopen())
+      s.protocol != "j1939" && s.protocol != "hid" && !s.is_canopen())
     ctx.fail(node["protocol"], where + ".protocol",
-             "unknown protocol '" + s.protocol + "' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, hid, canopen)");
+             "unknown protocol '" + s.protocol +
+                 "' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, j1939, hid, canopen)");
   if (!s.is_canopen())
     for (const char* k : kCanopenSourceKeys)
       if (node[k]) ctx.fail(node[k], where + "." + k, "only for protocol canopen");
@@ -137,10 +175,14 @@ SourceDefinition parse_source(const YamlReader& ctx, const YAML::Node& node, std
       ctx.fail(node["dbc"], where + ".dbc", e.what());
     }
     for (const char* k : {"node", "max_counter_delta", "poll_hz", "unit"})
-      if (node[k]) ctx.fail(node[k], where + "." + k, "not used by protocol dbc");
+      if (node[k]) ctx.fail(node[k], where + "." + k, "not used by protocol " + s.protocol);
   } else if (node["dbc"]) {
-    ctx.fail(node["dbc"], where + ".dbc", "only for protocol dbc");
+    ctx.fail(node["dbc"], where + ".dbc", "only for protocols dbc and j1939");
   }
+  if (s.is_j1939()) parse_j1939_source(ctx, node, where, s);
+  else
+    for (const char* k : {"address", "j1939_name", "console_name", "console_address"})
+      if (node[k]) ctx.fail(node[k], where + "." + k, "only for protocol j1939");
   if (s.is_generic_modbus())
     for (const char* k : {"node", "max_counter_delta", "recovery_frames"})
       if (node[k])
@@ -203,6 +245,9 @@ void parse_dbc_binding(const YamlReader& ctx, const SourceDefinition& source, co
     ctx.fail(node["signal"], where + ".signal",
              "no signal '" + text + "' (MESSAGE.SIGNAL) in " + source.dbc_file);
   if (node["bits"]) ctx.fail(node["bits"], where + ".bits", "not for a dbc source");
+  if (source.is_j1939() && !message->extended)
+    ctx.fail(node["signal"], where + ".signal",
+             "message " + message->name + " has an 11-bit id: a J1939 PGN needs a 29-bit one (BO_ id with bit 31 set)");
   c.dbc_message = message;
   c.dbc_signal = signal;
   if (c.kind == ControlKind::Axis) {

@@ -102,7 +102,7 @@ struct ControlDefinition {
 
 struct SourceDefinition {
   std::string name;
-  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc", "hid" or "canopen"
+  std::string protocol;           ///< "rise-can-v1", "rise-modbus-v1", "modbus", "dbc", "j1939", "hid" or "canopen"
   uint8_t node = 0;               ///< console node id on the bus: rise-can-v1 0..15, canopen 1..127
   double poll_hz = 50.0;          ///< Modbus: input polls per second
   uint8_t unit = 1;               ///< Modbus: slave / unit id (1..247)
@@ -113,6 +113,15 @@ struct SourceDefinition {
   /// MESSAGE.SIGNAL names. The database is shared by copies of the definition.
   std::string dbc_file;
   std::shared_ptr<const firmware_protocol::DbcDatabase> dbc;
+  /// protocol "j1939": an SAE J1939 console whose J1939 DBC (`dbc:`) names
+  /// its PGNs' signals. The bridge claims `address` with NAME `j1939_name`
+  /// (hil/j1939_source.hpp) and takes the console's messages from the
+  /// address its NAME `console_name` claims (followed when it moves), or
+  /// from the fixed `console_address` while no NAME is given or heard.
+  uint8_t j1939_address = 0x80;
+  uint64_t j1939_name = 0x8000000000001939ull;  ///< arbitrary address capable, identity 0x1939
+  std::optional<uint64_t> console_name;
+  uint8_t console_address = 254;  ///< 254 = none: only the console's NAME finds it
   /// protocol "hid": a USB HID device (joystick, gamepad); controls bind the
   /// names of its report descriptor's signals. `device` is its hid:// URL
   /// (optional here; the daemon's --source URL wins). timeout_ms defaults to
@@ -146,7 +155,10 @@ struct SourceDefinition {
   /// (panels/modbus_point.hpp); no alive counter or CRC of ours: stale when
   /// no poll was answered within timeout_ms.
   bool is_generic_modbus() const { return protocol == "modbus"; }
-  bool is_dbc() const { return protocol == "dbc"; }
+  /// Controls bind MESSAGE.SIGNAL of a DBC file: a plain CAN device (dbc)
+  /// or a J1939 one (j1939, messages matched by PGN and source address).
+  bool is_dbc() const { return protocol == "dbc" || is_j1939(); }
+  bool is_j1939() const { return protocol == "j1939"; }
 };
 
 struct LedDefinition {

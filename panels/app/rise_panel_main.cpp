@@ -20,6 +20,7 @@
 #include "panels/console_emulator.hpp"
 #include "panels/data_path.hpp"
 #include "panels/hid_emulator.hpp"
+#include "panels/j1939_emulator.hpp"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -34,6 +35,7 @@ struct EmulateOptions {
   std::string hid_id;      ///< VID:PID (hex); default: the descriptor file's, else the source's device URL
   std::string hid_name;    ///< product string; default: the descriptor file's name
   double hid_period_ms = 8.0;
+  int j1939_address = 254;  ///< j1939 source: where the console claims (254: the definition's)
   std::string script;
   bool loop = false;
   bool hold = false;
@@ -209,6 +211,40 @@ int run_emulate_canopen(const EmulateOptions& o, const rise::panels::PanelDefini
   return 0;
 }
 
+// A j1939 source: the console's J1939 firmware (panels/j1939_emulator.hpp)
+// on a CAN bus, its address claimed before it sends.
+int run_emulate_j1939(const EmulateOptions& o, const rise::panels::PanelDefinition& definition, std::size_t source,
+                      const rise::panels::Timeline& timeline, rise::hil::io::CanBus& bus) {
+  using namespace rise;
+  panels::J1939EmulatorSettings settings;
+  settings.address = static_cast<uint8_t>(o.j1939_address);
+  panels::J1939Emulator emulator(definition, source, settings);
+  spdlog::info("rise-panel ready: emulating '{}' source '{}' as a J1939 console on {}", definition.name,
+               definition.sources[source].name, o.can_url);
+  ScriptClock script(timeline, o);
+  script.start(rise::msgs::monotonic_us());
+  hil::io::CanFrame frame;
+  uint8_t noted = firmware_protocol::j1939::kNullAddress;
+  while (!g_stop) {
+    const int64_t now = rise::msgs::monotonic_us();
+    if (!script.step(now, definition, emulator) || emulator.ended()) break;
+    if (!bus.is_open()) {
+      bus.reopen();
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      continue;
+    }
+    emulator.tick(bus, now);
+    if (emulator.address() != noted) {
+      noted = emulator.address();
+      spdlog::info("J1939 address {:#04x} {}", noted, noted == 254 ? "(none: lost to a lower NAME)" : "claimed");
+    }
+    while (bus.is_open() && bus.receive(frame, 1) == hil::io::IoStatus::Ok)
+      emulator.on_frame(bus, frame, rise::msgs::monotonic_us());
+  }
+  spdlog::info("rise-panel stopped: {} frames sent", emulator.frames_sent());
+  return 0;
+}
+
 int run_emulate(const EmulateOptions& o) {
   using namespace rise;
   panels::PanelDefinition definition;
@@ -244,6 +280,11 @@ int run_emulate(const EmulateOptions& o) {
   }
   if (bus && definition.sources[source].is_canopen())
     return run_emulate_canopen(o, definition, source, timeline, *bus);
+  if (definition.sources[source].is_j1939()) {
+    if (bus) return run_emulate_j1939(o, definition, source, timeline, *bus);
+    spdlog::error("source '{}' speaks j1939: it runs on CAN (--can), not Modbus", definition.sources[source].name);
+    return 2;
+  }
   panels::ConsoleEmulator emulator(definition, source);
 
   const uint16_t port = server ? server->port() : hil::io::listening_port(*bus);
@@ -331,6 +372,9 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1000.0))
       ->needs("--hid");
+  em->add_option("--j1939-address", emulate.j1939_address,
+                 "a j1939 source: the address the console claims (default: the definition's console_address)")
+      ->check(CLI::Range(0, 253));
   em->add_option("--script", emulate.script, "timeline file: 'time control value' lines");
   em->add_flag("--loop", emulate.loop, "repeat the script");
   em->add_flag("--hold", emulate.hold, "keep sending the last state after the script ends");

@@ -174,7 +174,10 @@ every_live='[.[] | select(.link.state == "live" and .panel_state and .robot_stat
                           and (.link.clock_offset_ms != null))] | length'
 wait_for 40000 "($every_live) >= 3 and ([.[].id] | contains([\"${IDS[0]}\", \"${IDS[1]}\", \"${IDS[2]}\"]))" ||
   fail "the instructor does not list all three trainees live with their clocks measured: $(trainees | jq -c '[.[] | {id, link}]')"
-sleep 2  # a few more probes: the filter keeps the least delayed
+# More probes until every offset has settled near its truth (the filter keeps
+# the least delayed); the checks below say which one did not.
+settled="[.[] | select(.id == \"${IDS[0]}\" or .id == \"${IDS[2]}\") | .link.clock_offset_ms | fabs < 100] + [.[] | select(.id == \"${IDS[1]}\") | (.link.clock_offset_ms - $((SKEW_S * 1000)) | fabs) < 100] | all and length == 3"
+wait_for 10000 "$settled" || log "clock offsets not settled within 10 s"
 T=$(trainees)
 for i in 0 1 2; do
   id=${IDS[$i]}
@@ -198,11 +201,17 @@ if [ $PAGE -eq 1 ]; then
 fi
 
 # ---- 2. a fault into B; A and C untouched ------------------------------------
+seq_of() { jq --arg id "$1" '.[] | select(.id == $id) | .panel_state.seq' <<<"$2"; }
+T=$(trainees)
+SEQ_A=$(seq_of "${IDS[0]}" "$T") SEQ_C=$(seq_of "${IDS[2]}" "$T")
 R=$(api /api/fault/inject -X POST -H 'Content-Type: application/json' -d "{\"trainee\": \"${IDS[1]}\", \"fault\": \"stick-stuck\"}")
 log "inject into ${IDS[1]}: $R"
 wait_for 3000 ".[] | select(.id == \"${IDS[1]}\") | .panel_state.active_faults | any(startswith(\"stick-stuck:\"))" ||
   fail "${IDS[1]}: the signed fault did not apply: $(trainees | jq -c ".[] | select(.id == \"${IDS[1]}\") | .panel_state.active_faults")"
-sleep 0.5
+# A and C published 50 states (0.5 s) after the inject: none of them may carry it.
+wait_for 5000 "[.[] | select((.id == \"${IDS[0]}\" and .panel_state.seq > $SEQ_A + 50) or
+                            (.id == \"${IDS[2]}\" and .panel_state.seq > $SEQ_C + 50))] | length == 2" ||
+  fail "${IDS[0]} and ${IDS[2]} did not publish 50 states after the inject"
 T=$(trainees)
 for id in "${IDS[0]}" "${IDS[2]}"; do
   jq -e --arg id "$id" '.[] | select(.id == $id) | (.panel_state.active_faults | length) == 0 and

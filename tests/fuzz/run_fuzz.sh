@@ -5,7 +5,7 @@
 #   run_fuzz.sh CLANGXX ROOT WORKDIR TARGET RUNS
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
-# TARGET is console_can, console_modbus, dbc, canopen_eds, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
+# TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
 # line_protocols, command_auth, configs, training_graph, training_builder, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
@@ -16,6 +16,7 @@ case "$target" in
   console_modbus) sources=("$root"/firmware_protocol/console_{can,modbus}.cpp) ;;
   dbc) sources=("$root/firmware_protocol/dbc.cpp") ;;
   canopen_eds) sources=("$root"/firmware_protocol/{canopen,canopen_eds,dbc}.cpp) ;;
+  j1939) sources=("$root/firmware_protocol/j1939.cpp") ;;
   hid_descriptor) sources=("$root"/firmware_protocol/hid_{descriptor,report,text}.cpp) ;;
   # The semantic readers: PLY/XYZ and 3DTK/sim poses without PCL; the PCD
   # target adds our cloud_io.cpp and links the system's PCL (not sanitized).
@@ -157,6 +158,15 @@ case "$target" in
     { printf '\x04'; cat "$root/panels/definitions/rise_console_canopen.eds"; } >"$corpus/console.eds"
     printf '\x10[1017]\nParameterName=HB\nDataType=0x0006\nDefaultValue=50\nParameterValue=020\n[1800sub1]\nParameterName=C\nDataType=0x0007\nDefaultValue=0x20000180+$NODEID\n[1800sub2]\nParameterName=T\nDataType=0x0005\nDefaultValue=0\n[1A00sub0]\nParameterName=N\nDataType=0x0005\nDefaultValue=3\n[1A00sub1]\nParameterName=M1\nDataType=0x0007\nDefaultValue=0x20000120\n[1A00sub2]\nParameterName=M2\nDataType=0x0007\nDefaultValue=0x00050008\n[1A00sub3]\nParameterName=M3\nDataType=0x0007\nDefaultValue=0x20000201\n[2000]\nParameterName=R\nObjectType=0x9\nSubNumber=3\n[2000sub1]\nParameterName=Speed\nDataType=0x0008\nPDOMapping=1\nLowLimit=-10\nHighLimit=10\n[2000sub2]\nParameterName=On\nDataType=0x0001\nPDOMapping=1\n' >"$corpus/dcf.dcf"
     extra=(-dict="$root/tests/fuzz/canopen_eds.dict")
+    ;;
+  j1939)
+    # Our address 0x80. A 20-byte BAM of PGN 0xFF20 from 0x21 (CM + 3 DT);
+    # an RTS/CTS of 10 bytes to 0x80 (RTS, 2 DT); a contending claim of 0x80
+    # by a lower NAME; an RTS left to time out (time step 15 x 100 ms).
+    printf '\x80\x21\xff\xec\x1c\x08\x20\x14\x00\x03\xff\x20\xff\x00\x21\xff\xeb\x1c\x08\x01\x01\x02\x03\x04\x05\x06\x07\x21\xff\xeb\x1c\x08\x02\x08\x09\x0a\x0b\x0c\x0d\x0e\x21\xff\xeb\x1c\x08\x03\x0f\x10\x11\x12\x13\x14\xff' >"$corpus/bam"
+    printf '\x80\x21\x80\xec\x1c\x08\x10\x0a\x00\x02\xff\x00\xff\x00\x21\x80\xeb\x1c\x08\x01\x01\x02\x03\x04\x05\x06\x07\x21\x80\xeb\x1c\x08\x02\x08\x09\x0a\xff\xff\xff\xff' >"$corpus/rts_cts"
+    printf '\x80\x80\xff\xee\x18\x08\x01\x00\x00\x00\x00\x00\x00\x00\x21\xff\xea\x18\x03\x00\xee\x00' >"$corpus/claim"
+    printf '\x80\x21\x80\xec\x1c\x08\x10\x0a\x00\x02\xff\x00\xff\x00\x21\x80\xeb\x1c\xf8\x01\x01\x02\x03\x04\x05\x06\x07' >"$corpus/timeout"
     ;;
   hid_descriptor)
     # Gravis GamePad Pro (Android CTS) as bytes, the hid-recorder descriptors

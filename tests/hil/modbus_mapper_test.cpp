@@ -59,7 +59,7 @@ TEST_CASE("a panel definition accepts rise-modbus-v1 sources with poll_hz and un
         {"rise-modbus-v1", "unit: 0", "sources[0].unit: must be 1..247"},
         {"rise-modbus-v1", "poll_hz: 0.5", "sources[0].poll_hz: must be 1..1000"},
         {"rise-can-v1", "poll_hz: 50", "sources[0].poll_hz: only for protocols rise-modbus-v1 and modbus"},
-        {"rise-can-v2", "node: 0", "unknown protocol 'rise-can-v2' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, hid"},
+        {"rise-can-v2", "node: 0", "unknown protocol 'rise-can-v2' (known: rise-can-v1, rise-modbus-v1, modbus, dbc, j1939, hid"},
     }));
     try {
       with_source(protocol, keys);

@@ -79,7 +79,8 @@ TEST_CASE("a wrong definition is refused with file:line and the key", "[panels]"
       // A list as a key (yaml-cpp's own bad conversion escaped here; found by tests/fuzz/configs_fuzz.cpp).
       Case{"deadband: 0.1", "[deadband]: 0.1", "broken.yaml:5: controls[0]: a key must be a name, not a list or mapping"},
       Case{"node: 2", "node: 16", "broken.yaml:3: sources[0].node: must be 0..15"},
-      Case{"protocol: rise-can-v1", "protocol: j1939", "broken.yaml:3: sources[0].protocol: unknown protocol 'j1939'"},
+      Case{"protocol: rise-can-v1", "protocol: flexray", "broken.yaml:3: sources[0].protocol: unknown protocol 'flexray'"},
+      Case{"protocol: rise-can-v1", "protocol: j1939", "broken.yaml:3: sources[0].dbc: missing"},
       Case{"safe: arm", "safe: park", "broken.yaml:7: controls.mode.safe: 'park' is not one of the positions"},
       Case{", safe: 0.0}", "}", "broken.yaml:5: controls.drive_y.safe: missing"},
       Case{"deadband: 0.1", "deadband: lots", "broken.yaml:5: controls.drive_y.deadband: cannot read 'lots' as a number"},
