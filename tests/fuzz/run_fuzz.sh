@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, inputs, configs, training_graph, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, urdf, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -47,8 +47,16 @@ case "$target" in
   # The training graph without its tasks (TaskResult is apart from the
   # executor, so neither the executor nor the simulator is linked).
   training_graph)
-    sources=("$root"/sim/training/{training_graph,task_result,task_description}.cpp "$root"/sim/world_description.cpp
+    sources=("$root"/sim/training/{training_graph,training_writer,task_result,task_description}.cpp "$root"/sim/world_description.cpp
              "$root/panels/yaml_reader.cpp")
+    ;;
+  # The Training Builder's request body: JSON → graph → YAML → the trainer's
+  # loader with the shipped task files (design_files.cpp: the name check; its
+  # atomic save is report.cpp's).
+  training_builder)
+    sources=("$root"/instructor/{training_builder,design_files}.cpp
+             "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report}.cpp
+             "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
     ;;
   urdf) sources=("$root/sim/urdf_robot.cpp") ;;
   # The messages of the multicast group as the instructor takes them (every type by lcm-gen here).
@@ -106,6 +114,10 @@ if [ $rebuild -eq 1 ]; then
       ;;
     urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
+    training_builder)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-lyaml-cpp -ljsoncpp)
+      ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
       libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge)
@@ -257,6 +269,8 @@ case "$target" in
     { printf '\x00'; cat "$root/sim/training/examples/fig10_training.yaml"; } >"$corpus/fig10.yaml"
     { printf '\x35'; cat "$root/sim/training/examples/fig10_training.yaml"; } >"$corpus/fig10-b.yaml"
     printf '\x11training: t\nnodes:\n  - {name: a, task: a.yaml, max_attempts: 3}\n  - {name: b, task: /b.yaml}\ntransitions:\n  - {from: START, to: a}\n  - {from: a, if: "events.neutralized GE 1", to: b}\n  - {from: a, if: "time_s LE 1e2", to: a}\n  - {from: b, if: "success NE false", to: END}\n  - {from: b, to: a}\n' >"$corpus/loop.yaml"
+    # Comments and strings the writer must quote (the Training Builder saves through it).
+    printf '\x07# head\n#  two\n\ntraining: "a: \\"b\\" #c"\ntitle: \x27it\x27\x27s\x27\nnodes:\n  - {name: "yes", task: "../x y.yaml"}  # n # m\ntransitions:\n  - {from: START, to: "yes"}   #s\n  - {from: "yes", if: "result GE 1e1", to: END} # \x27q\x27\n' >"$corpus/quoted.yaml"
     printf '\x02training: t\nnodes:\n  - name: a\n    task: a.yaml\n  - name: b\n    task: b.yaml\ntransitions:\n  - {from: START, to: a}\n  - {from: a, to: b}\n  - {from: b, to: a}\n  - {from: c, to: END}\n' >"$corpus/closed.yaml"
     ;;
   urdf)
@@ -270,6 +284,14 @@ case "$target" in
     for b in 0 1 2 3; do
       for f in "$root"/sim/robots/*.urdf; do { printf "\\x0$b"; cat "$f"; } >"$corpus/$b-$(basename "$f")"; done
     done
+    ;;
+  training_builder)
+    # The page's graph of the shipped training (as /api/builder/training/NAME
+    # gives it), one with an edge added and one with errors of each kind.
+    g='{"training":"fig10_metro","title":"t","comment":"c\\nd","nodes":[{"name":"mission1","task":"approach_object.yaml","max_attempts":2,"comment":"x"},{"name":"mission2","task":"neutralize_object.yaml","max_attempts":2,"comment":""}],"transitions":[{"from":"START","to":"mission1","if":"","comment":""},{"from":"mission1","to":"mission2","if":"success EQ 1","comment":"C2"},{"from":"mission1","to":"mission1","if":"","comment":"repeat"},{"from":"mission1","to":"END","if":"","comment":""},{"from":"mission2","to":"END","if":"events.neutralized GE 1","comment":""},{"from":"mission2","to":"END","if":"","comment":""}]}'
+    printf '%s' "$g" >"$corpus/graph.json"
+    printf '%s' "${g/\"if\":\"success EQ 1\"/\"if\":\"score LT five\"}" >"$corpus/bad-condition.json"
+    printf '%s' '{"training":"t","nodes":[{"name":"a","task":"../x.yaml"},{"name":"b","task":"metro_transport.yaml","max_attempts":0}],"transitions":[{"from":"START","to":"c"},{"from":"a","to":"a","if":"events.nope GE 1"}]}' >"$corpus/errors.json"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.
