@@ -13,11 +13,14 @@ add_library(rise_instructor_web
   virtual_panel.cpp
   virtual_panels.cpp
   scenario_processes.cpp
-  launcher_thread.cpp)
+  launcher_thread.cpp
+  design_files.cpp
+  training_builder.cpp
+  builder_routes.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs
-  PRIVATE rise::sim rise::instructor rise::process rise::hil_io PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
+  PRIVATE rise::sim rise::training rise::instructor rise::process rise::hil_io PkgConfig::RISE_HTTPLIB JsonCpp::JsonCpp lcm Threads::Threads)
 
 # rise-instructor serve
 add_library(rise_instructor_serve STATIC app/serve_command.cpp)

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hil/panel_state_message.hpp"
+#include "instructor/builder_routes.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
@@ -363,6 +364,7 @@ void add_routes(httplib::Server& http, const WebRouteContext& context) {
   http.Post("/api/scenario/stop", [ctx](const Req& req, Res& res) { handle_scenario(*ctx, req, res, false); });
   http.Post(R"(/api/sim/([^/]+)/(pause|resume|step|reset))",
             [ctx](const Req& req, Res& res) { handle_sim_control(*ctx, req, res); });
+  add_builder_routes(http, ctx->settings.designs_dir);
 }
 
 }  // namespace rise::instructor

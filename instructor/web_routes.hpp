@@ -4,7 +4,7 @@
 // request, the built pages, the training reports, and the JSON API —
 // /api/world, /api/panel, /api/trainees, /api/reports, /api/stream (SSE),
 // the virtual panels' updates, the signed fault buttons, scenario control
-// and sim control.
+// and sim control; and the builder pages' API (instructor/builder_routes.hpp).
 
 #include <atomic>
 #include <cstdint>

@@ -48,6 +48,9 @@ struct WebServerSettings {
   /// started per trainee, stopped with SIGTERM, on which it clears its auto_clear faults).
   std::string scenarios_dir;        ///< "" → no scenarios
   std::string scenario_program;     ///< "" → scenario control off
+  /// The files the builder pages read and write (/training.html:
+  /// instructor/builder_routes.hpp); "" → the builders are off.
+  std::string designs_dir;
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;

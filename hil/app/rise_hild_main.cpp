@@ -54,12 +54,14 @@ void add_daemon_options(CLI::App& app, DaemonOptions& o) {
   app.add_option("--panel", o.panel_file, "panel definition (YAML)")->capture_default_str();
   // --can is the old name, from when every source was a CAN bus.
   app.add_option("--source,--can", o.source_urls,
-                 "transport of each source, one per source in the definition's order: rise-can-v1: "
-                 "socketcan://IFACE, socketcand://HOST:PORT/BUS, mem://NAME; rise-modbus-v1 and modbus: "
+                 "transport of each source, one per source in the definition's order: rise-can-v1, dbc, "
+                 "canopen and j1939: socketcan://IFACE, slcan:///dev/ttyACM0, socketcand://HOST:PORT/BUS, "
+                 "replay://FILE (candump/ASC/TRC/BLF/pcap), mem://NAME; rise-modbus-v1 and modbus: "
                  "modbus+tcp://HOST:PORT?unit=N&timeout_ms=T, modbus+rtu:///dev/ttyUSB0?baud=B&parity=E&unit=N, "
                  "replay://FILE.modbus.log?speed=1&loop=0&start=S&stop=S&fast=0 (a recorded trace as the slave); "
                  "hid: hid://VID:PID[?serial=S][&name=TEXT][&interface=N], or - for the definition's device:, "
-                 "or replay://FILE.hid?speed=X&loop=N&start=S&stop=S&fast=1 (a hid-recorder file as the device)");
+                 "or replay://FILE.hid?speed=X&loop=N&start=S&stop=S&fast=1 (a hid-recorder file as the device), "
+                 "or evdev:///dev/input/eventN, evdev://by-id/NAME, evdev://name/DEVICE%20NAME, evdev://VID:PID");
   app.add_option("--lcm", o.lcm_url, "LCM URL")->capture_default_str();
   app.add_option("--id", o.id, "trainee/station id used in channel names")->capture_default_str();
   app.add_option("--publish-hz", o.publish_hz, "PanelState rate (default: the definition's publish_hz, 100)")

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <semaphore>
@@ -29,6 +30,7 @@ struct ServeOptions {
   std::string robot = "sim/robots/skid4.yaml";
   std::string reports_dir;
   std::string scenarios_dir = "instructor/scenarios";
+  std::string designs = "sim/training/examples";
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
@@ -72,6 +74,10 @@ int serve(const ServeOptions& o) {
   s.reports_dir = o.reports_dir;
   s.scenarios_dir = o.scenarios_dir.empty() ? "" : panels::find_data_file(o.scenarios_dir);
   s.scenario_program = process::executable_dir() + "/rise-instructor";
+  s.designs_dir = o.designs.empty() ? "" : panels::find_data_file(o.designs);
+  if (!s.designs_dir.empty() && !std::filesystem::is_directory(s.designs_dir))
+    throw std::runtime_error(s.designs_dir + ": cannot open: " +
+                             std::strerror(std::filesystem::exists(s.designs_dir) ? ENOTDIR : ENOENT));
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
@@ -83,9 +89,10 @@ int serve(const ServeOptions& o) {
   msgs::init_publisher("rise-instructor");
   WebServer server(s);
   server.start();
-  spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel); "
-               "LCM {}",
-               hil::io::format_host_port(s.host, static_cast<uint16_t>(server.port())), s.lcm_url);
+  spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel), "
+               "/training.html?token=… (Training Builder, {}); LCM {}",
+               hil::io::format_host_port(s.host, static_cast<uint16_t>(server.port())),
+               s.designs_dir.empty() ? "off" : s.designs_dir, s.lcm_url);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   g_stop.acquire();
@@ -108,6 +115,9 @@ void add_serve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--reports-dir", o->reports_dir, "training reports to list and serve (rise-trainer --out)");
   cmd->add_option("--scenarios-dir", o->scenarios_dir, "the scenario files the console offers (\"\": none)")
+      ->capture_default_str();
+  cmd->add_option("--designs", o->designs,
+                  "the folder of training and task files the builder pages read and write (\"\": builders off)")
       ->capture_default_str();
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist, installed or of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();

@@ -5,6 +5,9 @@
 //   rise-trainer train TRAINING.yaml --id ID --out DIR [--resume]
 //   rise-trainer status                          every trainee's progress
 //   rise-trainer check TRAINING.yaml|TASK.yaml   load and validate
+//   rise-trainer check TRAINING.yaml --walk "score=10,success=1" --walk ...
+//                                                and print the graph's walk
+//                                                for those task results
 //
 // The executor listens on rise/<id>/sim_event and rise/<id>/robot_state,
 // publishes TaskEvent on rise/<id>/task_event and TaskStatus on
@@ -26,6 +29,8 @@
 #include <memory>
 #include <optional>
 #include <regex>
+#include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "cli/command_line.hpp"
@@ -628,7 +633,50 @@ int status(const std::string& lcm_url, double every_s, int count, int min_traine
   return 0;
 }
 
-int check(const std::string& file) {
+// One task's result for --walk: "score=10,success=1,events.neutralized=1"
+// (score, time_s, success, damage, collisions, events.<name>). Throws
+// std::invalid_argument naming the bad part.
+tr::TaskResult walk_result(const std::string& spec) {
+  tr::TaskResult r;
+  r.finished = true;
+  std::stringstream in(spec);
+  std::string part;
+  while (std::getline(in, part, ',')) {
+    const auto eq = part.find('=');
+    const std::string key = part.substr(0, eq);
+    char* end = nullptr;
+    const std::string text = eq == std::string::npos ? "" : part.substr(eq + 1);
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || end != text.c_str() + text.size())
+      throw std::invalid_argument("--walk '" + spec + "': '" + part + "': expected NAME=NUMBER");
+    if (key == "score") r.score = static_cast<int>(v);
+    else if (key == "time_s") r.time_s = v;
+    else if (key == "success") r.success = v != 0.0;
+    else if (key == "damage") r.damage = v;
+    else if (key == "collisions") r.collisions = static_cast<int>(v);
+    else if (key.rfind("events.", 0) == 0 && key.size() > 7) r.counts[key.substr(7)] = static_cast<int>(v);
+    else
+      throw std::invalid_argument("--walk '" + spec + "': unknown field '" + key +
+                                  "' (score, time_s, success, damage, collisions, events.<name>)");
+  }
+  return r;
+}
+
+// The walk the graph takes for these results, one line per task run:
+// "walk: mission2 #1: score GE 5 → drill", then how it ended.
+void print_walk(const tr::TrainingGraph& g, const std::vector<std::string>& walk) {
+  tr::TrainingWalker w(g);
+  for (const auto& spec : walk) {
+    if (w.ended()) break;
+    w.record(walk_result(spec));
+    const auto& v = w.visits().back();
+    std::printf("walk: %s #%d: %s\n", v.node.c_str(), v.attempt, v.transition.c_str());
+  }
+  if (w.ended()) std::printf("walk: ended: %s\n", w.end_reason().c_str());
+  else std::printf("walk: next: %s #%d\n", w.current()->first.c_str(), w.current()->second);
+}
+
+int check(const std::string& file, const std::vector<std::string>& walk) {
   try {
     // A training file has a top-level `training:` key, a task file `task:`.
     static const std::regex training_key("(^|\n)training:");
@@ -636,7 +684,9 @@ int check(const std::string& file) {
       const auto g = tr::load_training_graph(file);
       std::printf("%s: training %s, %zu nodes, %zu transitions: ok\n", file.c_str(), g.name.c_str(), g.nodes.size(),
                   g.transitions.size());
+      if (!walk.empty()) print_walk(g, walk);
     } else {
+      if (!walk.empty()) throw std::invalid_argument(file + ": --walk needs a training file");
       const auto t = tr::load_task_description(file);
       tr::check_against_world(t, rise::sim::load_world_description(t.world_file));
       std::printf("%s: task %s, %zu events: ok\n", file.c_str(), t.name.c_str(), t.events.size());
@@ -695,6 +745,10 @@ int main(int argc, char** argv) {
   std::string check_file;
   CLI::App* c = app.add_subcommand("check", "load and validate a training or task file");
   c->add_option("file", check_file, "training or task file")->required();
+  std::vector<std::string> check_walk;
+  c->add_option("--walk", check_walk,
+                "a task's result, e.g. score=10,success=1,events.neutralized=1 (repeat it): print the walk the "
+                "training graph takes for these results");
   if (const auto code = rise::cli::parse_command_line(app, "rise-trainer", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("[%H:%M:%S.%e] [%^%l%$] %v");
@@ -708,6 +762,6 @@ int main(int argc, char** argv) {
   if (r->parsed()) return run_task(rt);
   if (t->parsed()) return train(to);
   if (s->parsed()) return status(status_lcm, status_every_s, status_count, status_min);
-  if (c->parsed()) return check(check_file);
+  if (c->parsed()) return check(check_file, check_walk);
   return 1;
 }

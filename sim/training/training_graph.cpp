@@ -184,12 +184,79 @@ std::set<int> check_closed_loops(const TrainingGraph& g, const Digraph& d, const
   return closed_loop_members;
 }
 
+// Line `line` (1-based) of `text`.
+std::string line_text(const std::string& text, int line) {
+  std::size_t begin = 0;
+  for (int i = 1; i < line && begin != std::string::npos; ++i) {
+    begin = text.find('\n', begin);
+    if (begin != std::string::npos) ++begin;
+  }
+  if (begin == std::string::npos || begin > text.size()) return "";
+  const std::size_t end = text.find('\n', begin);
+  return text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+}
+
+// Without blanks at either end; control characters (a CR, a NUL) as blanks,
+// so the comment is one line of text when written again.
+std::string trim(std::string s) {
+  for (char& c : s)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
+  const auto b = s.find_first_not_of(' ');
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(' ') - b + 1);
+}
+
+// The `# ...` that ends line `line`: a # after a blank, outside quotes (YAML
+// 1.2 section 6.6), without the # and the blanks around it.
+std::string trailing_comment(const std::string& text, int line) {
+  const std::string l = line_text(text, line);
+  char quote = 0;
+  for (std::size_t i = 0; i < l.size(); ++i) {
+    const char c = l[i];
+    if (quote) {
+      if (c == quote) quote = 0;
+      else if (c == '\\' && quote == '"') ++i;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '#' && (i == 0 || l[i - 1] == ' ' || l[i - 1] == '\t')) {
+      return trim(l.substr(i + 1));
+    }
+  }
+  return "";
+}
+
+// The comment lines that open the file, before its first key: what the file
+// is about, kept when a builder writes it again.
+std::string leading_comment(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, out;
+  while (std::getline(in, line)) {
+    const std::string t = trim(line);
+    if (t.empty()) continue;
+    if (t[0] != '#') break;
+    std::string body = t.substr(1);
+    if (!body.empty() && body[0] == ' ') body.erase(0, 1);
+    out += (out.empty() ? "" : "\n") + body;
+  }
+  return out;
+}
+
 }  // namespace
 
 const char* to_string(CompareOp op) {
   for (const auto& o : kOps)
     if (o.op == op) return o.name;
   return "?";
+}
+
+std::vector<std::string> condition_fields() {
+  return {"score", "result", "time_s", "success", "damage", "collisions", "attempt"};
+}
+
+std::vector<std::string> condition_ops() {
+  std::vector<std::string> out;
+  for (const auto& o : kOps) out.push_back(o.name);
+  return out;
 }
 
 Condition parse_condition(const std::string& text) {
@@ -244,13 +311,15 @@ TrainingGraph load_training_graph(const std::string& path, bool load_tasks) {
   return parse_training_graph(panels::read_text_file(path), path, load_tasks);
 }
 
-TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks) {
+TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks,
+                                   bool validate) {
   const YamlReader r(file);
   const YAML::Node root = r.load_text(text);
   if (!root.IsMap()) r.fail(root, "", "expected a mapping with training:, nodes:, transitions:");
   r.only_keys(root, "", {"training", "title", "nodes", "transitions"});
   TrainingGraph g;
   g.file = file;
+  g.comment = leading_comment(text);
   if (!root["training"]) r.fail(root, "training", "missing");
   g.name = r.as<std::string>(root["training"], "training");
   if (root["title"]) g.title = r.as<std::string>(root["title"], "title");
@@ -270,6 +339,8 @@ TrainingGraph parse_training_graph(const std::string& text, const std::string& f
       r.fail(n["name"], where + ".name", "must not be empty, START or END");
     if (!names.insert(node.name).second) r.fail(n["name"], where + ".name", "duplicate node '" + node.name + "'");
     const auto task = r.as<std::string>(n["task"], where + ".task");
+    node.task_path = task;
+    node.comment = trailing_comment(text, node.line);
     node.task_file = std::filesystem::path(task).is_absolute()
                          ? task
                          : (std::filesystem::path(file).parent_path() / task).lexically_normal().string();
@@ -288,6 +359,7 @@ TrainingGraph parse_training_graph(const std::string& text, const std::string& f
     r.only_keys(n, where, {"from", "to", "if"});
     Transition t;
     t.line = n.Mark().line + 1;
+    t.comment = trailing_comment(text, t.line);
     for (const char* key : {"from", "to"})
       if (!n[key]) r.fail(n, where + "." + key, "missing");
     t.from = r.as<std::string>(n["from"], where + ".from");
@@ -301,7 +373,7 @@ TrainingGraph parse_training_graph(const std::string& text, const std::string& f
     }
     g.transitions.push_back(std::move(t));
   }
-  const auto errors = validate_training_graph(g);
+  const auto errors = validate ? validate_training_graph(g) : std::vector<std::string>{};
   if (!errors.empty()) {
     std::string all;
     for (const auto& e : errors) all += (all.empty() ? "" : "\n") + panels::printable(e);  // one line each

@@ -35,26 +35,35 @@ struct Condition {
 };
 /// Throws std::invalid_argument naming what is wrong in `text`.
 Condition parse_condition(const std::string& text);
+/// What a condition may compare, as a builder offers it: the fields
+/// (`events.<name>` besides these: the events of the task it leaves) and
+/// the comparisons.
+std::vector<std::string> condition_fields();
+std::vector<std::string> condition_ops();
 
 struct Transition {
   std::string from;  ///< START or a node
   std::string to;    ///< a node or END
   std::optional<Condition> condition;  ///< none: always
   int line = 0;
+  std::string comment;  ///< the `# ...` ending its line in the file, kept by write_training_graph
 };
 
 struct TrainingNode {
   std::string name;
   std::string task_file;  ///< resolved against the training file's folder
+  std::string task_path;  ///< as written in the file (task_file before resolving)
   int max_attempts = 3;   ///< runs of this node at most; a transition into an exhausted node is skipped
   int line = 0;
   std::optional<TaskDescription> task;  ///< loaded with the graph (load_tasks)
+  std::string comment;  ///< the `# ...` ending its line in the file
 };
 
 struct TrainingGraph {
   std::string name;
   std::string title;
   std::string file;
+  std::string comment;  ///< the comment lines before the first key, without their `# `
   std::vector<TrainingNode> nodes;
   std::vector<Transition> transitions;  ///< tried in file order
   const TrainingNode* node(const std::string& name) const;
@@ -65,7 +74,10 @@ struct TrainingGraph {
 /// std::runtime_error "file:line: key: message"; validation errors, all of
 /// them, one per line.
 TrainingGraph load_training_graph(const std::string& path, bool load_tasks = true);
-TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks = true);
+/// `validate` false: the graph as written, its graph errors not checked (a
+/// builder shows them beside the entries); errors of the file's form still throw.
+TrainingGraph parse_training_graph(const std::string& text, const std::string& file, bool load_tasks = true,
+                                   bool validate = true);
 /// The graph's errors, each "file:line: message": a transition from or to an
 /// unknown node, no transition from START, a node unreachable from START, a
 /// loop with no transition leaving it, a node with no path to END, a

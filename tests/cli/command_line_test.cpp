@@ -80,6 +80,9 @@ TEST_CASE("every program exits 2 for an unknown option, a bad value or a missing
       {"rise-sim", "--scan-format", "jpeg"},
       {"rise-trainer", "--no-such-option"},
       {"rise-trainer", "check"},
+      {"rise-trainer", "check", "sim/training/examples/fig10_training.yaml", "--walk", "scor=1"},
+      {"rise-trainer", "check", "sim/training/examples/fig10_training.yaml", "--walk", "score=x"},
+      {"rise-trainer", "check", "sim/training/examples/approach_object.yaml", "--walk", "score=1"},
       {"rise-panel", "--no-such-option"},
       {"rise-panel", "emulate", "--hid", "pad.rpt", "--hid-period-ms", "5000"},
       {"rise-semantic", "--no-such-option"},
@@ -119,6 +122,7 @@ TEST_CASE("a missing file is named with the OS's reason, and the program exits 2
       {{"rise-panel", "replay", m + ".log", "--to", "mem://x"}, m + ".log"},
       {{"rise-instructor", "scenario", m + ".yaml", "--trainee", "t1"}, m + ".yaml"},
       {{"rise-instructor", "serve", "--token-file", m + ".token"}, m + ".token"},
+      {{"rise-instructor", "serve", "--token", "t", "--listen", "127.0.0.1:1", "--designs", m}, m},
   }));
   std::string line;
   for (const auto& a : c.args) line += a + " ";

@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, configs, training_graph, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -33,6 +33,11 @@ case "$target" in
   logs) sources=("$root"/hil/io/{can_log,can_log_binary,candump_log,can_frame,modbus_trace,modbus_capture,hid_recording,record_file}.cpp) ;;
   line_protocols) sources=("$root"/hil/io/{slcan_wire,socketcand_wire,can_frame}.cpp) ;;
   command_auth) sources=("$root/msgs/command_auth.cpp") ;;
+  # Console scripts against the shipped console, pose graphs, key files, URLs.
+  inputs) sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,modbus_point,timeline}.cpp
+                   "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
+                   "$root"/semantic/{pose_graph_io,cloud_formats,text_reading,cloud}.cpp "$root/msgs/command_auth.cpp"
+                   "$root"/hil/io/{can_url,modbus_url,host_port,hid_device,usb_hotplug,evdev_device,posix_io}.cpp) ;;
   configs)
     sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
@@ -42,8 +47,16 @@ case "$target" in
   # The training graph without its tasks (TaskResult is apart from the
   # executor, so neither the executor nor the simulator is linked).
   training_graph)
-    sources=("$root"/sim/training/{training_graph,task_result,task_description}.cpp "$root"/sim/world_description.cpp
+    sources=("$root"/sim/training/{training_graph,training_writer,task_result,task_description}.cpp "$root"/sim/world_description.cpp
              "$root/panels/yaml_reader.cpp")
+    ;;
+  # The Training Builder's request body: JSON → graph → YAML → the trainer's
+  # loader with the shipped task files (design_files.cpp: the name check; its
+  # atomic save is report.cpp's).
+  training_builder)
+    sources=("$root"/instructor/{training_builder,design_files}.cpp
+             "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report}.cpp
+             "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
     ;;
   urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
   mesh) sources=("$root/sim/mesh_file.cpp") ;;
@@ -85,6 +98,11 @@ if [ $rebuild -eq 1 ]; then
       libs=(-lcrypto)
       ;;
     logs) libs=(-lpcap -lz) ;;
+    inputs)
+      bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen" "$root"/msgs/lcmtypes/{FaultCommand,TrainingControl}.lcm
+      flags=(-I"$work/lcmgen" -isystem /usr/include/eigen3 -isystem /usr/include/libevdev-1.0 -isystem /usr/include/libusb-1.0 -DRISE_FUZZ_ROOT="\"$root\"")
+      libs=(-lyaml-cpp -lcrypto -lhidapi-hidraw -lusb-1.0 -levdev)
+      ;;
     web_requests)
       bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen" "$root/msgs/lcmtypes/FaultCommand.lcm"
       flags=(-I"$work/lcmgen" -isystem /usr/include/jsoncpp)
@@ -98,6 +116,10 @@ if [ $rebuild -eq 1 ]; then
     urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge -lassimp) ;;
     mesh) libs=(-lassimp) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
+    training_builder)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-lyaml-cpp -ljsoncpp)
+      ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
       libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
@@ -249,6 +271,8 @@ case "$target" in
     { printf '\x00'; cat "$root/sim/training/examples/fig10_training.yaml"; } >"$corpus/fig10.yaml"
     { printf '\x35'; cat "$root/sim/training/examples/fig10_training.yaml"; } >"$corpus/fig10-b.yaml"
     printf '\x11training: t\nnodes:\n  - {name: a, task: a.yaml, max_attempts: 3}\n  - {name: b, task: /b.yaml}\ntransitions:\n  - {from: START, to: a}\n  - {from: a, if: "events.neutralized GE 1", to: b}\n  - {from: a, if: "time_s LE 1e2", to: a}\n  - {from: b, if: "success NE false", to: END}\n  - {from: b, to: a}\n' >"$corpus/loop.yaml"
+    # Comments and strings the writer must quote (the Training Builder saves through it).
+    printf '\x07# head\n#  two\n\ntraining: "a: \\"b\\" #c"\ntitle: \x27it\x27\x27s\x27\nnodes:\n  - {name: "yes", task: "../x y.yaml"}  # n # m\ntransitions:\n  - {from: START, to: "yes"}   #s\n  - {from: "yes", if: "result GE 1e1", to: END} # \x27q\x27\n' >"$corpus/quoted.yaml"
     printf '\x02training: t\nnodes:\n  - name: a\n    task: a.yaml\n  - name: b\n    task: b.yaml\ntransitions:\n  - {from: START, to: a}\n  - {from: a, to: b}\n  - {from: b, to: a}\n  - {from: c, to: END}\n' >"$corpus/closed.yaml"
     ;;
   urdf)
@@ -275,6 +299,14 @@ case "$target" in
     printf '\x00solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid t\n' >"$corpus/ascii.stl"
     { printf '\x01'; cat "$root/tests/sim/data/cube.dae"; } >"$corpus/cube.dae"
     ;;
+  training_builder)
+    # The page's graph of the shipped training (as /api/builder/training/NAME
+    # gives it), one with an edge added and one with errors of each kind.
+    g='{"training":"fig10_metro","title":"t","comment":"c\\nd","nodes":[{"name":"mission1","task":"approach_object.yaml","max_attempts":2,"comment":"x"},{"name":"mission2","task":"neutralize_object.yaml","max_attempts":2,"comment":""}],"transitions":[{"from":"START","to":"mission1","if":"","comment":""},{"from":"mission1","to":"mission2","if":"success EQ 1","comment":"C2"},{"from":"mission1","to":"mission1","if":"","comment":"repeat"},{"from":"mission1","to":"END","if":"","comment":""},{"from":"mission2","to":"END","if":"events.neutralized GE 1","comment":""},{"from":"mission2","to":"END","if":"","comment":""}]}'
+    printf '%s' "$g" >"$corpus/graph.json"
+    printf '%s' "${g/\"if\":\"success EQ 1\"/\"if\":\"score LT five\"}" >"$corpus/bad-condition.json"
+    printf '%s' '{"training":"t","nodes":[{"name":"a","task":"../x.yaml"},{"name":"b","task":"metro_transport.yaml","max_attempts":0}],"transitions":[{"from":"START","to":"c"},{"from":"a","to":"a","if":"events.nope GE 1"}]}' >"$corpus/errors.json"
+    ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.
     printf '{"axes":{"drive_y":0.8},"buttons":{"deadman":true,"estop":false},"switches":{"mode":"drive","speed":"fast"}}' >"$corpus/virtual.json"
@@ -283,6 +315,25 @@ case "$target" in
     printf '{"trainee":"t-2.a","fault":"f","kind":"noise","target":"drive_x","value":0.5,"rate":1e-3,"duration_s":2,"seed":-7}' >"$corpus/fields.json"
     printf '{"trainee":"t1","file":"stuck.yaml","seed":11}' >"$corpus/scenario.json"
     printf 'a=b; rise_token=abc123;theme=dark' >"$corpus/cookie"
+    ;;
+  inputs)
+    # A byte first: 0 console script, 1 pose graph, 2 key file, 3 URLs. The
+    # demo's script; the real g2o / EDGE3 graphs' first lines; a key; the
+    # README's URL examples.
+    { printf '\x00'; cat "$root/panels/scripts/demo_drive.txt"; } >"$corpus/demo_drive.txt"
+    if [ -n "${RISE_TEST_DATA:-}" ] && [ -d "$RISE_TEST_DATA/posegraphs" ]; then
+      for f in "$RISE_TEST_DATA"/posegraphs/*/*; do { printf '\x01'; head -60 "$f"; } >"$corpus/1-$(basename "$f")"; done
+    fi
+    printf '\x01VERTEX_SE2 0 0 0 0\nVERTEX_SE2 1 1 0 0.1\nEDGE_SE2 0 1 1 0 0.1 500 0 0 500 0 5000\nFIX 0\n' >"$corpus/se2.g2o"
+    printf '\x01VERTEX_SE3:QUAT 0 0 0 0 0 0 0 1\nEDGE_SE3:QUAT 0 1 1 0 0 0 0 0 1 100 0 0 0 0 0 100 0 0 0 0 100 0 0 0 400 0 0 400 0 400\n' >"$corpus/se3.g2o"
+    printf '\x02# rise instructor key\n00112233445566778899aabbccddeeff00112233445566778899aabbccddeeff\n' >"$corpus/key"
+    n=0
+    for u in socketcan://can0 'slcan:///dev/ttyACM0?bitrate=500000&listen_only=1' socketcand://10.0.0.2:29536/can0 \
+             'replay://a.log?speed=2&loop=1' mem://bus 'modbus+tcp://127.0.0.1:1502?unit=3&timeout_ms=200' \
+             'modbus+rtu:///dev/ttyUSB0?baud=19200&parity=E&unit=1' 'hid://046d:c21d?serial=A1&interface=0' \
+             'evdev://name/Xbox%20360%20Pad' evdev://045e:028e evdev:///dev/input/event3; do
+      printf '\x03%s' "$u" >"$corpus/url$((n++))"
+    done
     ;;
   # command_auth and lcm_messages write their own seeds (LLVMFuzzerInitialize).
 esac

@@ -4,7 +4,9 @@
 // the file name ("file:line: ..."). A graph that loads is valid, so: giving
 // each node a task with one event leaves only "has no event" errors; and a
 // walk of it, fed results from the first byte, stays on its nodes within
-// their max_attempts and ends after at most the sum of them.
+// their max_attempts and ends after at most the sum of them. Written again
+// (sim/training/training_writer.hpp, what the Training Builder saves) it
+// loads as the same graph, comments included, and writes the same text.
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -14,6 +16,7 @@
 #include <string_view>
 
 #include "sim/training/training_graph.hpp"
+#include "sim/training/training_writer.hpp"
 #include "tests/fuzz/fuzz_check.hpp"
 
 namespace training = rise::sim::training;
@@ -79,6 +82,32 @@ void walk(const training::TrainingGraph& g, unsigned k) {
   fuzz_check(static_cast<long long>(w.visits().size()) <= budget);
 }
 
+// write → parse gives the same graph; a second write the same text.
+void round_trip(const training::TrainingGraph& g) {
+  const std::string text = training::write_training_graph(g);
+  training::TrainingGraph again;
+  try {
+    again = training::parse_training_graph(text, kFile, false);
+  } catch (const std::runtime_error& e) {
+    std::fprintf(stderr, "written graph does not load: %s\n%s", e.what(), text.c_str());
+    fuzz_check(false);
+  }
+  fuzz_check(again.name == g.name && again.title == g.title && again.comment == g.comment);
+  fuzz_check(again.nodes.size() == g.nodes.size() && again.transitions.size() == g.transitions.size());
+  for (std::size_t i = 0; i < g.nodes.size(); ++i) {
+    const auto &a = g.nodes[i], &b = again.nodes[i];
+    fuzz_check(a.name == b.name && a.task_path == b.task_path && a.task_file == b.task_file);
+    fuzz_check(a.max_attempts == b.max_attempts && a.comment == b.comment);
+  }
+  for (std::size_t i = 0; i < g.transitions.size(); ++i) {
+    const auto &a = g.transitions[i], &b = again.transitions[i];
+    fuzz_check(a.from == b.from && a.to == b.to && a.comment == b.comment);
+    fuzz_check(a.condition.has_value() == b.condition.has_value());
+    if (a.condition) fuzz_check(a.condition->text == b.condition->text && a.condition->op == b.condition->op);
+  }
+  fuzz_check(training::write_training_graph(again) == text);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
@@ -94,6 +123,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   fuzz_check(!g.nodes.empty() && !g.transitions.empty());
   fuzz_check(training::validate_training_graph(g).empty());
   check_events(g);
+  round_trip(g);
   walk(g, data[0]);
   return 0;
 }

@@ -6,7 +6,9 @@
 // camera-blackout button blacks out the camera inset until the fault ends; the
 // virtual panel page drives the robot, and closing it stops the robot; the
 // trainee page's camera follows the robot, its HUD shows the failsafe, its
-// WebAudio plays SoundCues at their gain; `rise demo --view` serves it.
+// WebAudio plays SoundCues at their gain; `rise demo --view` serves it; the
+// Training Builder edits a copy of the shipped training by clicks and typing,
+// and the saved file walks differently in `rise-trainer check --walk`.
 
 #include <catch2/catch.hpp>
 
@@ -709,4 +711,116 @@ TEST_CASE("the console folds a collision that goes on into one line with a count
   CHECK(lines[2]["text"].asString().find("→ 80") != std::string::npos);
   CHECK(lines[3]["text"].asString() == ev_id + " region_entered chassis / dock");
   CHECK(lines[4]["count"].asInt() == 3);
+}
+
+namespace {
+/// `rise-trainer check FILE [--walk R]...`: its exit code and output.
+std::pair<int, std::string> trainer_check(const fs::path& dir, const std::string& file, const std::vector<std::string>& walk) {
+  std::vector<std::string> argv{kBin + "/rise-trainer", "check", file};
+  for (const auto& w : walk) argv.insert(argv.end(), {"--walk", w});
+  const std::string log = (dir / ("check-" + std::to_string(rise::msgs::monotonic_us()) + ".log")).string();
+  ChildProcess check(argv, log);
+  const int code = check.wait_for(20000);
+  return {code, read_file(log)};
+}
+}  // namespace
+
+TEST_CASE("the Training Builder adds a task and a conditioned edge by clicks and typing, and rise-trainer walks the saved "
+          "file through it",
+          "[instructor][builder]") {
+  if (const auto why = missing_browser(); !why.empty()) {
+    WARN("skipped: " << why);
+    return;
+  }
+  char tmpl[] = "/tmp/rise-builder-test-XXXXXX";
+  const fs::path dir = ::mkdtemp(tmpl);
+  const fs::path designs = dir / "designs";
+  fs::create_directories(designs);
+  for (const auto& e : fs::directory_iterator(kSource + "/sim/training/examples"))
+    if (e.path().extension() == ".yaml") fs::copy_file(e.path(), designs / e.path().filename());
+  const std::string file = (designs / "fig10_training.yaml").string();
+  const std::string token = "builder-" + std::to_string(::getpid());
+  const int port = free_port();
+  ChildProcess server({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token", token,
+                       "--lcm", kLcm, "--designs", designs.string()},
+                      (dir / "server.log").string());
+  httplib::Client http("127.0.0.1", port);
+  http.set_connection_timeout(0, 200'000);
+  bool up = false;
+  for (int i = 0; i < 200 && !up && server.running(); ++i) {
+    auto r = http.Get("/api/builder/trainings", {{"X-Rise-Token", token}});
+    up = r && r->status == 200;
+    if (!up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  INFO(read_file((dir / "server.log").string()));
+  REQUIRE(up);
+  // Before the edit a mission 2 that scores 2 repeats.
+  const std::vector<std::string> walk{"score=10,success=1", "score=2"};
+  const auto before = trainer_check(dir, file, walk);
+  CHECK(before.second.find("walk: mission2 #1: always → mission2") != std::string::npos);
+
+  const std::string screens = std::string(RISE_BINARY_DIR) + "/instructor_screens";
+  fs::create_directories(screens);
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/training_builder_check.cjs",
+                     "http://127.0.0.1:" + std::to_string(port), token, screens, kWeb, designs.string()},
+                    (dir / "builder_check.log").string());
+  const int node_code = node.wait_for(120000);
+  if (node_code < 0) node.stop();
+  const auto r = read_result((dir / "builder_check.log").string());
+  INFO(read_file((dir / "builder_check.log").string()));
+  REQUIRE(node_code == 0);
+  REQUIRE_FALSE(r.isMember("error"));
+  CHECK(r["page_errors"].size() == 0);
+  CHECK(r["status"].asInt() == 200);
+  // The shipped graph drawn: START, three tasks, END; 11 arrows, three of them repeats.
+  CHECK(text(r["boxes"]) == text(parse_json(R"(["START","mission1","mission2","mission3","END"])")));
+  CHECK(r["arrows"].asInt() == 11);
+  CHECK(r["loop_labels"].size() == 3);
+  CHECK(r["opened"]["cls"].asString() == "ok");
+  // A lone task: the validator's error inline, on its line, and no saving.
+  REQUIRE(r["lone_task_errors"].size() == 1);
+  CHECK(r["lone_task_errors"][0]["key"].asString() == "nodes[3]");
+  CHECK(r["lone_task_errors"][0]["line"].asInt() > 0);
+  CHECK(r["lone_task_errors"][0]["text"].asString().find("node 'drill' is unreachable from START") != std::string::npos);
+  CHECK(r["lone_task_save_disabled"].asBool());
+  // A condition that is no number: the loader's own words, with line and key, the edge drawn red.
+  REQUIRE(r["bad_condition_errors"].size() == 1);
+  const auto& bad = r["bad_condition_errors"][0];
+  CHECK(bad["key"].asString() == "transitions[6].if");
+  CHECK(bad["text"].asString() ==
+        std::to_string(bad["line"].asInt()) + ": transitions[6].if: condition 'score LT five': 'five' is not a number");
+  CHECK(text(r["bad_edges_drawn"]) == text(parse_json(R"(["mission2→drill"])")));
+  CHECK(r["edge_note"].asString().find("before the unconditional mission2 → mission2") != std::string::npos);
+  REQUIRE(r["after_first_edge_errors"].size() == 1);
+  CHECK(r["after_first_edge_errors"][0]["text"].asString().find("node 'drill' has no path to END") != std::string::npos);
+  CHECK(r["valid"]["cls"].asString() == "ok");
+  CHECK(text(r["drawn_new_edge"]) == text(parse_json(R"(["2: score LT 5"])")));
+  // Someone else's change on disk: refused, said so, the file left as they wrote it.
+  CHECK(r["conflict_text"].asString().find("fig10_training.yaml changed on disk since this page loaded it") !=
+        std::string::npos);
+  CHECK(r["save_state_after_conflict"].asString() == "not saved: changed on disk");
+  const std::string disk = read_file(file);
+  CHECK(disk == r["disk_after_conflict"].asString());
+  CHECK(disk.find("# changed by someone else\n") != std::string::npos);
+  CHECK(r["attempts_after_reload"].asString() == "1");  // the page's unsaved 3 is gone, the disk's 1 shown
+
+  // The saved file, in the CLI: it loads, has the new task and edge in place, and the walk goes there.
+  CHECK(disk.find("  - {name: drill, task: neutralize_object.yaml, max_attempts: 1}") != std::string::npos);
+  CHECK(disk.find("  - {from: mission2, if: \"score LT 5\", to: drill}\n  - {from: mission2, to: mission2}") !=
+        std::string::npos);
+  CHECK(disk.find("# C3: Mission 2 not needed") != std::string::npos);  // the comments kept
+  const auto after = trainer_check(dir, file, walk);
+  INFO(after.second);
+  CHECK(after.first == 0);
+  CHECK(after.second.find("training fig10_metro, 4 nodes, 13 transitions: ok") != std::string::npos);
+  CHECK(after.second.find("walk: mission2 #1: score LT 5 → drill") != std::string::npos);
+  CHECK(trainer_check(dir, file, {"score=10,success=1", "score=2", "score=0"}).second.find("walk: drill #1: always → END") !=
+        std::string::npos);
+  // A mission 2 that scores 5 or more still repeats, as before the edit.
+  CHECK(trainer_check(dir, file, {"score=10,success=1", "score=6"}).second.find("walk: mission2 #1: always → mission2") !=
+        std::string::npos);
+  CHECK(is_png(screens + "/training_builder.png"));
+  CHECK(is_png(screens + "/training_builder_conflict.png"));
+  server.stop();
+  fs::remove_all(dir);
 }

@@ -366,8 +366,14 @@ TEST_CASE("the server publishes a virtual panel's PanelState and fails it safe w
       unsigned_command.trainee_id = f.id;
       unsigned_command.action = "clear";
       unsigned_command.issuer = "trainee";
-      peer.lcm().publish(rise::msgs::fault_command_channel(f.id), &unsigned_command);
-      REQUIRE(peer.wait_until([&] { return has("rejected: unsigned"); }, 5000, post));
+      // Sent again every 200 ms until reported: one datagram can be lost under load.
+      auto next_send = std::chrono::steady_clock::now();
+      REQUIRE(peer.wait_until([&] { return has("rejected: unsigned"); }, 5000, [&] {
+        post();
+        if (std::chrono::steady_clock::now() < next_send) return;
+        peer.lcm().publish(rise::msgs::fault_command_channel(f.id), &unsigned_command);
+        next_send += std::chrono::milliseconds(200);
+      }));
       CHECK(has("rejected: unsigned"));
     }
     SECTION("the page's goodbye disconnects the source") {

@@ -28,6 +28,7 @@ function trainee(id) {
 function updatePanelLink() {
   document.getElementById('panel-link').href =
     'panel.html?id=' + encodeURIComponent(state.selected || 't1') + '&token=' + encodeURIComponent(token);
+  document.getElementById('builder-link').href = 'training.html?token=' + encodeURIComponent(token);
 }
 
 // ---- top-down map -------------------------------------------------------
