@@ -33,7 +33,10 @@ io::IoStatus J1939Source::receive(SourcePanel& panel, int timeout_ms) {
     if (!claim_started_) input_.start(now_us / 1000, replies_);
     claim_started_ = true;
     input_.tick(now_us / 1000, replies_);
-    return status == io::IoStatus::Ok && input_.on_frame(mapper, panel.source(), frame_, now_us, replies_);
+    const bool changed = status == io::IoStatus::Ok && input_.on_frame(mapper, panel.source(), frame_, now_us, replies_);
+    // Before a change is published: whoever sees the state sees these too.
+    store_counters();
+    return changed;
   });
   // Fire and forget, as every J1939 node: a lost claim or CTS is sent again
   // (the peer repeats its request, the sender's timeout aborts and retries).
@@ -42,14 +45,17 @@ io::IoStatus J1939Source::receive(SourcePanel& panel, int timeout_ms) {
   return status;
 }
 
+void J1939Source::store_counters() {
+  seen_own_ = input_.own_address();
+  seen_console_ = input_.console_address();
+  seen_tp_messages_ = input_.transport_counters().messages;
+  seen_foreign_ = input_.foreign_messages();
+}
+
 // Address changes are rare and worth a line in the log (allocates only then).
 void J1939Source::note_changes(SourcePanel& panel) {
   const uint8_t own = input_.own_address();
   const uint8_t console = input_.console_address();
-  seen_own_ = own;
-  seen_console_ = console;
-  seen_tp_messages_ = input_.transport_counters().messages;
-  seen_foreign_ = input_.foreign_messages();
   if (own != noted_own_) {
     noted_own_ = own;
     if (own != j1939::kNullAddress)

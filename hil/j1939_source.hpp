@@ -45,6 +45,8 @@ class J1939Source final : public SourceTransport {
   uint64_t foreign_messages() const { return seen_foreign_; }
 
  private:
+  // The counters and addresses the accessors read (atomics), from the input.
+  void store_counters();
   void note_changes(SourcePanel& panel);
 
   std::unique_ptr<io::CanBus> bus_;

@@ -217,6 +217,11 @@ TEST_CASE("the bridge claims its address, finds the J1939 console by NAME and de
     const auto back = published.wait_for(
         [&](const PanelSnapshot& s) { return !s.failsafe && s.controls[speed].position == 2; }, 5000, before);
     REQUIRE(back.has_value());
+    // The address is stored after the frame that made the panel live was
+    // taken; the publish thread can be first.
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
+    while (source->console_address() != 0x95 && std::chrono::steady_clock::now() < until)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
     CHECK(source->console_address() == 0x95);
   }
   SECTION("a lower NAME claims the bridge's address: it claims the next free one and RTS/CTS reaches it there") {
