@@ -86,8 +86,14 @@ void VoxelGrid::k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour
   const int32_t cx = coord(q.x()), cy = coord(q.y()), cz = coord(q.z());
   const Eigen::Vector4f q4(q.x(), q.y(), q.z(), 0.0f);
   // Ring by ring (the shell of cells at Chebyshev distance `ring`): a point
-  // outside rings 0..R is farther than R cells from q, so the k best are
-  // final once the k-th is within R * cell_m.
+  // outside rings 0..R is farther than R cells plus q's distance to its own
+  // cell's nearest face, so the k best are final once the k-th is within that.
+  float face = cell_m_;
+  for (int a = 0; a < 3; ++a) {
+    const float lo = static_cast<float>(a == 0 ? cx : a == 1 ? cy : cz) * cell_m_;
+    face = std::min({face, q[a] - lo, lo + cell_m_ - q[a]});
+  }
+  face = std::max(0.0f, face - 1e-6f * (q.cwiseAbs().maxCoeff() + cell_m_));  // float rounding of the cell's faces
   for (int ring = 0; ring <= max_rings; ++ring) {
     for (int32_t dx = -ring; dx <= ring; ++dx)
       for (int32_t dy = -ring; dy <= ring; ++dy)
@@ -109,7 +115,7 @@ void VoxelGrid::k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour
             }
           }
         }
-    const float reach = static_cast<float>(ring) * cell_m_;
+    const float reach = static_cast<float>(ring) * cell_m_ + face;
     if (out.size() == want && out.front().distance2_m2 <= reach * reach) break;
   }
   std::sort_heap(out.begin(), out.end(), closer);
