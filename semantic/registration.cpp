@@ -36,7 +36,7 @@ class Sizing {
     if (thin_.size() <= points) return small;
     for (int i = 0; i < 24 && large / small > 1.05; ++i) {
       const double mid = std::sqrt(small * large);
-      (VoxelGrid(thin_.points, static_cast<float>(mid)).occupied_cells() > points ? small : large) = mid;
+      (VoxelGrid::count_cells(thin_.points, static_cast<float>(mid)) > points ? small : large) = mid;
     }
     return large;
   }
