@@ -38,9 +38,11 @@
 // inside it; from the pair's own start the fastest of 5 runs (ours) or 3
 // (Open3D), PCL one run; from the perturbed starts one run each.
 //
-//   bench_registration_real_pairs [--quick] [--ours-only] [--pair NAME]
+//   bench_registration_real_pairs [--quick] [--ours-only] [--levels] [--pair NAME]
 //   --quick: one run per cell; --ours-only: no PCL, no Open3D rows;
-//   --pair: only lidar-ply, lidar-pcd, 3dtk, bunny or room.
+//   --levels: each of our runs' stages (preparation, each pyramid level:
+//   points, iterations, ms); --pair: only lidar-ply, lidar-pcd, 3dtk, bunny
+//   or room.
 
 #include <omp.h>
 #include <pcl/registration/icp.h>
@@ -144,16 +146,27 @@ struct Starts {
   std::vector<std::string> names;
 };
 
+// Where one run of ours spent its time (--levels).
+void print_levels(const std::string& start, int threads, const sem::RegistrationResult& r) {
+  std::printf("  stages of ours, start %s, %d thread(s): %.1f ms in all, %.1f ms preparing%s\n", start.c_str(), threads,
+              1e3 * r.total_s, 1e3 * r.prepare_s, r.from_start ? ", the answer from the start's run" : "");
+  for (const auto& l : r.levels)
+    std::printf("    voxel %6.3f m pairing %6.3f m  %6zu onto %6zu points  %3d iterations%s  %7.1f ms\n", l.voxel_m, l.pairing_m,
+                l.source_points, l.target_points, l.icp.iterations, l.icp.converged ? " (converged)" : "            ",
+                1e3 * l.seconds);
+}
+
 // Ours from every start (the pair's own: the fastest of 5 runs, or 1 with
 // --quick; the perturbed: one run each), on 1 and 2 threads. Without a
 // reference, ours from the pair's own start stands in for it.
-std::vector<Row> ours_rows(Pair& pair, Starts& starts, bool quick) {
+std::vector<Row> ours_rows(Pair& pair, Starts& starts, bool quick, bool levels) {
   std::vector<Row> rows;
   const auto run_ours = [&](size_t start, int runs) {
     for (int threads : {1, 2}) {
       sem::RegistrationResult r;
       const double ms = time_fastest<sem::RegistrationResult>(runs, [&] { return ours(pair, starts.T[start], threads); }, r);
       rows.push_back({"ours register_clouds", threads, start, ms, r.T_target_source, r.converged ? "yes" : "no: " + r.failure});
+      if (levels) print_levels(starts.names[start], threads, r);
     }
   };
   run_ours(0, quick ? 1 : 5);
@@ -302,10 +315,10 @@ void print_tally(const Pair& pair, const Starts& starts, const std::vector<Row>&
   std::printf("\n");
 }
 
-void run_pair(Pair& pair, bool quick, bool ours_only) {
+void run_pair(Pair& pair, bool quick, bool ours_only, bool levels) {
   Starts starts{{pair.T_start}, {pair.start_name}};
   const bool reference_is_ours = !pair.T_reference;
-  std::vector<Row> rows = ours_rows(pair, starts, quick);
+  std::vector<Row> rows = ours_rows(pair, starts, quick, levels);
   // The peers, on the raw clouds and (lidar pairs) on filtered ones.
   if (!ours_only) add_peer_rows(pair, starts, quick, rows);
   print_rows(pair, starts, rows);
@@ -398,17 +411,19 @@ std::vector<Maker> pair_makers() {
 }  // namespace
 
 int main(int argc, char** argv) {
-  bool quick = false, ours_only = false;
+  bool quick = false, ours_only = false, levels = false;
   std::string only;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--quick") == 0) {
       quick = true;
     } else if (std::strcmp(argv[i], "--ours-only") == 0) {
       ours_only = true;
+    } else if (std::strcmp(argv[i], "--levels") == 0) {
+      levels = true;
     } else if (std::strcmp(argv[i], "--pair") == 0 && i + 1 < argc) {
       only = argv[++i];
     } else {
-      std::fprintf(stderr, "usage: bench_registration_real_pairs [--quick] [--ours-only] [--pair lidar-ply|lidar-pcd|3dtk|bunny|room]\n");
+      std::fprintf(stderr, "usage: bench_registration_real_pairs [--quick] [--ours-only] [--levels] [--pair lidar-ply|lidar-pcd|3dtk|bunny|room]\n");
       return 2;
     }
   }
@@ -428,7 +443,7 @@ int main(int argc, char** argv) {
     }
     try {
       Pair p = m.make(paths);
-      run_pair(p, quick, ours_only);
+      run_pair(p, quick, ours_only, levels);
       ++ran;
     } catch (const std::exception& e) {
       std::fprintf(stderr, "bench_registration_real_pairs: %s: %s\n", m.name.c_str(), e.what());

@@ -69,8 +69,9 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
 std::vector<double> correspondence_schedule(const IcpSettings& settings);
 
 /// Unit normals from the k nearest neighbours' covariance (PCA), oriented
-/// towards `viewpoint`; fills cloud.normals.
-void estimate_normals(Cloud& cloud, int k = 10, const Eigen::Vector3f& viewpoint = Eigen::Vector3f::Zero());
+/// towards `viewpoint`; fills cloud.normals. `threads` 0: OpenMP's default.
+void estimate_normals(Cloud& cloud, int k = 10, const Eigen::Vector3f& viewpoint = Eigen::Vector3f::Zero(),
+                      int threads = 0);
 
 /// One point per occupied cube of `leaf_m` (the centroid of its points).
 Cloud voxel_filter(const Cloud& cloud, double leaf_m);

@@ -6,8 +6,8 @@
 // bunny at 2 mm) needs no tuning, and a verdict that says when the answer
 // cannot be trusted instead of returning it as if it could.
 //
-// Each level voxel-filters both clouds at its voxel (the target keeps its
-// normals for point-to-plane), pairs within `pairing_voxels` voxels with a
+// Each level voxel-filters both clouds at its voxel (the target's normals,
+// estimated once at the finest level, averaged per voxel), pairs within `pairing_voxels` voxels with a
 // Huber kernel one voxel wide, and hands its pose to the next, finer level.
 // The coarsest level sees the whole scene in a few hundred points and
 // pairs within metres: it brings 20° and a metre of initial error into the

@@ -78,6 +78,35 @@ VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, i
   }
 }
 
+size_t VoxelGrid::count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m) {
+  const VoxelGrid empty({}, cell_m);  // validates cell_m; its coord() and pack() map a point to its key
+  const size_t capacity = std::bit_ceil(std::max<size_t>(16, points.size() * 2));
+  const size_t mask = capacity - 1;
+  const int shift = 64 - std::countr_zero(capacity);
+  std::vector<uint64_t> keys(capacity, kEmpty);
+  size_t cells = 0;
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const uint64_t key = pack(empty.coord(p.x()), empty.coord(p.y()), empty.coord(p.z()));
+    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift);
+    while (keys[i] != key && keys[i] != kEmpty) i = (i + 1) & mask;
+    if (keys[i] == kEmpty) {
+      keys[i] = key;
+      ++cells;
+    }
+  }
+  return cells;
+}
+
+float VoxelGrid::face_gap(const Eigen::Vector3f& q) const {
+  float face = cell_m_;
+  for (int a = 0; a < 3; ++a) {
+    const float lo = static_cast<float>(coord(q[a])) * cell_m_;
+    face = std::min({face, q[a] - lo, lo + cell_m_ - q[a]});
+  }
+  return std::max(0.0f, face - 1e-6f * (q.cwiseAbs().maxCoeff() + cell_m_));  // float rounding of the cell's faces
+}
+
 void VoxelGrid::k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour>& out, int max_rings) const {
   out.clear();
   if (k <= 0 || !q.allFinite()) return;
@@ -86,8 +115,9 @@ void VoxelGrid::k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour
   const int32_t cx = coord(q.x()), cy = coord(q.y()), cz = coord(q.z());
   const Eigen::Vector4f q4(q.x(), q.y(), q.z(), 0.0f);
   // Ring by ring (the shell of cells at Chebyshev distance `ring`): a point
-  // outside rings 0..R is farther than R cells from q, so the k best are
-  // final once the k-th is within R * cell_m.
+  // outside rings 0..R is farther than R cells plus q's distance to its own
+  // cell's nearest face, so the k best are final once the k-th is within that.
+  const float face = face_gap(q);
   for (int ring = 0; ring <= max_rings; ++ring) {
     for (int32_t dx = -ring; dx <= ring; ++dx)
       for (int32_t dy = -ring; dy <= ring; ++dy)
@@ -109,7 +139,7 @@ void VoxelGrid::k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour
             }
           }
         }
-    const float reach = static_cast<float>(ring) * cell_m_;
+    const float reach = static_cast<float>(ring) * cell_m_ + face;
     if (out.size() == want && out.front().distance2_m2 <= reach * reach) break;
   }
   std::sort_heap(out.begin(), out.end(), closer);

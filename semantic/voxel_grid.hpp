@@ -34,6 +34,11 @@ class VoxelGrid {
   /// when cell_m is not positive and finite.
   VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, int max_points_per_cell = 0);
 
+  /// How many cubes of `cell_m` > 0 the finite points occupy: what
+  /// VoxelGrid(points, cell_m).occupied_cells() says, without building the
+  /// grid (a hash set of the cells' keys; a fraction of the cost).
+  static size_t count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m);
+
   float cell_m() const { return cell_m_; }
   size_t occupied_cells() const { return cell_count_; }
   size_t size() const { return index_.size(); }  ///< points kept
@@ -63,6 +68,10 @@ class VoxelGrid {
   /// first). Exact where the k-th lies within `max_rings` cells of q's
   /// cell; fewer than k when fewer lie that close.
   void k_nearest(const Eigen::Vector3f& q, int k, std::vector<Neighbour>& out, int max_rings = 3) const;
+
+  /// q's distance to the nearest face of its own cell (a little less, for
+  /// float rounding; 0 outside the grid's range).
+  float face_gap(const Eigen::Vector3f& q) const;
 
   /// Points in grid order (x y z), and the index of each into the input.
   const std::vector<Eigen::Vector4f>& grid_points() const { return sorted_; }

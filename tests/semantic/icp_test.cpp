@@ -163,6 +163,33 @@ TEST_CASE("voxel grid finds the same nearest neighbour as brute force", "[semant
   }
 }
 
+TEST_CASE("voxel grid's k nearest stop early only when no farther cell can hold a nearer point", "[semantic]") {
+  // Small cells (a few points each): the 12th neighbour often lies one or
+  // two rings out, where the early stop (ring + the query's gap to its own
+  // cell's faces) decides; every answer must still be brute force's.
+  const sem::Cloud room = sem::test::synthetic_room(5000, 9, 0.01);
+  const sem::VoxelGrid grid(room.points, 0.08f);
+  const sem::Cloud queries = sem::test::synthetic_room(300, 10, 0.03);
+  std::vector<sem::VoxelGrid::Neighbour> knn;
+  for (const auto& q : queries.points) {
+    std::vector<float> all;
+    for (const auto& p : room.points) all.push_back((p - q).squaredNorm());
+    std::sort(all.begin(), all.end());
+    grid.k_nearest(q, 12, knn, 8);
+    REQUIRE(knn.size() == 12);
+    for (size_t k = 0; k < 12; ++k) REQUIRE(knn[k].distance2_m2 == Approx(all[k]).margin(1e-9));
+  }
+}
+
+TEST_CASE("voxel grid counts the cells a grid of the points occupies without building it", "[semantic]") {
+  sem::Cloud room = sem::test::synthetic_room(4000, 11, 0.02);
+  room.points.push_back(Eigen::Vector3f::Constant(std::nanf("")));  // left out, as the grid leaves it
+  for (const float cell : {0.01f, 0.05f, 0.3f, 2.0f, 50.0f})
+    CHECK(sem::VoxelGrid::count_cells(room.points, cell) == sem::VoxelGrid(room.points, cell).occupied_cells());
+  CHECK(sem::VoxelGrid::count_cells({}, 0.1f) == 0);
+  CHECK_THROWS_AS(sem::VoxelGrid::count_cells(room.points, 0.0f), std::invalid_argument);
+}
+
 TEST_CASE("voxel filter keeps one centroid per occupied cube", "[semantic]") {
   sem::Cloud c;
   c.points = {{0.01f, 0.01f, 0.01f}, {0.03f, 0.05f, 0.07f}, {0.15f, 0.0f, 0.0f}, {-0.05f, 0.0f, 0.0f}};
