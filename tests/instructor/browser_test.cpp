@@ -29,6 +29,7 @@
 #include "rise_msgs/SoundCue.hpp"
 #include "rise_msgs/TaskEvent.hpp"
 #include "rise_msgs/TaskStatus.hpp"
+#include "browser_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -36,38 +37,6 @@ using namespace rise::instructor_test;
 using rise::process::ChildProcess;
 
 namespace {
-const std::string kSource = RISE_SOURCE_DIR;
-const std::string kBin = std::string(RISE_BINARY_DIR) + "/bin";
-const std::string kWeb = kSource + "/instructor/web";
-
-/// Why the browser checks cannot run here, or "".
-std::string missing_browser() {
-  if (!fs::exists("/usr/bin/node")) return "node is not installed (/usr/bin/node)";
-  const char* chromium = std::getenv("RISE_CHROMIUM");
-  if (!fs::exists(chromium ? chromium : "/usr/bin/chromium")) return "chromium is not installed (/usr/bin/chromium)";
-  if (!fs::exists(kWeb + "/node_modules/playwright-core")) return "playwright-core is not installed (npm ci in instructor/web)";
-  return "";
-}
-
-std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
-
-/// The RESULT line a check printed.
-Json::Value read_result(const std::string& log) {
-  std::ifstream in(log);
-  std::string line;
-  Json::Value result;
-  while (std::getline(in, line))
-    if (line.rfind("RESULT ", 0) == 0) result = parse_json(line.substr(7));
-  return result;
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 /// rise-sim and rise-instructor serve for one trainee, in a scratch folder.
 struct Stations {
   std::string id = "web" + std::to_string(::getpid());
@@ -131,20 +100,9 @@ struct Stations {
         });
   }
   std::string base() const { return "http://127.0.0.1:" + std::to_string(port); }
-  std::string out_dir() const {
-    const std::string d = std::string(RISE_BINARY_DIR) + "/instructor_screens";
-    fs::create_directories(d);
-    return d;
-  }
+  std::string out_dir() const { return screens_dir(); }
 };
 
-/// How many non-black pixels a PNG screenshot has is not checked here: the
-/// page measures its canvases itself (variance, robot colour); the file must
-/// exist and be a PNG of some size.
-bool is_png(const std::string& path) {
-  const std::string s = read_file(path);
-  return s.size() > 2000 && s.compare(1, 3, "PNG") == 0;
-}
 }  // namespace
 
 TEST_CASE("the console shows the robot moving while the emulator drives, and a click injects a fault", "[instructor]") {
@@ -713,17 +671,6 @@ TEST_CASE("the console folds a collision that goes on into one line with a count
   CHECK(lines[4]["count"].asInt() == 3);
 }
 
-namespace {
-/// `rise-trainer check FILE [--walk R]...`: its exit code and output.
-std::pair<int, std::string> trainer_check(const fs::path& dir, const std::string& file, const std::vector<std::string>& walk) {
-  std::vector<std::string> argv{kBin + "/rise-trainer", "check", file};
-  for (const auto& w : walk) argv.insert(argv.end(), {"--walk", w});
-  const std::string log = (dir / ("check-" + std::to_string(rise::msgs::monotonic_us()) + ".log")).string();
-  ChildProcess check(argv, log);
-  const int code = check.wait_for(20000);
-  return {code, read_file(log)};
-}
-}  // namespace
 
 TEST_CASE("the Training Builder adds a task and a conditioned edge by clicks and typing, and rise-trainer walks the saved "
           "file through it",
@@ -739,30 +686,17 @@ TEST_CASE("the Training Builder adds a task and a conditioned edge by clicks and
   for (const auto& e : fs::directory_iterator(kSource + "/sim/training/examples"))
     if (e.path().extension() == ".yaml") fs::copy_file(e.path(), designs / e.path().filename());
   const std::string file = (designs / "fig10_training.yaml").string();
-  const std::string token = "builder-" + std::to_string(::getpid());
-  const int port = free_port();
-  ChildProcess server({kBin + "/rise-instructor", "serve", "--listen", "127.0.0.1:" + std::to_string(port), "--token", token,
-                       "--lcm", kLcm, "--designs", designs.string()},
-                      (dir / "server.log").string());
-  httplib::Client http("127.0.0.1", port);
-  http.set_connection_timeout(0, 200'000);
-  bool up = false;
-  for (int i = 0; i < 200 && !up && server.running(); ++i) {
-    auto r = http.Get("/api/builder/trainings", {{"X-Rise-Token", token}});
-    up = r && r->status == 200;
-    if (!up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
+  BuilderServer server(dir, designs);
   INFO(read_file((dir / "server.log").string()));
-  REQUIRE(up);
+  REQUIRE(server.up);
   // Before the edit a mission 2 that scores 2 repeats.
   const std::vector<std::string> walk{"score=10,success=1", "score=2"};
   const auto before = trainer_check(dir, file, walk);
   CHECK(before.second.find("walk: mission2 #1: always → mission2") != std::string::npos);
 
-  const std::string screens = std::string(RISE_BINARY_DIR) + "/instructor_screens";
-  fs::create_directories(screens);
-  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/training_builder_check.cjs",
-                     "http://127.0.0.1:" + std::to_string(port), token, screens, kWeb, designs.string()},
+  const std::string screens = screens_dir();
+  ChildProcess node({"/usr/bin/node", kSource + "/tests/instructor/browser/training_builder_check.cjs", server.base(),
+                     server.token, screens, kWeb, designs.string()},
                     (dir / "builder_check.log").string());
   const int node_code = node.wait_for(120000);
   if (node_code < 0) node.stop();
@@ -821,6 +755,6 @@ TEST_CASE("the Training Builder adds a task and a conditioned edge by clicks and
         std::string::npos);
   CHECK(is_png(screens + "/training_builder.png"));
   CHECK(is_png(screens + "/training_builder_conflict.png"));
-  server.stop();
+  server.process.stop();
   fs::remove_all(dir);
 }
