@@ -51,6 +51,8 @@ struct WebServerSettings {
   /// The files the builder pages read and write (/training.html:
   /// instructor/builder_routes.hpp); "" → the builders are off.
   std::string designs_dir;
+  /// The world files the Environment Builder edits (instructor/world_builder.hpp); "" → off.
+  std::string worlds_dir;
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;
