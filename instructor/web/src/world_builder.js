@@ -19,6 +19,10 @@ const GRID_M = 0.05;
 const DEG = Math.PI / 180;
 // The entity lists, in the order a click finds them (small things over big ones).
 const LISTS = ['doors', 'objects', 'props', 'boxes', 'stairs', 'walls', 'regions'];
+// The property panel's order: as the files write them.
+const KEY_ORDER = ['name', 'kind', 'from', 'to', 'hinge', 'start', 'center_m', 'min', 'max', 'size_m', 'width', 'height',
+  'thickness', 'yaw_deg', 'open_deg_max', 'break_torque_nm', 'break_time_ms', 'mass_kg', 'friction_torque_nm',
+  'return_nm_per_rad', 'steps', 'riser_m', 'tread_m', 'width_m', 'landing_m'];
 const state = {
   file: '', version: '', world: null, view: null, bounds: null,
   check: null, checkSeq: 0, checking: false, pending: false, dirty: false,
@@ -245,7 +249,7 @@ function drawMap() {
   for (const d of state.world.doors) {
     const [hx, hy] = px(...d.hinge), yaw = d.yaw_deg * DEG, open = d.open_deg_max * DEG;
     g.strokeStyle = 'rgba(160,82,45,0.7)'; g.lineWidth = 1; g.setLineDash([4, 3]);
-    g.beginPath(); g.arc(hx, hy, d.width * s, -(yaw + open), -(yaw - open)); g.stroke(); g.setLineDash([]);
+    g.beginPath(); g.arc(hx, hy, Math.max(0, d.width) * s, -(yaw + open), -(yaw - open)); g.stroke(); g.setLineDash([]);
     g.fillStyle = MAP_FILLS.door; g.beginPath(); g.arc(hx, hy, 3, 0, 2 * Math.PI); g.fill();
   }
   const e = selectedEntity();
@@ -304,7 +308,9 @@ function renderProps() {
   const { list, i } = state.selected;
   $('selected-name').textContent = `${list}[${i}] ${e.name}`;
   const bad = places.filter((p) => p.entity === `${list}[${i}]`).map((p) => p.field);
-  const rows = Object.keys(e).filter((k) => k !== 'openings').map((k) => field(e, k, done, bad));
+  const rank = (k) => (KEY_ORDER.indexOf(k) + KEY_ORDER.length + 1) % (KEY_ORDER.length + 1);
+  const keys = Object.keys(e).filter((k) => k !== 'openings').sort((a, b) => rank(a) - rank(b));
+  const rows = keys.map((k) => field(e, k, done, bad));
   if (list === 'walls') rows.push(...openingRows(e, bad));
   if (list === 'doors') rows.push(el('div', { class: 'row' }, el('span', {}, 'hinge side'),
     el('button', { id: 'flip-hinge', onclick: () => { flipHinge(e); changed(); } }, 'hinge at the other end')));

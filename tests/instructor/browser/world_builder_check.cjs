@@ -14,16 +14,25 @@ const [base, token, outDir, webDir, worldsDir] = process.argv.slice(2);
 const file = path.join(worldsDir, 'building.yaml');
 
 const errorsShown = (page) => page.$$eval('#errors li', (l) => l.map((e) => ({ text: e.textContent, key: e.dataset.key, line: Number(e.dataset.line) })));
-const settled = (page, cls) => page.waitForFunction((c) => {
-  const s = window.riseWorldBuilder && window.riseWorldBuilder.state;
-  return document.getElementById('check-state').className === c && s && !s.checking && !s.pending;
-}, cls, { timeout: 15000 });
+async function settled(page, cls) {
+  try {
+    await page.waitForFunction((c) => {
+      const s = window.riseWorldBuilder && window.riseWorldBuilder.state;
+      return document.getElementById('check-state').className === c && s && !s.checking && !s.pending;
+    }, cls, { timeout: 15000 });
+  } catch (e) {
+    const seen = await page.evaluate(() => ({ check: document.getElementById('check-state').textContent,
+      errors: [...document.querySelectorAll('#errors li')].map((l) => l.textContent), selected: window.riseWorldBuilder.state.selected }));
+    throw new Error(`waiting for the check to be ${cls}: ${JSON.stringify(seen)}`);
+  }
+}
 
-// The page's pixel of a world point, in the page's coordinates (the mouse's).
+// The page's pixel nearest to a world point, in the page's coordinates (the
+// mouse's: whole pixels, as the events carry them).
 async function at(page, x, y) {
   const box = await (await page.$('#map')).boundingBox();
   const [u, v] = await page.evaluate(([a, b]) => window.riseWorldBuilder.toCanvas(a, b), [x, y]);
-  return [box.x + u, box.y + v];
+  return [Math.round(box.x + u), Math.round(box.y + v)];
 }
 
 async function drag(page, from, to) {
@@ -90,7 +99,7 @@ run(async () => {
 
     // A region dragged out in room A, then named.
     await page.check('input[name="tool"][value="region"]');
-    await drag(page, [-3.0, -2.0], [-2.0, -1.0]);
+    await drag(page, [-3.0, -2.0], [-2.0, -1.0]);  // a pixel is ~2.5 cm: the corners snap to the 5 cm grid
     await settled(page, 'ok');
     result.new_region = await page.evaluate(() => window.riseWorldBuilder.state.world.regions.at(-1));
     await typeField(page, 'name', 'drop_zone');
