@@ -11,8 +11,9 @@ export function worldBounds(world, points = []) {
   let min = [Infinity, Infinity], max = [-Infinity, -Infinity];
   const grow = (x, y) => { min = [Math.min(min[0], x), Math.min(min[1], y)]; max = [Math.max(max[0], x), Math.max(max[1], y)]; };
   for (const b of world.boxes) {
-    const r = Math.hypot(b.size[0], b.size[1]) / 2;
-    grow(b.center[0] - r, b.center[1] - r); grow(b.center[0] + r, b.center[1] + r);
+    // The footprint's corners (a long wall's circle would take the map's room).
+    const c = Math.cos(b.yaw), s = Math.sin(b.yaw), hx = b.size[0] / 2, hy = b.size[1] / 2;
+    for (const [x, y] of [[hx, hy], [hx, -hy], [-hx, hy], [-hx, -hy]]) grow(b.center[0] + c * x - s * y, b.center[1] + s * x + c * y);
   }
   for (const r of world.regions) { grow(r.min[0], r.min[1]); grow(r.max[0], r.max[1]); }
   for (const p of points) grow(p[0], p[1]);

@@ -351,7 +351,7 @@ function build3d() {
   view.scene.add(view.group);
   const { min, max } = state.bounds, c = [(min[0] + max[0]) / 2, (min[1] + max[1]) / 2];
   const span = Math.max(max[0] - min[0], max[1] - min[1]);
-  view.cam.position.set(c[0] - 0.15 * span, c[1] - 0.75 * span, 0.6 * span);
+  view.cam.position.set(c[0] - 0.1 * span, c[1] - 0.6 * span, 0.5 * span);
   view.cam.lookAt(c[0], c[1], 0);
   const w = view.renderer.domElement.width, h = view.renderer.domElement.height;
   renderInto(view.renderer, view.scene, view.cam, { x: 0, y: 0, w, h });
