@@ -17,7 +17,7 @@
 
 #include "hil/panel_state_message.hpp"
 #include "instructor/builder_routes.hpp"
-#include "instructor/world_builder.hpp"
+#include "instructor/world_builder_routes.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"

@@ -6,13 +6,8 @@
 // into the YAML that would be saved (sim/world_writer.hpp, keeping the
 // comments of the file on disk) and loaded by the loader rise-sim uses,
 // whose error shows with its line and key. Saved through DesignFolder
-// (atomic, versioned, 409 when the file changed on disk). Routes (behind the
-// token):
-//   GET  /api/builder/worlds              the .yaml files of DIR: [{file, name | error}]
-//   GET  /api/builder/world/NAME          its text, version, world (or load_error), view (/api/world's form)
-//   POST /api/builder/world/NAME/check    {world} → {yaml, ok, errors: [{file, line, key, message}], view}
-//   POST /api/builder/world/NAME          {version, world} → saved (new version); 409 when the file
-//                                         changed since `version`; 422 with the errors when it would not load
+// (atomic, versioned, 409 when the file changed on disk) by the routes of
+// instructor/world_builder_routes.hpp. Pure.
 
 #include <json/json.h>
 
@@ -22,10 +17,6 @@
 
 #include "instructor/training_builder.hpp"
 #include "sim/world_description.hpp"
-
-namespace httplib {
-class Server;
-}
 
 namespace rise::instructor {
 
@@ -43,14 +34,11 @@ std::optional<sim::WorldDescription> world_model_from_json(const Json::Value& bo
 struct WorldCheck {
   std::string yaml;                  ///< what would be saved
   std::vector<BuilderError> errors;  ///< empty: rise-sim --world would load it
-  Json::Value view;                  ///< the loaded world as /api/world draws it (null with errors)
+  std::optional<sim::WorldDescription> loaded;  ///< the yaml as rise-sim loads it (none with errors)
 };
 
 /// Writes `world` as it would be saved at `path` (with the comments of
 /// `disk_text`, the file it replaces) and loads it with the loader of rise-sim.
 WorldCheck check_world(const sim::WorldDescription& world, const std::string& path, const std::string& disk_text);
-
-/// Adds the routes; `worlds_dir` "" answers 503 on each.
-void add_world_builder_routes(httplib::Server& http, const std::string& worlds_dir);
 
 }  // namespace rise::instructor

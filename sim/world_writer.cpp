@@ -38,11 +38,15 @@ std::string shortest(double v, const std::function<bool(double)>& same) {
 }
 
 std::string num(double v) {
+  // YAML's own words for what is no finite number (a loaded .nan centre).
+  if (std::isnan(v)) return ".nan";
+  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
   return shortest(v, [v](double x) { return x == v; });
 }
 
 // Radians as the degrees the loader turns back into the same radians.
 std::string deg(double rad) {
+  if (!std::isfinite(rad)) return num(rad);
   return shortest(rad / kDegToRad, [rad](double x) { return x * kDegToRad == rad; });
 }
 
@@ -111,6 +115,15 @@ std::string trailing_comment(const std::string& line) {
     }
   }
   return "";
+}
+
+// A line as written back: no control characters but tabs (a CR inside a
+// line would start another one).
+std::string clean(std::string line) {
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  for (char& c : line)
+    if ((static_cast<unsigned char>(c) < 0x20 && c != '\t') || c == 0x7f) c = ' ';
+  return line;
 }
 
 bool blank_or_comment(const std::string& line) {
@@ -268,6 +281,7 @@ WorldComments read_world_comments(const std::string& text) {
   std::istringstream in(text);
   std::string line, block, last;
   for (int n = 0; std::getline(in, line); ++n) {
+    line = clean(line);
     if (blank_or_comment(line)) {
       if (!block.empty() || !trailing_comment(line).empty() || line.find('#') != std::string::npos) block += line + "\n";
       continue;
