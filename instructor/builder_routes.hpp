@@ -1,6 +1,7 @@
 #pragma once
 
-// The builder pages' API (behind the same token as every route):
+// The Training Builder's API (behind the same token as every route; the
+// four routes are instructor/design_routes.hpp's):
 //   GET  /api/builder/trainings            the training and task files of --designs DIR
 //   GET  /api/builder/training/NAME        its text, version, graph (or the loader's errors)
 //   POST /api/builder/training/NAME/check  {graph} → the YAML it would save and its errors

@@ -28,6 +28,15 @@ struct DesignText {
   std::string version;
 };
 
+/// An error of a file a builder would save, as the page shows it beside
+/// what the user changed.
+struct BuilderError {
+  std::string file;     ///< the file the error is in: the training, or a task file it names (file name only)
+  int line = 0;         ///< in that file (the training: in `yaml`)
+  std::string key;      ///< "transitions[3].if", or the entry the line holds ("nodes[1]"), or ""
+  std::string message;  ///< without file, line and key
+};
+
 enum class SaveStatus { Saved, Conflict };
 
 struct SaveOutcome {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "instructor/design_files.hpp"
 #include "sim/training/training_graph.hpp"
 
 namespace rise::instructor {
@@ -28,12 +29,6 @@ Json::Value training_graph_json(const sim::training::TrainingGraph& graph);
 /// wrong shape.
 std::optional<sim::training::TrainingGraph> training_graph_from_json(const Json::Value& body, std::string* error);
 
-struct BuilderError {
-  std::string file;     ///< the file the error is in: the training, or a task file it names (file name only)
-  int line = 0;         ///< in that file (the training: in `yaml`)
-  std::string key;      ///< "transitions[3].if", or the entry the line holds ("nodes[1]"), or ""
-  std::string message;  ///< without file, line and key
-};
 
 struct TrainingCheck {
   std::string yaml;  ///< what would be saved

@@ -17,6 +17,7 @@ add_library(rise_instructor_web
   design_files.cpp
   training_builder.cpp
   builder_routes.cpp
+  design_routes.cpp
   world_builder.cpp
   world_builder_routes.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
