@@ -51,6 +51,7 @@ struct WebServerSettings {
   /// The files the builder pages read and write (/training.html:
   /// instructor/builder_routes.hpp); "" → the builders are off.
   std::string designs_dir;
+  std::string robots_dir;  ///< the robot files /robot_builder.html edits (instructor/robot_builder_routes.hpp); "" → off
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;

@@ -31,6 +31,7 @@ struct ServeOptions {
   std::string reports_dir;
   std::string scenarios_dir = "instructor/scenarios";
   std::string designs = "sim/training/examples";
+  std::string robots = "sim/robots";
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
@@ -78,6 +79,7 @@ int serve(const ServeOptions& o) {
   if (!s.designs_dir.empty() && !std::filesystem::is_directory(s.designs_dir))
     throw std::runtime_error(s.designs_dir + ": cannot open: " +
                              std::strerror(std::filesystem::exists(s.designs_dir) ? ENOTDIR : ENOENT));
+  s.robots_dir = o.robots.empty() ? "" : panels::find_data_file(o.robots);
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
@@ -118,6 +120,8 @@ void add_serve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--designs", o->designs,
                   "the folder of training and task files the builder pages read and write (\"\": builders off)")
+      ->capture_default_str();
+  cmd->add_option("--robots", o->robots, "the folder of robot files the Robot Builder reads and writes (\"\": off)")
       ->capture_default_str();
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist, installed or of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();

@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, inputs, configs, training_graph, training_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, robot_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -57,6 +57,14 @@ case "$target" in
     sources=("$root"/instructor/{training_builder,design_files}.cpp
              "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report}.cpp
              "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
+    ;;
+  # The Robot Builder's request body: its edits written in place into a
+  # robot's text (sim/yaml_edit.cpp) and loaded as rise-sim loads it;
+  # web_json.cpp draws the view (its message types by lcm-gen here).
+  robot_builder)
+    sources=("$root"/instructor/{robot_builder,web_json,trainee_directory}.cpp "$root"/msgs/{channels,publisher_session,failsafe}.cpp
+             "$root"/sim/{yaml_edit,robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp
+             "$root/panels/yaml_reader.cpp")
     ;;
   urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
   mesh) sources=("$root/sim/mesh_file.cpp") ;;
@@ -119,6 +127,11 @@ if [ $rebuild -eq 1 ]; then
     training_builder)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-lyaml-cpp -ljsoncpp)
+      ;;
+    robot_builder)
+      bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen-all" "$root"/msgs/lcmtypes/*.lcm
+      flags=(-I"$work/lcmgen-all" -isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-ljsoncpp -llcm -lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
       ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
@@ -306,6 +319,14 @@ case "$target" in
     printf '%s' "$g" >"$corpus/graph.json"
     printf '%s' "${g/\"if\":\"success EQ 1\"/\"if\":\"score LT five\"}" >"$corpus/bad-condition.json"
     printf '%s' '{"training":"t","nodes":[{"name":"a","task":"../x.yaml"},{"name":"b","task":"metro_transport.yaml","max_attempts":0}],"transitions":[{"from":"START","to":"c"},{"from":"a","to":"a","if":"events.nope GE 1"}]}' >"$corpus/errors.json"
+    ;;
+  robot_builder)
+    # The page's bodies on skid4.yaml (a limit, an invert added, a picked
+    # button, a bad value, a bad path), and edits of a text of every YAML form.
+    printf '{"version":"x","edits":[{"path":"control.linear.max_mps","value":"0.3"},{"path":"control.linear.invert","value":"true"}]}' >"$corpus/limit.json"
+    printf '{"edits":[{"path":"sounds.horn.button","value":"gripper_open"},{"path":"wheels.max_torque_nm","value":"-1"}]}' >"$corpus/bad.json"
+    printf '{"edits":[{"path":"control.speed_scale.values[2]","value":"two words"},{"path":"control..x","value":"1"}]}' >"$corpus/paths.json"
+    printf 'a: {b: 1, c: "q\\"", d: [1, 2]}  # c\nl:\n  - {x: 1}\n  - y\nm:\n  n: 2\n\0[{"path":"a.e","value":"1"},{"path":"l[0].z","value":"#"},{"path":"m.o.p","value":""}]' >"$corpus/forms"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.
