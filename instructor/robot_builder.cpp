@@ -132,7 +132,8 @@ RobotCheck check_robot(const std::string& text, const std::vector<sim::YamlEdit>
   try {
     out.yaml = sim::apply_yaml_edits(text, edits);
   } catch (const sim::YamlEditError& e) {
-    out.errors.push_back({file, line_of(text, e.path()), e.path(), std::string(e.what()).substr(e.path().size() + 2)});
+    const std::string key = panels::printable(e.path()), what = e.what();  // "key: why"
+    out.errors.push_back({file, line_of(text, e.path()), key, what.substr(key.size() + 2)});
     return out;
   } catch (const std::exception& e) {
     out.errors.push_back({file, 0, "", e.what()});

@@ -6,7 +6,12 @@
 #include <cstdio>
 #include <optional>
 
+#include "panels/yaml_reader.hpp"
+
 namespace rise::sim {
+
+YamlEditError::YamlEditError(std::string path, const std::string& what)
+    : std::runtime_error(panels::printable(path) + ": " + what), path_(std::move(path)) {}
 
 namespace {
 

@@ -35,8 +35,8 @@ struct YamlEdit {
 /// An edit that cannot be applied: its path and why.
 class YamlEditError : public std::runtime_error {
  public:
-  YamlEditError(std::string path, const std::string& what)
-      : std::runtime_error(path + ": " + what), path_(std::move(path)) {}
+  /// what(): "path: what", the path's control characters as \xNN.
+  YamlEditError(std::string path, const std::string& what);
   const std::string& path() const { return path_; }
 
  private:
