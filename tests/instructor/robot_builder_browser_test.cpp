@@ -86,6 +86,8 @@ TEST_CASE("the Robot Builder: a motor limit edited by typing, saved in place, an
   const std::string parts = text(r["parts"]);
   CHECK(parts.find("\"laser\"") != std::string::npos);
   CHECK(parts.find("\"camera:front\"") != std::string::npos);
+  CHECK(parts.find("\"axis:front_left_wheel_joint\"") != std::string::npos);
+  CHECK(parts.find("\"front_left_wheel\"") != std::string::npos);
   CHECK(r["view_note"].asString().find("skid_steer · 5 links, 4 joints · laser 270° · 1 camera(s)") != std::string::npos);
   CHECK(r["view_stats"]["variance"].asDouble() > 10);
   CHECK(r["max_mps_before"].asString() == "1.2");
@@ -121,6 +123,15 @@ TEST_CASE("the Robot Builder: a motor limit edited by typing, saved in place, an
   CHECK(page_max > 0.25);
   CHECK(page_max < 0.45);
   CHECK(r["drive_stats"]["variance"].asDouble() > 10);
+  // The tracked robot from the list: belts, arm joint axes, both cameras; its motor and break limits listed.
+  const std::string tracked = text(r["tracked_parts"]);
+  for (const char* part : {"\"tracks\"", "\"laser\"", "\"camera:chase\"", "\"axis:shoulder_yaw\"", "\"axis:gripper\""})
+    CHECK(tracked.find(part) != std::string::npos);
+  CHECK(r["tracked_note"].asString().find("tracked · ") == 0);
+  const std::string motors = text(r["tracked_motors"]);
+  CHECK(motors.find("control.arm.elbow_pitch.break_torque_nm") != std::string::npos);
+  CHECK(motors.find("tracks.max_speed_mps") != std::string::npos);
+  CHECK(motors.find("control.arm.gripper.max_force_n") != std::string::npos);
   // Stopped: no robot states on the station any more.
   const std::size_t seen = peer.robot.size();
   peer.wait_until([] { return false; }, 1500);

@@ -389,5 +389,6 @@ async function main() {
 }
 
 window.riseRobotBuilder = { state, stats: () => ({ view3d: canvasStats($('view3d')), drive3d: drive.renderer ? canvasStats($('drive3d')) : null }),
-  scene: () => view.robot && view.robot.children.map((c) => c.name) };
+  // The named parts drawn (tracks, laser, camera:NAME, axis:JOINT, the URDF's links).
+  scene: () => { const names = []; if (view.robot) view.robot.traverse((o) => { if (o.name) names.push(o.name); }); return names; } };
 main().catch((e) => { $('save-state').textContent = 'error: ' + e.message; });

@@ -86,6 +86,14 @@ run(async () => {
     result.drive_stats = await page.evaluate(() => window.riseRobotBuilder.stats().drive3d);
     await page.click('#drive-stop');
     await page.waitForFunction(() => document.getElementById('drive-state').textContent === 'stopped', null, { timeout: 10000 });
+
+    // Another robot from the list: the tracked one, its belts and arm joints drawn, its break torques listed.
+    await page.selectOption('#file', 'tracked_eod.yaml');
+    await page.waitForFunction(() => document.getElementById('view-note').textContent.startsWith('tracked'), null, { timeout: 10000 });
+    result.tracked_parts = await page.evaluate(() => window.riseRobotBuilder.scene());
+    result.tracked_note = await page.$eval('#view-note', (e) => e.textContent);
+    result.tracked_motors = await page.$$eval('#props-motors code', (c) => c.map((e) => e.textContent));
+    await page.screenshot({ path: path.join(outDir, 'robot_builder_tracked.png') });
     result.page_errors = errors;
   } finally {
     await browser.close();
