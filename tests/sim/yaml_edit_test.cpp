@@ -77,7 +77,7 @@ LimitEdit limit_edit_for(const RobotDescription& d) {
 
 }  // namespace
 
-TEST_CASE("every shipped robot: rewriting every value as it is keeps the bytes and the robot", "[yaml_edit]") {
+TEST_CASE("every shipped robot: rewriting every value as it is keeps the bytes and the robot", "[sim][yaml_edit]") {
   const auto robots = shipped_robots();
   REQUIRE(robots.size() >= 3);
   for (const auto& path : robots) {
@@ -93,7 +93,7 @@ TEST_CASE("every shipped robot: rewriting every value as it is keeps the bytes a
   }
 }
 
-TEST_CASE("every shipped robot: a changed motor limit changes that field and one line, comments kept", "[yaml_edit]") {
+TEST_CASE("every shipped robot: a changed motor limit changes that field and one line, comments kept", "[sim][yaml_edit]") {
   for (const auto& path : shipped_robots()) {
     INFO(path);
     const std::string text = slurp(path);
@@ -115,7 +115,7 @@ TEST_CASE("every shipped robot: a changed motor limit changes that field and one
   }
 }
 
-TEST_CASE("a key the file lacks is added to its flow or block mapping", "[yaml_edit]") {
+TEST_CASE("a key the file lacks is added to its flow or block mapping", "[sim][yaml_edit]") {
   const std::string path = kRobots + "skid4.yaml";
   const std::string text = slurp(path);
   // control.linear is a flow mapping without invert.
@@ -132,7 +132,7 @@ TEST_CASE("a key the file lacks is added to its flow or block mapping", "[yaml_e
   CHECK(apply_yaml_edits("a: {}\n", {{"a.b", "1"}}) == "a: {b: 1}\n");
 }
 
-TEST_CASE("values are written so that they read back as given", "[yaml_edit]") {
+TEST_CASE("values are written so that they read back as given", "[sim][yaml_edit]") {
   const std::string text = "a: {b: 'x', c: \"y\\\"z\", d: 1}  # keep\nl: [1, 2, 3]\n";
   for (const std::string v : {"plain", "two words", "a,b", "{x}", "#", "\"q\"", "", "-1.5e3", "tab\there", "ü"}) {
     INFO(v);
@@ -150,7 +150,7 @@ TEST_CASE("values are written so that they read back as given", "[yaml_edit]") {
   CHECK(yaml_flow_scalar("a b") == "\"a b\"");
 }
 
-TEST_CASE("an edit that cannot apply names its path and changes nothing", "[yaml_edit]") {
+TEST_CASE("an edit that cannot apply names its path and changes nothing", "[sim][yaml_edit]") {
   const std::string text = slurp(kRobots + "tracked_eod.yaml");
   const auto fails = [&](const std::string& path, const std::string& what) {
     INFO(path);
@@ -173,7 +173,7 @@ TEST_CASE("an edit that cannot apply names its path and changes nothing", "[yaml
   CHECK_THROWS_AS(yaml_scalars("a: [1, 2"), std::runtime_error);
 }
 
-TEST_CASE("the paths are the loader's keys", "[yaml_edit]") {
+TEST_CASE("the paths are the loader's keys", "[sim][yaml_edit]") {
   // An error of the loader names the key the page edits (control.linear.max_mps).
   const std::string path = kRobots + "skid4.yaml";
   const std::string saved = apply_yaml_edits(slurp(path), {{"control.linear.max_mps", "-1"}});
