@@ -173,6 +173,18 @@ TEST_CASE("an edit that cannot apply names its path and changes nothing", "[sim]
   CHECK_THROWS_AS(yaml_scalars("a: [1, 2"), std::runtime_error);
 }
 
+TEST_CASE("YAML an edit in place cannot change alone is refused, not changed otherwise", "[sim][yaml_edit]") {
+  // An anchored value is also its aliases' value; a block scalar spans lines.
+  for (const auto& [text, path] : std::vector<std::pair<std::string, std::string>>{
+           {"a: &x 1\nb: *x\n", "a"}, {"a: &x 1\nb: *x\n", "b"}, {"a: |\n  two\n  lines\n", "a"},
+           {"a: plain\n  continued\n", "a"}, {"- x: 1\n  y: 2\n", "[0].z"}}) {
+    INFO(text << " " << path);
+    CHECK_THROWS_AS(apply_yaml_edits(text, {{path, "9"}}), YamlEditError);
+  }
+  CHECK(apply_yaml_edits("a: {b: 1, }\n", {{"a.c", "2"}}) == "a: {b: 1, c: 2 }\n");
+  CHECK(apply_yaml_edits("a: {b: 1  # one\n   }\n", {{"a.c", "2"}}) == "a: {b: 1, c: 2  # one\n   }\n");
+}
+
 TEST_CASE("the paths are the loader's keys", "[sim][yaml_edit]") {
   // An error of the loader names the key the page edits (control.linear.max_mps).
   const std::string path = kRobots + "skid4.yaml";
