@@ -115,8 +115,9 @@ std::optional<std::vector<sim::YamlEdit>> robot_edits_from_json(const Json::Valu
     if (!e.isObject()) return *error = where + ": expected {path, value}", std::nullopt;
     const Json::Value &path = e["path"], &value = e["value"];
     if (!path.isString()) return *error = where + ".path: expected a string", std::nullopt;
-    if (!value.isString() && !value.isNumeric() && !value.isBool())
-      return *error = where + ".value: expected a string", std::nullopt;
+    // Numbers as the page typed them: a JSON number's text is not (0.3 → 0.29999999999999999).
+    if (!value.isString() && !value.isBool() && !(value.isIntegral() && !value.isDouble()))
+      return *error = where + ".value: expected the value as a string (\"0.3\")", std::nullopt;
     sim::YamlEdit edit{path.asString(), value.asString()};
     if (edit.path.size() > 1000 || edit.value.size() > kMaxText)
       return *error = where + ": longer than 10000 characters", std::nullopt;

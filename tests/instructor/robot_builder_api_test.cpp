@@ -178,6 +178,8 @@ TEST_CASE("robot builder: list, read, check with line and key, save in place, 40
     CHECK(http.Post(url, "not json", "application/json")->status == 400);
     CHECK(http.Post(url, R"({"edits": {"path": 1}, "version": "x"})", "application/json")->status == 400);
     CHECK(http.Post(url, R"({"edits": [{"path": "a"}]})", "application/json")->status == 400);
+    CHECK(http.Post(url, R"({"edits": [{"path": "control.linear.max_mps", "value": 0.3}], "version": "x"})",
+                    "application/json")->status == 400);  // a number's JSON text is not what was typed
     CHECK(http.Post(url, edits_body({}, ""), "application/json")->status == 400);  // no version
     CHECK(slurp(file) == shipped);
   }
