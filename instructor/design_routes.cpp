@@ -88,6 +88,15 @@ void handle_save(DesignFolder& folder, const DesignKind& kind, const Req& req, R
   const auto check = body_check(folder, kind, name, req, res, &body);
   if (!check) return;
   if (!body["version"].isString()) return reply_json_error(res, 400, "version: expected the version the page loaded");
+  const std::string loaded = body["version"].asString();
+  // Changed on disk since the page loaded it: a conflict, whatever the check
+  // says (a builder that edits the disk's text checked edits on another text).
+  SaveOutcome on_disk;
+  try {
+    on_disk.version = folder.read(name).version;
+  } catch (const std::exception&) {
+  }
+  if (on_disk.version != loaded) return reply_json(res, conflict_json(name, loaded, on_disk), 409);
   // A file its program would refuse is not written over one it loads.
   if (!check->errors.empty()) {
     Json::Value v = design_check_json(*check);
@@ -96,11 +105,11 @@ void handle_save(DesignFolder& folder, const DesignKind& kind, const Req& req, R
   }
   SaveOutcome saved;
   try {
-    saved = folder.save(name, check->yaml, body["version"].asString());
+    saved = folder.save(name, check->yaml, loaded);
   } catch (const std::exception& e) {
     return reply_json_error(res, 500, e.what());
   }
-  if (saved.status == SaveStatus::Conflict) return reply_json(res, conflict_json(name, body["version"].asString(), saved), 409);
+  if (saved.status == SaveStatus::Conflict) return reply_json(res, conflict_json(name, loaded, saved), 409);
   Json::Value v;
   v["file"] = name;
   v["saved"] = true;

@@ -19,7 +19,10 @@ add_library(rise_instructor_web
   builder_routes.cpp
   design_routes.cpp
   world_builder.cpp
-  world_builder_routes.cpp)
+  world_builder_routes.cpp
+  sandbox.cpp
+  robot_builder.cpp
+  robot_builder_routes.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs

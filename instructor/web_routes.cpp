@@ -18,6 +18,7 @@
 #include "hil/panel_state_message.hpp"
 #include "instructor/builder_routes.hpp"
 #include "instructor/world_builder_routes.hpp"
+#include "instructor/robot_builder_routes.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
@@ -367,6 +368,7 @@ void add_routes(httplib::Server& http, const WebRouteContext& context) {
             [ctx](const Req& req, Res& res) { handle_sim_control(*ctx, req, res); });
   add_builder_routes(http, ctx->settings.designs_dir);
   add_world_builder_routes(http, ctx->settings.worlds_dir);
+  add_robot_builder_routes(http, {ctx->settings.robots_dir, ctx->settings.world_file, ctx->settings.lcm_url});
 }
 
 }  // namespace rise::instructor

@@ -53,6 +53,7 @@ struct WebServerSettings {
   std::string designs_dir;
   /// The world files the Environment Builder edits (instructor/world_builder.hpp); "" → off.
   std::string worlds_dir;
+  std::string robots_dir;  ///< the robot files /robot_builder.html edits (instructor/robot_builder_routes.hpp); "" → off
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;

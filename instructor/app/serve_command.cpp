@@ -32,6 +32,7 @@ struct ServeOptions {
   std::string scenarios_dir = "instructor/scenarios";
   std::string designs = "sim/training/examples";
   std::string worlds = "sim/worlds";
+  std::string robots = "sim/robots";
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
@@ -80,6 +81,7 @@ int serve(const ServeOptions& o) {
     throw std::runtime_error(s.designs_dir + ": cannot open: " +
                              std::strerror(std::filesystem::exists(s.designs_dir) ? ENOTDIR : ENOENT));
   s.worlds_dir = o.worlds.empty() ? "" : panels::find_data_file(o.worlds);
+  s.robots_dir = o.robots.empty() ? "" : panels::find_data_file(o.robots);
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
@@ -122,6 +124,8 @@ void add_serve_command(CLI::App& app) {
                   "the folder of training and task files the builder pages read and write (\"\": builders off)")
       ->capture_default_str();
   cmd->add_option("--worlds", o->worlds, "the folder of world files the Environment Builder reads and writes (\"\": off)")
+      ->capture_default_str();
+  cmd->add_option("--robots", o->robots, "the folder of robot files the Robot Builder reads and writes (\"\": off)")
       ->capture_default_str();
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist, installed or of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();

@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, inputs, configs, training_graph, training_builder, world_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, world_builder, robot_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -61,6 +61,14 @@ case "$target" in
   # The Environment Builder's body (JSON → world → YAML → rise-sim's loader) and world files written back.
   world_builder)
     sources=("$root/instructor/world_builder.cpp" "$root"/sim/{world_writer,world_description}.cpp "$root/panels/yaml_reader.cpp") ;;
+  # The Robot Builder's request body: its edits written in place into a
+  # robot's text (sim/yaml_edit.cpp) and loaded as rise-sim loads it;
+  # web_json.cpp draws the view (its message types by lcm-gen here).
+  robot_builder)
+    sources=("$root"/instructor/{robot_builder,web_json,trainee_directory}.cpp "$root"/msgs/{channels,publisher_session,failsafe}.cpp
+             "$root"/sim/{yaml_edit,robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp
+             "$root/panels/yaml_reader.cpp")
+    ;;
   urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
   mesh) sources=("$root/sim/mesh_file.cpp") ;;
   # The messages of the multicast group as the instructor takes them (every type by lcm-gen here).
@@ -126,6 +134,11 @@ if [ $rebuild -eq 1 ]; then
     training_builder)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-lyaml-cpp -ljsoncpp)
+      ;;
+    robot_builder)
+      bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen-all" "$root"/msgs/lcmtypes/*.lcm
+      flags=(-I"$work/lcmgen-all" -isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-ljsoncpp -llcm -lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
       ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
@@ -319,6 +332,13 @@ case "$target" in
     printf '\x00%s' '{"world":"w","ground_friction":1,"robot_start":{"xy_m":[0,0],"yaw_deg":0},"robot_starts":[{"xy_m":[1,1],"yaw_deg":90}],"ceiling":{"height_m":2.6,"thickness_m":0.1,"follows_walls":true},"boxes":[{"name":"b","center_m":[3,3,0.3],"size_m":[0.6,0.6,0.6],"yaw_deg":23}],"props":[{"name":"p","kind":"shelf","center_m":[5,5,1],"size_m":[0.4,2,2],"yaw_deg":45}],"walls":[{"name":"w1","from":[-4,-3],"to":[9,-3],"height":2.5,"thickness":0.15,"openings":[{"at_m":3,"width_m":0.9,"height_m":2}]}],"doors":[{"name":"d","hinge":[-1,-3],"width":0.9,"yaw_deg":0,"open_deg_max":100,"break_torque_nm":900}],"stairs":[{"name":"s","start":[0.5,4.25],"yaw_deg":0,"steps":6}],"objects":[{"name":"o","size_m":[0.3,0.3,0.3],"mass_kg":4,"center_m":[6,1.5,0.15]}],"regions":[{"name":"r","min":[7,-2.5,0],"max":[8.5,-1,1.5]}]}' >"$corpus/world.json"
     printf '\x00%s' '{"world":"w","walls":[{"name":"w","from":[0,0],"to":[0,0],"openings":[{"at_m":-1}]}],"doors":[{"name":"w","hinge":[0,0],"width":-1}],"stairs":[{"name":"s","start":[0,0],"steps":0}]}' >"$corpus/errors.json"
     for f in "$root"/sim/worlds/*.yaml; do { printf '\x01'; cat "$f"; } >"$corpus/$(basename "$f")"; done
+  robot_builder)
+    # The page's bodies on skid4.yaml (a limit, an invert added, a picked
+    # button, a bad value, a bad path), and edits of a text of every YAML form.
+    printf '{"version":"x","edits":[{"path":"control.linear.max_mps","value":"0.3"},{"path":"control.linear.invert","value":"true"}]}' >"$corpus/limit.json"
+    printf '{"edits":[{"path":"sounds.horn.button","value":"gripper_open"},{"path":"wheels.max_torque_nm","value":"-1"}]}' >"$corpus/bad.json"
+    printf '{"edits":[{"path":"control.speed_scale.values[2]","value":"two words"},{"path":"control..x","value":"1"}]}' >"$corpus/paths.json"
+    printf 'a: {b: 1, c: "q\\"", d: [1, 2]}  # c\nl:\n  - {x: 1}\n  - y\nm:\n  n: 2\n\0[{"path":"a.e","value":"1"},{"path":"l[0].z","value":"#"},{"path":"m.o.p","value":""}]' >"$corpus/forms"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.
