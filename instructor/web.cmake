@@ -17,7 +17,9 @@ add_library(rise_instructor_web
   design_files.cpp
   training_builder.cpp
   builder_routes.cpp
-  sandbox.cpp)
+  sandbox.cpp
+  task_builder.cpp
+  task_builder_routes.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs

@@ -19,11 +19,13 @@
 #include "instructor/builder_routes.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
+#include "instructor/task_builder_routes.hpp"
 #include "instructor/trainee_directory.hpp"
 #include "instructor/web_json.hpp"
 #include "instructor/web_requests.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/SimControl.hpp"
 
@@ -365,6 +367,7 @@ void add_routes(httplib::Server& http, const WebRouteContext& context) {
   http.Post(R"(/api/sim/([^/]+)/(pause|resume|step|reset))",
             [ctx](const Req& req, Res& res) { handle_sim_control(*ctx, req, res); });
   add_builder_routes(http, ctx->settings.designs_dir);
+  add_task_builder_routes(http, ctx->settings.designs_dir, process::executable_dir(), ctx->settings.lcm_url);
 }
 
 }  // namespace rise::instructor
