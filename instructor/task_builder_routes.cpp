@@ -29,6 +29,7 @@ struct TaskBuilder {
   DesignFolder folder;
   Sandbox sandbox;
   std::string out_dir;  ///< the sandbox's logs and reports
+  std::string station;  ///< the sandbox's trainee id
 };
 
 void reply(Res& res, const Json::Value& v, int status = 200) {
@@ -167,7 +168,7 @@ void handle_try(TaskBuilder& b, const Req& req, Res& res) {
   SandboxRequest request;
   try {
     // The file as saved: what rise-trainer loads is what the user saved.
-    request = sandbox_request_for_task(b.folder.path(name), kSandboxStation, b.out_dir);
+    request = sandbox_request_for_task(b.folder.path(name), b.station, b.out_dir);
     tr::check_against_world(tr::load_task_description(request.task_file),
                             sim::load_world_description(request.world_file));
   } catch (const std::exception& e) {
@@ -180,7 +181,7 @@ void handle_try(TaskBuilder& b, const Req& req, Res& res) {
     return reply_error(res, 500, e.what());
   }
   v["file"] = name;
-  v["panel"] = std::string("panel.html?id=") + kSandboxStation;
+  v["panel"] = "panel.html?id=" + b.station;
   reply(res, v);
 }
 
@@ -196,7 +197,8 @@ void add_task_builder_routes(httplib::Server& http, const std::string& designs_d
                              const std::string& lcm_url) {
   auto b = std::shared_ptr<TaskBuilder>(new TaskBuilder{
       DesignFolder(designs_dir), Sandbox(bin_dir, lcm_url),
-      (fs::temp_directory_path() / ("rise-task-builder-" + std::to_string(::getpid()))).string()});
+      (fs::temp_directory_path() / ("rise-task-builder-" + std::to_string(::getpid()))).string(),
+      "sandbox-" + std::to_string(::getpid())});
   http.Get("/api/builder/tasks", [b](const Req&, Res& res) {
     if (b->folder.dir().empty()) return reply_error(res, 503, "no designs folder (rise-instructor serve --designs DIR)");
     reply(res, task_files_json(b->folder.dir(), b->folder.list(".yaml")));

@@ -9,8 +9,10 @@
 //                                        changed on disk since `version` ("" : must be new); 422
 //                                        with the errors when it would not load
 //   POST /api/builder/task/NAME/try      runs the saved file in a sandbox (instructor/sandbox.hpp):
-//                                        rise-sim + rise-trainer run-task on station "sandbox";
-//                                        the user drives with panel.html?id=sandbox
+//                                        rise-sim + rise-trainer run-task on station
+//                                        "sandbox-<server pid>" (apart from another server's on
+//                                        the same LCM); the user drives with the virtual panel
+//                                        page the reply names (panel.html?id=STATION)
 //   GET  /api/builder/try                the sandbox's state and, once the task ended, its report
 //   GET  /api/builder/try/report.html    the report as rise-trainer wrote it
 //   POST /api/builder/try/stop           stops it (the trainer writes the report: interrupted)
@@ -23,9 +25,6 @@ class Server;
 }
 
 namespace rise::instructor {
-
-/// The station id the sandbox drives on.
-inline constexpr const char* kSandboxStation = "sandbox";
 
 /// Adds the routes; `designs_dir` "" answers 503 on each. The sandbox starts
 /// the programs of `bin_dir` on `lcm_url` (the server's).

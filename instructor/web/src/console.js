@@ -4,6 +4,7 @@ import { api, getJson, postJson, stream, el, token, ROBOT_COLOUR } from './commo
 import { createView, camera, buildWorld, robotMesh as makeRobotMesh, poseRobot, placeObjects, onboardMount, placeOnboard,
   placeChase, cameraBlackedOut, renderInto, canvasStats } from './scene3d.js';
 import { foldEvent, lineText } from './event_fold.js';
+import { worldBounds, mapView, drawWorld, drawObjects, drawRobot } from './world_map.js';
 
 const state = {
   world: null,
@@ -31,67 +32,24 @@ function updatePanelLink() {
   document.getElementById('builder-link').href = 'training.html?token=' + encodeURIComponent(token);
 }
 
-// ---- top-down map -------------------------------------------------------
-function worldBounds() {
-  let min = [Infinity, Infinity], max = [-Infinity, -Infinity];
-  const grow = (x, y) => { min = [Math.min(min[0], x), Math.min(min[1], y)]; max = [Math.max(max[0], x), Math.max(max[1], y)]; };
-  for (const b of state.world.boxes) {
-    const r = Math.hypot(b.size[0], b.size[1]) / 2;
-    grow(b.center[0] - r, b.center[1] - r); grow(b.center[0] + r, b.center[1] + r);
-  }
-  for (const r of state.world.regions) { grow(r.min[0], r.min[1]); grow(r.max[0], r.max[1]); }
-  for (const t of state.trainees.values()) for (const p of t.trail) grow(p[0], p[1]);
-  grow(state.world.robot_start[0] - 3, state.world.robot_start[1] - 3);
-  grow(state.world.robot_start[0] + 3, state.world.robot_start[1] + 3);
-  return { min, max };
-}
-
+// ---- top-down map (world_map.js) -----------------------------------------
 function drawMap() {
   const c = document.getElementById('map'), g = c.getContext('2d');
   g.fillStyle = '#101215'; g.fillRect(0, 0, c.width, c.height);
   if (!state.world) return;
-  const { min, max } = worldBounds();
-  const margin = 0.5;
-  const s = Math.min(c.width / (max[0] - min[0] + 2 * margin), c.height / (max[1] - min[1] + 2 * margin));
-  // World x to the right, y up.
-  const px = (x, y) => [(x - min[0] + margin) * s, c.height - (y - min[1] + margin) * s];
-  g.strokeStyle = '#2a2f36'; g.lineWidth = 1;
-  for (let x = Math.floor(min[0]); x <= max[0]; ++x) { const [a] = px(x, 0); g.beginPath(); g.moveTo(a, 0); g.lineTo(a, c.height); g.stroke(); }
-  for (let y = Math.floor(min[1]); y <= max[1]; ++y) { const [, b] = px(0, y); g.beginPath(); g.moveTo(0, b); g.lineTo(c.width, b); g.stroke(); }
-  for (const r of state.world.regions) {
-    const [x0, y0] = px(r.min[0], r.max[1]), [x1, y1] = px(r.max[0], r.min[1]);
-    g.fillStyle = 'rgba(46,160,67,0.25)'; g.fillRect(x0, y0, x1 - x0, y1 - y0);
-    g.fillStyle = '#7ee787'; g.font = '10px sans-serif'; g.fillText(r.name, x0 + 2, y0 + 10);
-  }
-  const fills = { wall: '#8b949e', door: '#a0522d', stairs: '#4c6ef5', box: '#6e7681', prop: '#6e5494' };
-  const drawBox = (center, size, yaw, fill) => {
-    g.save();
-    const [cx, cy] = px(center[0], center[1]);
-    g.translate(cx, cy); g.rotate(-yaw);
-    g.fillStyle = fill; g.fillRect(-size[0] * s / 2, -size[1] * s / 2, size[0] * s, size[1] * s);
-    g.restore();
-  };
-  for (const b of state.world.boxes) drawBox(b.center, b.size, b.yaw, fills[b.kind] || fills.prop);
+  const trails = [...state.trainees.values()].flatMap((t) => t.trail);
+  const view = mapView(c, worldBounds(state.world, trails));
+  drawWorld(g, view, state.world);
   for (const [id, t] of state.trainees) {
     const r = t.robot_state;
-    const objects = r ? r.objects : state.world.objects.map((o) => ({ name: o.name, position: o.center }));
-    for (const o of objects) {
-      const w = state.world.objects.find((x) => x.name === o.name);
-      drawBox(o.position, w ? w.size : [0.3, 0.3, 0.3], 0, '#e3b341');
-    }
+    drawObjects(g, view, state.world, r ? r.objects : null);
     if (t.trail.length > 1) {
       g.strokeStyle = id === state.selected ? 'rgba(255,90,0,0.8)' : 'rgba(255,255,255,0.4)'; g.lineWidth = 2;
       g.beginPath();
-      t.trail.forEach((p, i) => { const [x, y] = px(p[0], p[1]); if (i) g.lineTo(x, y); else g.moveTo(x, y); });
+      t.trail.forEach((p, i) => { const [x, y] = view.px(p[0], p[1]); if (i) g.lineTo(x, y); else g.moveTo(x, y); });
       g.stroke();
     }
-    if (r) {
-      drawBox(r.position, [0.8, 0.6], r.yaw, colourHex);
-      const [x, y] = px(r.position[0], r.position[1]);
-      g.strokeStyle = '#fff'; g.beginPath(); g.moveTo(x, y);
-      g.lineTo(x + Math.cos(r.yaw) * 0.6 * s, y - Math.sin(r.yaw) * 0.6 * s); g.stroke();
-      g.fillStyle = '#fff'; g.font = '11px sans-serif'; g.fillText(id, x + 8, y - 8);
-    }
+    if (r) drawRobot(g, view, r.position, r.yaw, colourHex, id);
   }
 }
 
