@@ -85,7 +85,7 @@ run(async () => {
     await settled(page, 'ok');
     result.events = await page.evaluate(() => window.riseTaskBuilder.state.task.events.map((e) => e.name));
     result.end_on = await page.evaluate(() => window.riseTaskBuilder.state.task.end_on);
-    await page.screenshot({ path: path.join(outDir, 'task_builder.png'), fullPage: true });
+    await page.screenshot({ path: path.join(outDir, 'task_builder_edit.png'), fullPage: true });
     await page.click('#save');
     await page.waitForFunction(() => document.getElementById('save-state').textContent === 'saved', null, { timeout: 10000 });
     result.yaml = await page.$eval('#yaml', (e) => e.textContent);
@@ -110,7 +110,7 @@ run(async () => {
     result.try_state = await page.$eval('#try-state', (e) => e.textContent);
     const html = await page.$eval('#report-html', (a) => a.href);
     result.report_html_status = (await (await browser.newPage()).goto(html)).status();
-    await page.screenshot({ path: path.join(outDir, 'task_builder_report.png'), fullPage: true });
+    await page.screenshot({ path: path.join(outDir, 'task_builder.png'), fullPage: true });
     result.page_errors = errors;
   } finally {
     await browser.close();
