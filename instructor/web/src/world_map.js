@@ -12,8 +12,10 @@ export function worldBounds(world, points = []) {
   let min = [Infinity, Infinity], max = [-Infinity, -Infinity];
   const grow = (x, y) => { min = [Math.min(min[0], x), Math.min(min[1], y)]; max = [Math.max(max[0], x), Math.max(max[1], y)]; };
   for (const b of world.boxes) {
-    const r = Math.hypot(b.size[0], b.size[1]) / 2;
-    grow(b.center[0] - r, b.center[1] - r); grow(b.center[0] + r, b.center[1] + r);
+    // The turned box's own extent (a long wall's circle would add metres of nothing).
+    const c = Math.abs(Math.cos(b.yaw || 0)), s = Math.abs(Math.sin(b.yaw || 0));
+    const hx = (c * b.size[0] + s * b.size[1]) / 2, hy = (s * b.size[0] + c * b.size[1]) / 2;
+    grow(b.center[0] - hx, b.center[1] - hy); grow(b.center[0] + hx, b.center[1] + hy);
   }
   for (const r of world.regions) { grow(r.min[0], r.min[1]); grow(r.max[0], r.max[1]); }
   for (const p of points) grow(p[0], p[1]);
