@@ -4,6 +4,7 @@
 #include <json/json.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <filesystem>
 #include <memory>
 
@@ -28,8 +29,9 @@ using Res = httplib::Response;
 struct TaskBuilder {
   DesignFolder folder;
   Sandbox sandbox;
-  std::string out_dir;  ///< the sandbox's logs and reports
+  std::string out_dir;  ///< the sandbox's logs and reports: one folder per try (try-1, try-2, ...)
   std::string station;  ///< the sandbox's trainee id
+  std::atomic<int> tries{0};
 };
 
 void reply(Res& res, const Json::Value& v, int status = 200) {
@@ -168,7 +170,8 @@ void handle_try(TaskBuilder& b, const Req& req, Res& res) {
   SandboxRequest request;
   try {
     // The file as saved: what rise-trainer loads is what the user saved.
-    request = sandbox_request_for_task(b.folder.path(name), b.station, b.out_dir);
+    const std::string out = (fs::path(b.out_dir) / ("try-" + std::to_string(++b.tries))).string();
+    request = sandbox_request_for_task(b.folder.path(name), b.station, out);
     tr::check_against_world(tr::load_task_description(request.task_file),
                             sim::load_world_description(request.world_file));
   } catch (const std::exception& e) {

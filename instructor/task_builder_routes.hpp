@@ -12,7 +12,9 @@
 //                                        rise-sim + rise-trainer run-task on station
 //                                        "sandbox-<server pid>" (apart from another server's on
 //                                        the same LCM); the user drives with the virtual panel
-//                                        page the reply names (panel.html?id=STATION)
+//                                        page the reply names (panel.html?id=STATION); each
+//                                        try's logs and report in its own folder of
+//                                        $TMPDIR/rise-task-builder-<server pid>/try-N
 //   GET  /api/builder/try                the sandbox's state and, once the task ended, its report
 //   GET  /api/builder/try/report.html    the report as rise-trainer wrote it
 //   POST /api/builder/try/stop           stops it (the trainer writes the report: interrupted)

@@ -6,7 +6,8 @@
 // rise-sim with rise-trainer run-task while the check drives the robot with
 // the virtual panel page into the region; the report on the page and the
 // report file score the new event, and the saved file passes
-// `rise-trainer check`.
+// `rise-trainer check`; a second try stopped from the page ends with
+// rise-trainer's report (interrupted).
 
 #include <catch2/catch.hpp>
 
@@ -55,7 +56,7 @@ TEST_CASE("the Task Builder places a region and an event by mouse, saves, and it
   const auto r = read_result((dir / "task_check.log").string());
   INFO(read_file((dir / "task_check.log").string()));
   const fs::path sandbox_dir = fs::temp_directory_path() / ("rise-task-builder-" + std::to_string(server.process.pid()));
-  INFO(read_file((sandbox_dir / "trainer.log").string()));
+  INFO(read_file((sandbox_dir / "try-1" / "trainer.log").string()));
   REQUIRE(node_code == 0);
   REQUIRE_FALSE(r.isMember("error"));
   CHECK(r["page_errors"].size() == 0);
@@ -110,10 +111,16 @@ TEST_CASE("the Task Builder places a region and an event by mouse, saves, and it
   for (const auto& row : r["report_rows"]) shown |= row.asString() == "in_drill_zone";
   CHECK(shown);
   CHECK(r["report_html_status"].asInt() == 200);
-  const auto file_report = parse_json(read_file((sandbox_dir / "task_approach_object.json").string()));
+  const auto file_report = parse_json(read_file((sandbox_dir / "try-1" / "task_approach_object.json").string()));
   CHECK(file_report["counts"]["in_drill_zone"].asInt() == 1);
   CHECK(file_report["time_limit_s"].asDouble() == 60);
   CHECK(is_png(screens + "/task_builder.png"));
+  // Stopped from the page: rise-trainer ended the task, its report shown.
+  CHECK(r["stopped_report"]["end_reason"].asString() == "interrupted");
+  CHECK(r["stopped_report"]["counts"]["in_drill_zone"].asInt() == 0);
+  CHECK(r["stopped_state"].asString().rfind("ended", 0) == 0);
+  CHECK(parse_json(read_file((sandbox_dir / "try-2" / "task_approach_object.json").string()))["end_reason"].asString() ==
+        "interrupted");
   server.process.stop();
   fs::remove_all(dir);
   fs::remove_all(sandbox_dir);

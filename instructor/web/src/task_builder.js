@@ -397,6 +397,7 @@ function onUp() {
 // ---- try it -------------------------------------------------------------------
 async function tryIt() {
   $('report').hidden = true;
+  window.riseTaskBuilder.report = null;
   const r = await postJson(`/api/builder/task/${encodeURIComponent(state.file)}/try`, {});
   const body = await r.json();
   if (!r.ok) { $('try-state').textContent = 'not started: ' + body.error; $('try-state').className = 'bad'; return; }

@@ -7,7 +7,8 @@
 // reach_region event on the new region with points and makes it end the
 // task; raises the time limit; saves; then "Try it": drives the robot with
 // the virtual panel page of the sandbox station (dead-man + forward keys)
-// into the region and reads the report the page shows.
+// into the region and reads the report the page shows; tries again and
+// stops it from the page (the report: interrupted).
 // usage: node task_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR
 const path = require('node:path');
 const { launch, run } = require('./browser.cjs');
@@ -111,6 +112,16 @@ run(async () => {
     const html = await page.$eval('#report-html', (a) => a.href);
     result.report_html_status = (await (await browser.newPage()).goto(html)).status();
     await page.screenshot({ path: path.join(outDir, 'task_builder.png'), fullPage: true });
+
+    // Again, stopped from the page before anyone drives: rise-trainer ends the task and reports it.
+    await page.click('#try');
+    await page.waitForFunction(() => document.getElementById('try-state').className === 'ok', null, { timeout: 20000 });
+    await page.waitForFunction(() => document.getElementById('report').hidden, null, { timeout: 5000 });
+    await page.click('#stop');
+    await page.waitForFunction(() => window.riseTaskBuilder.report && window.riseTaskBuilder.report.end_reason === 'interrupted',
+                               null, { timeout: 20000 });
+    result.stopped_report = await page.evaluate(() => window.riseTaskBuilder.report);
+    result.stopped_state = await page.$eval('#try-state', (e) => e.textContent);
     result.page_errors = errors;
   } finally {
     await browser.close();
