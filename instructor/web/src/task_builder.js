@@ -8,7 +8,8 @@
 // as `rise-trainer check` checks a task, its errors shown with their line
 // and key; Save writes the YAML atomically or says the file changed on disk
 // (409). "Try it" runs the saved task in rise-sim with rise-trainer on the
-// sandbox station, driven from the virtual panel page, and shows the report.
+// sandbox station, opens the virtual panel page of that station (a window
+// of its own) for the user to drive, and shows the report when the task ends.
 import { getJson, postJson, el, token, ROBOT_COLOUR } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
 import { worldBounds, mapView, drawWorld, drawObjects, drawRobot, drawRegion } from './world_map.js';
@@ -398,11 +399,19 @@ function onUp() {
 async function tryIt() {
   $('report').hidden = true;
   window.riseTaskBuilder.report = null;
+  // The panel's window is opened in the click itself (a browser blocks one
+  // opened later), and sent to the station's page once the server answers.
+  const panel = window.open('', 'rise-sandbox-panel');
   const r = await postJson(`/api/builder/task/${encodeURIComponent(state.file)}/try`, {});
   const body = await r.json();
-  if (!r.ok) { $('try-state').textContent = 'not started: ' + body.error; $('try-state').className = 'bad'; return; }
+  if (!r.ok) {
+    if (panel) panel.close();
+    $('try-state').textContent = 'not started: ' + body.error; $('try-state').className = 'bad';
+    return;
+  }
   $('panel-link').href = `${body.panel}&token=${encodeURIComponent(token)}`;
   $('panel-link').hidden = false;
+  if (panel) panel.location.href = $('panel-link').href;
   $('stop').disabled = false;
   showTry(body);
   clearInterval(state.polling);

@@ -6,7 +6,7 @@
 // loader's error shows inline with line and key) and deletes it; adds a
 // reach_region event on the new region with points and makes it end the
 // task; raises the time limit; saves; then "Try it": drives the robot with
-// the virtual panel page of the sandbox station (dead-man + forward keys)
+// the virtual panel page it opened for the sandbox station (dead-man + forward keys)
 // into the region and reads the report the page shows; tries again and
 // stops it from the page (the report: interrupted).
 // usage: node task_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR
@@ -92,13 +92,14 @@ run(async () => {
     result.yaml = await page.$eval('#yaml', (e) => e.textContent);
 
     // Try it: the saved task in rise-sim, driven from the virtual panel page.
+    const popup = page.waitForEvent('popup', { timeout: 20000 });
     await page.click('#try');
     await page.waitForFunction(() => document.getElementById('try-state').className === 'ok', null, { timeout: 20000 });
-    const panelUrl = await page.$eval('#panel-link', (a) => a.href);
-    result.panel_url = panelUrl.replace(/token=[^&]*/, 'token=T');
-    const panel = await browser.newPage();
+    // The page opened the station's virtual panel in a window of its own: the user drives there.
+    const panel = await popup;
     panel.on('pageerror', (e) => errors.push('panel: ' + String(e)));
-    await panel.goto(panelUrl);
+    await panel.waitForURL(/panel\.html\?id=/, { timeout: 20000 });
+    result.panel_url = panel.url().replace(/token=[^&]*/, 'token=T');
     await panel.waitForFunction(() => window.risePanel && window.risePanel.state, null, { timeout: 20000 });
     await panel.keyboard.down('Space');
     await panel.keyboard.down('KeyW');
