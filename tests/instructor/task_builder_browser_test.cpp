@@ -90,6 +90,12 @@ TEST_CASE("the Task Builder places a region and an event by mouse, saves, and it
   CHECK(saved == r["yaml"].asString());
   CHECK(saved.find("  - {name: in_drill_zone, kind: reach_region, region: drill_zone, points: 7}") != std::string::npos);
   CHECK(saved.find("time_limit_s: 60\n") != std::string::npos);
+  // The threshold edited in the form, in its place.
+  CHECK(r["edit_form"]["kind"].asString() == "time_exceeded");
+  CHECK(r["edit_form"]["after_s"].asString() == "20");
+  CHECK(text(r["events"]) ==
+        text(parse_json(R"(["near_object","object_touched","slow","bump","in_drill_zone"])")));
+  CHECK(saved.find("  - {name: slow, kind: time_exceeded, after_s: 25, points: -5}") != std::string::npos);
   CHECK(saved.find("yaw_deg: 36.87}") != std::string::npos);
   CHECK(saved.find("# Mission 1 of the example training") == 0);
   const auto checked = trainer_check(dir, file, {});

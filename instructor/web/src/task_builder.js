@@ -20,6 +20,7 @@ const colourHex = '#' + ROBOT_COLOUR.toString(16).padStart(6, '0');
 const state = {
   file: '', version: '', task: null, world: null, kinds: [], check: null, checkSeq: 0, dirty: false,
   view: null, drag: null, picked: { region: '', object: '' }, polling: null,
+  editing: -1,  // the event the form updates (-1: it adds one)
 };
 let conflict = null;
 
@@ -45,6 +46,8 @@ async function openFile(file) {
   const r = await getJson('/api/builder/task/' + encodeURIComponent(file));
   state.file = file;
   $('file').value = file;
+  state.editing = -1;
+  $('add-event').textContent = 'Add event';
   state.version = r.version;
   state.dirty = false;
   conflict.hide();
@@ -204,8 +207,11 @@ function renderEvents(bad) {
       });
       return c;
     };
+    const edit = el('button', { class: 'edit-event', 'data-event': e.name }, 'edit');
+    edit.addEventListener('click', () => editEvent(i));
     const del = el('button', { class: 'delete-event', 'data-event': e.name }, 'delete');
     del.addEventListener('click', () => {
+      state.editing = -1;
       t.events.splice(i, 1);
       t.end_on = t.end_on.filter((n) => n !== e.name);
       t.success = t.success.filter((n) => n !== e.name);
@@ -213,7 +219,7 @@ function renderEvents(bad) {
     });
     rows.push(el('tr', { class: bad.has(`events[${i}]`) ? 'bad' : '', 'data-event': e.name }, el('td', {}, e.name), el('td', {}, e.kind),
                  el('td', {}, paramText(e)), el('td', {}, points), el('td', {}, box('end_on', 'end-on')),
-                 el('td', {}, box('success', 'success')), el('td', {}, e.comment || ''), el('td', {}, del)));
+                 el('td', {}, box('success', 'success')), el('td', {}, e.comment || ''), el('td', {}, edit, del)));
   });
   $('events').replaceChildren(...rows);
 }
@@ -257,6 +263,23 @@ function syncPicked() {
   }
 }
 
+// An event's values into the form; "Update event" then writes them back in its place.
+function editEvent(i) {
+  const e = state.task.events[i];
+  state.editing = i;
+  $('event-name').value = e.name;
+  $('event-kind').value = e.kind;
+  renderParams();
+  for (const p of kindOf(e.kind).params) {
+    const v = e[p.key];
+    $('param-' + p.key).value = p.type === 'names' ? (v || []).join(', ') : v;
+  }
+  $('event-points').value = e.points;
+  $('event-max').value = e.max_count;
+  $('event-comment').value = e.comment || '';
+  $('add-event').textContent = 'Update event';
+}
+
 function addEvent() {
   const name = $('event-name').value.trim(), k = kindOf($('event-kind').value);
   if (!name || !k) return;
@@ -269,7 +292,16 @@ function addEvent() {
     else if (p.type === 'names') e[p.key] = v.split(',').map((s) => s.trim()).filter(Boolean);
     else e[p.key] = v;
   }
-  state.task.events.push(e);
+  const t = state.task, old = state.editing >= 0 ? t.events[state.editing] : null;
+  if (old) {
+    // A renamed event keeps its place in end_on and success.
+    t.events[state.editing] = e;
+    for (const list of ['end_on', 'success']) t[list] = t[list].map((n) => (n === old.name ? e.name : n));
+  } else {
+    t.events.push(e);
+  }
+  state.editing = -1;
+  $('add-event').textContent = 'Add event';
   $('event-name').value = '';
   $('event-comment').value = '';
   changed();

@@ -5,7 +5,7 @@
 // robot and resizes it by a corner; adds an event whose name is taken (the
 // loader's error shows inline with line and key) and deletes it; adds a
 // reach_region event on the new region with points and makes it end the
-// task; raises the time limit; saves; then "Try it": drives the robot with
+// task; edits the time_exceeded event's threshold; raises the time limit; saves; then "Try it": drives the robot with
 // the virtual panel page it opened for the sandbox station (dead-man + forward keys)
 // into the region and reads the report the page shows; tries again and
 // stops it from the page (the report: interrupted).
@@ -83,6 +83,13 @@ run(async () => {
     await addEvent(page, 'in_drill_zone', 'reach_region', 7, ['region', 'drill_zone']);
     await settled(page, 'ok');
     await page.check('input.end-on[data-event="in_drill_zone"]');
+    await settled(page, 'ok');
+    // A threshold edited: "slow" fires at 25 s instead of 20.
+    await page.click('button.edit-event[data-event="slow"]');
+    result.edit_form = { kind: await page.$eval('#event-kind', (e) => e.value), after_s: await page.$eval('#param-after_s', (e) => e.value) };
+    await page.fill('#param-after_s', '');
+    await page.type('#param-after_s', '25');
+    await page.click('#add-event');
     await settled(page, 'ok');
     result.events = await page.evaluate(() => window.riseTaskBuilder.state.task.events.map((e) => e.name));
     result.end_on = await page.evaluate(() => window.riseTaskBuilder.state.task.end_on);
