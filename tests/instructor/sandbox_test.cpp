@@ -58,7 +58,7 @@ struct Scratch {
 
 }  // namespace
 
-TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer; stop writes the report", "[instructor][sandbox]") {
+TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer and stopping it writes the report", "[instructor][sandbox]") {
   Scratch scratch;
   const std::string station = "sandbox" + std::to_string(::getpid());
   Sandbox sandbox(kBin, rise::msgs::kDefaultLcmUrl);
@@ -93,7 +93,7 @@ TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer; stop writes the r
   CHECK(report["end_reason"].asString() == "interrupted");
 }
 
-TEST_CASE("a sandbox start stops the earlier run; without a task only rise-sim runs", "[instructor][sandbox]") {
+TEST_CASE("a sandbox start stops the earlier run and without a task only rise-sim runs", "[instructor][sandbox]") {
   Scratch scratch;
   const std::string station = "sandboxb" + std::to_string(::getpid());
   Sandbox sandbox(kBin, rise::msgs::kDefaultLcmUrl);
