@@ -2,6 +2,7 @@
 
 #include <httplib.h>
 
+#include "instructor/training_builder.hpp"
 #include "instructor/web_json.hpp"
 #include "instructor/web_requests.hpp"
 
@@ -23,9 +24,15 @@ void reply_json_error(Res& res, int status, const std::string& message) {
 
 namespace {
 
+// "designs" of "--designs DIR": what the user calls the folder.
+std::string folder_word(const DesignKind& kind) {
+  const std::string flag = kind.flag.substr(0, kind.flag.find(' '));
+  return flag.substr(flag.find_first_not_of('-'));
+}
+
 bool folder_on(const DesignFolder& folder, const DesignKind& kind, Res& res) {
   if (folder.dir().empty())
-    reply_json_error(res, 503, "no " + kind.plural + " folder (rise-instructor serve " + kind.flag + ")");
+    reply_json_error(res, 503, "no " + folder_word(kind) + " folder (rise-instructor serve " + kind.flag + ")");
   return !folder.dir().empty();
 }
 
@@ -125,7 +132,7 @@ std::string design_name(const DesignFolder& folder, const DesignKind& kind, cons
   const std::string name = req.matches[1];
   if (!valid_design_name(name, ".yaml")) {
     reply_json_error(res, 400,
-                     "file '" + name + "': a .yaml name of the " + kind.plural + " folder (letters, digits, _ . -)");
+                     "file '" + name + "': a .yaml name of the " + folder_word(kind) + " folder (letters, digits, _ . -)");
     return "";
   }
   return name;
@@ -140,19 +147,10 @@ std::string disk_text(const DesignFolder& folder, const std::string& name) {
 }
 
 Json::Value design_check_json(const DesignCheck& check) {
-  Json::Value v = check.extra.isObject() ? check.extra : Json::Value(Json::objectValue);
-  v["yaml"] = check.yaml;
-  v["ok"] = check.errors.empty();
-  Json::Value errors(Json::arrayValue);
-  for (const auto& e : check.errors) {
-    Json::Value j;
-    j["file"] = e.file;
-    j["line"] = e.line;
-    j["key"] = e.key;
-    j["message"] = e.message;
-    errors.append(j);
-  }
-  v["errors"] = errors;
+  Json::Value v = check_json(TrainingCheck{check.yaml, check.errors});
+  if (check.extra.isObject())
+    for (const auto& key : check.extra.getMemberNames())
+      if (!v.isMember(key)) v[key] = check.extra[key];
   return v;
 }
 

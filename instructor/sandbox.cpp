@@ -68,10 +68,15 @@ SandboxStatus Sandbox::start(const SandboxRequest& request) {
     trainer = {bin_dir_ + "/rise-trainer", "run-task", request.task_file, "--id", request.station,
                "--lcm", lcm_url_, "--out", request.out_dir};
   }
-  launcher_.run([&] {
-    sim_ = std::make_unique<process::ChildProcess>(sim, (out / "sim.log").string());
-    if (!trainer.empty()) trainer_ = std::make_unique<process::ChildProcess>(trainer, (out / "trainer.log").string());
-  });
+  try {
+    launcher_.run([&] {
+      sim_ = std::make_unique<process::ChildProcess>(sim, (out / "sim.log").string());
+      if (!trainer.empty()) trainer_ = std::make_unique<process::ChildProcess>(trainer, (out / "trainer.log").string());
+    });
+  } catch (...) {
+    stop_locked();  // no simulator left without its trainer
+    throw;
+  }
   active_ = true;
   task_exit_code_ = -1;
   return status_locked();

@@ -6,7 +6,6 @@
 #include <stdexcept>
 
 #include "instructor/design_files.hpp"
-#include "instructor/design_routes.hpp"
 #include "panels/yaml_reader.hpp"
 #include "sim/training/task_description.hpp"
 #include "sim/training/training_writer.hpp"
@@ -200,7 +199,20 @@ TrainingCheck check_training(const tr::TrainingGraph& graph, const std::string& 
 }
 
 Json::Value check_json(const TrainingCheck& check) {
-  return design_check_json(DesignCheck{check.yaml, check.errors, Json::Value()});
+  Json::Value v;
+  v["yaml"] = check.yaml;
+  v["ok"] = check.errors.empty();
+  Json::Value errors(Json::arrayValue);
+  for (const auto& e : check.errors) {
+    Json::Value j;
+    j["file"] = e.file;
+    j["line"] = e.line;
+    j["key"] = e.key;
+    j["message"] = e.message;
+    errors.append(j);
+  }
+  v["errors"] = errors;
+  return v;
 }
 
 Json::Value training_files_json(const std::string& dir, const std::vector<std::string>& yaml_files) {

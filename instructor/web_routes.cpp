@@ -21,11 +21,13 @@
 #include "instructor/robot_builder_routes.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
+#include "instructor/task_builder_routes.hpp"
 #include "instructor/trainee_directory.hpp"
 #include "instructor/web_json.hpp"
 #include "instructor/web_requests.hpp"
 #include "msgs/channels.hpp"
 #include "msgs/clock.hpp"
+#include "process/child_process.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/SimControl.hpp"
 
@@ -369,6 +371,7 @@ void add_routes(httplib::Server& http, const WebRouteContext& context) {
   add_builder_routes(http, ctx->settings.designs_dir);
   add_world_builder_routes(http, ctx->settings.worlds_dir);
   add_robot_builder_routes(http, {ctx->settings.robots_dir, ctx->settings.world_file, ctx->settings.lcm_url});
+  add_task_builder_routes(http, ctx->settings.designs_dir, process::executable_dir(), ctx->settings.lcm_url);
 }
 
 }  // namespace rise::instructor

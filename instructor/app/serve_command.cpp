@@ -94,7 +94,7 @@ int serve(const ServeOptions& o) {
   WebServer server(s);
   server.start();
   spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel), "
-               "/training.html?token=… (Training Builder, {}); LCM {}",
+               "/training.html?token=…, /task_builder.html?token=… (Training and Task Builders, {}); LCM {}",
                hil::io::format_host_port(s.host, static_cast<uint16_t>(server.port())),
                s.designs_dir.empty() ? "off" : s.designs_dir, s.lcm_url);
   std::signal(SIGINT, on_signal);

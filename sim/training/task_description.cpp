@@ -5,6 +5,7 @@
 #include <set>
 
 #include "panels/yaml_reader.hpp"
+#include "sim/training/yaml_comments.hpp"
 
 namespace rise::sim::training {
 
@@ -12,16 +13,21 @@ using panels::YamlReader;
 
 namespace {
 
-struct KindName {
-  TaskEventKind kind;
-  const char* name;
-};
-constexpr KindName kKinds[] = {
-    {TaskEventKind::ReachRegion, "reach_region"},       {TaskEventKind::TimeExceeded, "time_exceeded"},
-    {TaskEventKind::ObjectInRegion, "object_in_region"}, {TaskEventKind::TouchObject, "touch_object"},
-    {TaskEventKind::RobotDamaged, "robot_damaged"},     {TaskEventKind::RobotDisabled, "robot_disabled"},
-    {TaskEventKind::NeutralizeObject, "neutralize_object"}, {TaskEventKind::Collision, "collision"},
-};
+// Every key an event kind may take beyond name/kind/points/max_count; a kind
+// refuses the ones its entry of task_event_kinds() does not list.
+constexpr const char* kParamKeys[] = {"region", "object", "after_s", "hold_s", "within_m", "per", "except"};
+
+bool takes(const TaskEventKindInfo& info, const std::string& key) {
+  for (const auto& p : info.params)
+    if (key == p.key) return true;
+  return false;
+}
+
+std::string kind_names() {
+  std::string out;
+  for (const auto& k : task_event_kinds()) out += (out.empty() ? "" : ", ") + std::string(k.name);
+  return out;
+}
 
 std::string resolve(const std::string& task_file, const std::string& relative) {
   if (relative.empty() || std::filesystem::path(relative).is_absolute()) return relative;
@@ -65,85 +71,104 @@ TaskEventSpec read_event(const YamlReader& r, const YAML::Node& n, const std::st
   const auto kind = task_event_kind(kind_text);
   if (!kind)
     r.fail(n["kind"], where + ".kind",
-           "unknown kind '" + kind_text +
-               "' (reach_region, time_exceeded, object_in_region, touch_object, robot_damaged, robot_disabled, "
-               "neutralize_object, collision)");
+           "unknown kind '" + kind_text + "' (" + kind_names() + ")");
   e.kind = *kind;
   if (n["points"]) e.points = r.as<int>(n["points"], where + ".points");
-  e.max_count = (e.kind == TaskEventKind::Collision || e.kind == TaskEventKind::RobotDamaged) ? 0 : 1;
+  e.max_count = task_event_kind_info(e.kind).default_max_count;
   if (n["max_count"]) {
     e.max_count = r.as<int>(n["max_count"], where + ".max_count");
     if (e.max_count < 0) r.fail(n["max_count"], where + ".max_count", "must be >= 0 (0: no limit)");
   }
-  const auto need = [&](const char* key, std::string& out) {
-    if (!n[key]) r.fail(n, where + "." + key, std::string("missing (kind ") + to_string(e.kind) + " needs it)");
-    out = r.as<std::string>(n[key], where + "." + key);
-  };
-  const auto refuse = [&](const char* key) {
-    if (n[key]) r.fail(n[key], where + "." + key, std::string("not for kind ") + to_string(e.kind));
-  };
-  switch (e.kind) {
-    case TaskEventKind::ReachRegion:
-      need("region", e.region);
-      break;
-    case TaskEventKind::ObjectInRegion:
-      need("region", e.region);
-      need("object", e.object);
-      break;
-    case TaskEventKind::TouchObject:
-    case TaskEventKind::NeutralizeObject:
-      need("object", e.object);
-      break;
-    default:
-      break;
+  const TaskEventKindInfo& info = task_event_kind_info(e.kind);
+  for (const char* key : kParamKeys)
+    if (n[key] && !takes(info, key)) r.fail(n[key], where + "." + key, std::string("not for kind ") + info.name);
+  for (const auto& p : info.params)
+    if (p.required && !n[p.key]) r.fail(n, where + "." + p.key, std::string("missing (kind ") + info.name + " needs it)");
+  if (n["region"]) e.region = r.as<std::string>(n["region"], where + ".region");
+  if (n["object"]) e.object = r.as<std::string>(n["object"], where + ".object");
+  if (n["after_s"]) e.after_s = r.positive(n, "after_s", where, 0.0);
+  if (takes(info, "hold_s")) e.hold_s = r.positive(n, "hold_s", where, 0.0, true);
+  if (takes(info, "within_m")) e.within_m = r.positive(n, "within_m", where, 0.0, true);
+  if (n["per"]) {
+    const auto per = r.as<std::string>(n["per"], where + ".per");
+    if (per != "collision" && per != "second")
+      r.fail(n["per"], where + ".per", "'" + per + "': expected collision or second");
+    e.per_second = per == "second";
   }
-  if (e.kind != TaskEventKind::ReachRegion && e.kind != TaskEventKind::ObjectInRegion) refuse("region");
-  if (e.kind != TaskEventKind::ObjectInRegion && e.kind != TaskEventKind::TouchObject &&
-      e.kind != TaskEventKind::NeutralizeObject)
-    refuse("object");
-  if (e.kind == TaskEventKind::TimeExceeded) {
-    if (!n["after_s"]) r.fail(n, where + ".after_s", "missing (kind time_exceeded needs it)");
-    e.after_s = r.positive(n, "after_s", where, 0.0);
-  } else {
-    refuse("after_s");
-  }
-  if (e.kind == TaskEventKind::ObjectInRegion || e.kind == TaskEventKind::NeutralizeObject)
-    e.hold_s = r.positive(n, "hold_s", where, 0.0, true);
-  else
-    refuse("hold_s");
-  if (e.kind == TaskEventKind::NeutralizeObject)
-    e.within_m = r.positive(n, "within_m", where, 0.0, true);
-  else
-    refuse("within_m");
-  if (e.kind == TaskEventKind::Collision) {
-    if (n["per"]) {
-      const auto per = r.as<std::string>(n["per"], where + ".per");
-      if (per != "collision" && per != "second")
-        r.fail(n["per"], where + ".per", "'" + per + "': expected collision or second");
-      e.per_second = per == "second";
-    }
-    if (n["except"]) {
-      if (!n["except"].IsSequence()) r.fail(n["except"], where + ".except", "expected a list of entity names");
-      for (std::size_t i = 0; i < n["except"].size(); ++i)
-        e.except.push_back(r.as<std::string>(n["except"][i], where + "." + item("except", i)));
-    }
-  } else {
-    refuse("per");
-    refuse("except");
+  if (n["except"]) {
+    if (!n["except"].IsSequence()) r.fail(n["except"], where + ".except", "expected a list of entity names");
+    for (std::size_t i = 0; i < n["except"].size(); ++i)
+      e.except.push_back(r.as<std::string>(n["except"][i], where + "." + item("except", i)));
   }
   return e;
 }
 
+// The files the task names, as written and resolved against its folder.
+void read_paths(const YamlReader& r, const YAML::Node& root, TaskDescription* t) {
+  const auto path = [&](const char* key, std::string* as_written, std::string* resolved) {
+    if (!root[key]) return;
+    *as_written = r.as<std::string>(root[key], key);
+    *resolved = resolve(t->file, *as_written);
+  };
+  path("robot", &t->robot_path, &t->robot_file);
+  path("world", &t->world_path, &t->world_file);
+  path("panel", &t->panel_path, &t->panel_file);
+  path("console_script", &t->console_script_path, &t->console_script);
+  path("scenario", &t->scenario_path, &t->scenario_file);
+}
+
+// The file's opening comment and the comments ending its top-level keys' lines.
+void read_comments(const std::string& text, const YAML::Node& root, TaskDescription* t) {
+  t->comment = leading_comment(text);
+  for (const auto& kv : root) {
+    const int line = kv.first.Mark().line + 1;
+    // A block list's comment on its key's line, a flow value's on the line it ends.
+    const std::string c = trailing_comment(text, line);
+    if (!c.empty()) t->key_comments[kv.first.as<std::string>()] = c;
+  }
+}
+
 }  // namespace
 
+const std::vector<TaskEventKindInfo>& task_event_kinds() {
+  using K = TaskEventKind;
+  static const TaskEventParam region{"region", "region", true, "the region (task or world) the robot's base enters"};
+  static const TaskEventParam object{"object", "object", true, "the world's object"};
+  static const std::vector<TaskEventKindInfo> kinds{
+      {K::ReachRegion, "reach_region", "the robot's base enters a region", 1, {region}},
+      {K::TimeExceeded, "time_exceeded", "task time reaches after_s", 1,
+       {{"after_s", "seconds", true, "task time at which it fires"}}},
+      {K::ObjectInRegion, "object_in_region", "an object's centre inside a region for hold_s", 1,
+       {{"region", "region", true, "the region it must be in"},
+        {"object", "object", true, "the object that must be inside"},
+        {"hold_s", "seconds", false, "continuously for this long (0: at once)"}}},
+      {K::TouchObject, "touch_object", "a robot part starts touching the object", 1, {object}},
+      {K::RobotDamaged, "robot_damaged", "a robot joint breaks", 0, {}},
+      {K::RobotDisabled, "robot_disabled", "the robot tips over or its damage reaches 1", 1, {}},
+      {K::NeutralizeObject, "neutralize_object", "the gripper on the object (or within within_m of it) for hold_s", 1,
+       {object, {"hold_s", "seconds", false, "continuously for this long"},
+        {"within_m", "metres", false, "0: gripper contact; > 0: the finger's centre this close to the object's"}}},
+      {K::Collision, "collision", "a penalty per collision, or per second of contact", 0,
+       {{"per", "per", false, "collision (each one) or second (of contact)"},
+        {"except", "names", false, "entities whose contact does not count"}}},
+  };
+  return kinds;
+}
+
+const TaskEventKindInfo& task_event_kind_info(TaskEventKind kind) {
+  for (const auto& k : task_event_kinds())
+    if (k.kind == kind) return k;
+  return task_event_kinds().front();
+}
+
 const char* to_string(TaskEventKind kind) {
-  for (const auto& k : kKinds)
+  for (const auto& k : task_event_kinds())
     if (k.kind == kind) return k.name;
   return "unknown";
 }
 
 std::optional<TaskEventKind> task_event_kind(const std::string& name) {
-  for (const auto& k : kKinds)
+  for (const auto& k : task_event_kinds())
     if (name == k.name) return k.kind;
   return std::nullopt;
 }
@@ -165,12 +190,8 @@ TaskDescription parse_task_description(const std::string& text, const std::strin
     if (!root[key]) r.fail(root, key, "missing");
   t.name = r.as<std::string>(root["task"], "task");
   if (root["title"]) t.title = r.as<std::string>(root["title"], "title");
-  t.robot_file = resolve(file, r.as<std::string>(root["robot"], "robot"));
-  t.world_file = resolve(file, r.as<std::string>(root["world"], "world"));
-  if (root["panel"]) t.panel_file = resolve(file, r.as<std::string>(root["panel"], "panel"));
-  if (root["console_script"])
-    t.console_script = resolve(file, r.as<std::string>(root["console_script"], "console_script"));
-  if (root["scenario"]) t.scenario_file = resolve(file, r.as<std::string>(root["scenario"], "scenario"));
+  read_paths(r, root, &t);
+  read_comments(text, root, &t);
   if (const YAML::Node s = root["start"]) {
     r.only_keys(s, "start", {"xy_m", "yaw_deg"});
     RobotStart start;
@@ -184,7 +205,11 @@ TaskDescription parse_task_description(const std::string& text, const std::strin
   }
   if (const YAML::Node regions = root["regions"]) {
     if (!regions.IsSequence()) r.fail(regions, "regions", "expected a list");
-    for (std::size_t i = 0; i < regions.size(); ++i) t.regions.push_back(read_region(r, regions[i], item("regions", i)));
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+      t.regions.push_back(read_region(r, regions[i], item("regions", i)));
+      t.region_lines.push_back(regions[i].Mark().line + 1);
+      t.region_comments.push_back(trailing_comment(text, t.region_lines.back()));
+    }
   }
   const YAML::Node events = root["events"];
   if (!events || !events.IsSequence() || events.size() == 0)
@@ -193,6 +218,7 @@ TaskDescription parse_task_description(const std::string& text, const std::strin
   for (std::size_t i = 0; i < events.size(); ++i) {
     const auto where = item("events", i);
     t.events.push_back(read_event(r, events[i], where));
+    t.events.back().comment = trailing_comment(text, t.events.back().line);
     if (!seen.insert(t.events.back().name).second)
       r.fail(events[i]["name"], where + ".name", "duplicate event name '" + t.events.back().name + "'");
   }

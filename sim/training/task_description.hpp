@@ -7,6 +7,7 @@
 // "Training").
 
 #include <array>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,27 @@ enum class TaskEventKind {
 const char* to_string(TaskEventKind kind);
 std::optional<TaskEventKind> task_event_kind(const std::string& name);
 
+/// One key an event kind takes besides name, kind, points and max_count.
+struct TaskEventParam {
+  const char* key;       ///< "region", "after_s", ...
+  const char* type;      ///< "region" / "object" (a name), "seconds", "metres", "per" (collision|second), "names"
+  bool required;
+  const char* what;      ///< one line for the builder page
+};
+/// An event kind as the loader reads it and the executor scores it: the keys
+/// it takes (any other is refused with its line), its default max_count.
+struct TaskEventKindInfo {
+  TaskEventKind kind;
+  const char* name;
+  const char* what;
+  int default_max_count;  ///< 1, or 0 = no limit
+  std::vector<TaskEventParam> params;
+};
+/// Every kind, in the order the task format documents them (the Task
+/// Builder's page offers these: instructor/task_builder.hpp).
+const std::vector<TaskEventKindInfo>& task_event_kinds();
+const TaskEventKindInfo& task_event_kind_info(TaskEventKind kind);
+
 /// One scored event of a task.
 struct TaskEventSpec {
   std::string name;  ///< unique in the task; names it in results and end conditions
@@ -48,6 +70,7 @@ struct TaskEventSpec {
   bool per_second = false;           ///< collision: per second of contact instead of per collision
   std::vector<std::string> except;   ///< collision: entities that do not count
   int line = 0;
+  std::string comment;  ///< the `# ...` ending its line, kept by write_task_description
 };
 
 /// A task file.
@@ -66,6 +89,15 @@ struct TaskDescription {
   std::vector<Region> regions;         ///< task-only regions (scored from the robot's position)
   std::vector<std::string> end_on;     ///< the task ends when any of these events fires
   std::vector<std::string> success;    ///< success = all of these fired (empty: ended by an end_on event with points >= 0)
+
+  // As written in the file, for write_task_description (sim/training/task_writer.hpp):
+  // the paths before resolving ("" = the key is absent), the comments.
+  std::string robot_path, world_path, panel_path, console_script_path, scenario_path;
+  std::string comment;                       ///< the comment lines before the first key
+  std::vector<std::string> region_comments;  ///< one per region: the `# ...` ending its line
+  std::vector<int> region_lines;             ///< one per region: its line in the file
+  /// The `# ...` ending a top-level key's line ("scenario", "start", ...).
+  std::map<std::string, std::string> key_comments;
 };
 
 /// Loads and checks a task file; throws std::runtime_error

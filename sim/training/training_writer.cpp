@@ -1,7 +1,8 @@
 #include "sim/training/training_writer.hpp"
 
 #include <cstdio>
-#include <sstream>
+
+#include "sim/training/yaml_comments.hpp"
 
 namespace rise::sim::training {
 
@@ -17,47 +18,6 @@ bool plain_safe(const std::string& s) {
   }
   return true;
 }
-
-// A comment as the loader reads it back (training_graph.cpp): control
-// characters (line breaks too) as blanks, none at the end, and for one on an
-// entry's line none at the start either; so writing is a fixed point.
-std::string comment_text(std::string s, bool keep_leading) {
-  for (char& c : s)
-    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = ' ';
-  const auto last = s.find_last_not_of(' ');
-  if (last == std::string::npos) return "";
-  s.erase(last + 1);
-  if (!keep_leading) s.erase(0, s.find_first_not_of(' '));
-  return s;
-}
-
-// One entry of a list: `  - {k: v, ...}` and, padded to a column, its comment.
-class Lines {
- public:
-  int add(const std::string& entry, const std::string& comment) {
-    std::string line = entry;
-    const std::string text = comment_text(comment, false);
-    if (!text.empty()) {
-      if (line.size() < 60) line.append(60 - line.size(), ' ');
-      line += "  # " + text;
-    }
-    text_ += line + "\n";
-    return ++count_;
-  }
-  void comment_block(const std::string& comment) {
-    std::istringstream in(comment);
-    std::string l;
-    while (std::getline(in, l)) {
-      l = comment_text(l, true);
-      add(l.empty() ? "#" : "# " + l, "");
-    }
-  }
-  const std::string& text() const { return text_; }
-
- private:
-  std::string text_;
-  int count_ = 0;
-};
 
 }  // namespace
 
@@ -83,7 +43,7 @@ std::string yaml_scalar(const std::string& text) {
 }
 
 std::string write_training_graph(const TrainingGraph& g, TrainingYamlLines* where) {
-  Lines out;
+  CommentedLines out;
   TrainingYamlLines lines;
   out.comment_block(g.comment);
   out.add("training: " + yaml_scalar(g.name), "");

@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, inputs, configs, training_graph, training_builder, world_builder, robot_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, world_builder, robot_builder, task_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -41,13 +41,13 @@ case "$target" in
   configs)
     sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
-             "$root"/sim/{robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp "$root/sim/training/task_description.cpp"
+             "$root"/sim/{robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp "$root"/sim/training/{task_description,yaml_comments}.cpp
              "$root/instructor/scenario.cpp")
     ;;
   # The training graph without its tasks (TaskResult is apart from the
   # executor, so neither the executor nor the simulator is linked).
   training_graph)
-    sources=("$root"/sim/training/{training_graph,training_writer,task_result,task_description}.cpp "$root"/sim/world_description.cpp
+    sources=("$root"/sim/training/{training_graph,training_writer,task_result,task_description,yaml_comments}.cpp "$root"/sim/world_description.cpp
              "$root/panels/yaml_reader.cpp")
     ;;
   # The Training Builder's request body: JSON → graph → YAML → the trainer's
@@ -55,7 +55,14 @@ case "$target" in
   # atomic save is report.cpp's).
   training_builder)
     sources=("$root"/instructor/{training_builder,design_files}.cpp
-             "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report}.cpp
+             "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report,yaml_comments}.cpp
+             "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
+    ;;
+  # The Task Builder's request body: JSON → task → YAML → the trainer's loader
+  # and the task's world (training_builder.cpp: the errors' JSON).
+  task_builder)
+    sources=("$root"/instructor/{task_builder,training_builder,design_files}.cpp
+             "$root"/sim/training/{task_writer,training_graph,training_writer,task_result,task_description,report,yaml_comments}.cpp
              "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
     ;;
   # The Environment Builder's body (JSON → world → YAML → rise-sim's loader) and world files written back.
@@ -131,7 +138,7 @@ if [ $rebuild -eq 1 ]; then
     urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge -lassimp) ;;
     mesh) libs=(-lassimp) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
-    training_builder)
+    training_builder | task_builder)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-lyaml-cpp -ljsoncpp)
       ;;
@@ -339,6 +346,14 @@ case "$target" in
     printf '{"edits":[{"path":"sounds.horn.button","value":"gripper_open"},{"path":"wheels.max_torque_nm","value":"-1"}]}' >"$corpus/bad.json"
     printf '{"edits":[{"path":"control.speed_scale.values[2]","value":"two words"},{"path":"control..x","value":"1"}]}' >"$corpus/paths.json"
     printf 'a: {b: 1, c: "q\\"", d: [1, 2]}  # c\nl:\n  - {x: 1}\n  - y\nm:\n  n: 2\n\0[{"path":"a.e","value":"1"},{"path":"l[0].z","value":"#"},{"path":"m.o.p","value":""}]' >"$corpus/forms"
+  task_builder)
+    # The page's task of the shipped approach_object.yaml (as /api/builder/task/NAME
+    # gives it), one with an event of every kind, and one with errors of each kind.
+    t='{"task":"approach_object","title":"Drive up","comment":"Mission 1\\nof two","robot":"../../robots/tracked_eod.yaml","world":"../../worlds/building.yaml","panel":"../../../panels/definitions/rise_console.yaml","console_script":"approach_object_console.txt","scenario":"","start":{"x":4,"y":0,"yaw_deg":36.87},"time_limit_s":30,"regions":[{"name":"near_object","min":[4.8,0.4,0],"max":[6.6,2.2,1],"comment":"r"}],"events":[{"name":"near_object","kind":"reach_region","region":"near_object","points":10,"max_count":1,"comment":"c"},{"name":"object_touched","kind":"touch_object","object":"hazardous_object","points":10},{"name":"slow","kind":"time_exceeded","after_s":20,"points":-5},{"name":"bump","kind":"collision","except":["hazardous_object"],"points":-2}],"end_on":["object_touched"],"success":["object_touched"],"key_comments":{"world":"w"}}'
+    printf '%s' "$t" >"$corpus/task.json"
+    printf '%s' "${t/\"end_on\":\[\"object_touched\"\]/\"end_on\":[\"object_touched\",\"nope\"]}" >"$corpus/bad-end.json"
+    printf '%s' '{"task":"k","robot":"r.yaml","world":"../../worlds/building.yaml","events":[{"name":"a","kind":"object_in_region","object":"hazardous_object","region":"neutralization_area","hold_s":1},{"name":"b","kind":"neutralize_object","object":"hazardous_object","within_m":0.4,"hold_s":2},{"name":"c","kind":"robot_damaged","max_count":0},{"name":"d","kind":"robot_disabled"},{"name":"e","kind":"collision","per":"second"}]}' >"$corpus/kinds.json"
+    printf '%s' '{"task":"","robot":"","world":"x.yaml","time_limit_s":-1,"regions":[{"name":"z","min":[1,1,1],"max":[0,0,0]}],"events":[{"name":"a","kind":"reach_region","region":"nowhere","object":"o","after_s":-1},{"name":"a","kind":"time_exceeded"}],"success":["q"]}' >"$corpus/errors.json"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.

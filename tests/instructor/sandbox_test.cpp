@@ -58,7 +58,7 @@ struct Scratch {
 
 }  // namespace
 
-TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer; stop writes the report", "[instructor][sandbox]") {
+TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer and stopping it writes the report", "[instructor][sandbox]") {
   Scratch scratch;
   const std::string station = "sandbox" + std::to_string(::getpid());
   Sandbox sandbox(kBin, rise::msgs::kDefaultLcmUrl);
@@ -72,8 +72,8 @@ TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer; stop writes the r
   CHECK(alive(s.sim_pid));
   CHECK(alive(s.task_pid));
   // The trainer hears the simulator (it logs the task's start) and keeps scoring.
-  REQUIRE(eventually([&] { return slurp(s.task_log).find("waiting for rise-sim") != std::string::npos; }, 10));
-  std::this_thread::sleep_for(std::chrono::seconds(2));
+  INFO(slurp(s.task_log));
+  REQUIRE(eventually([&] { return slurp(s.task_log).find("task approach_object started") != std::string::npos; }, 20));
   s = sandbox.status();
   CHECK(s.sim_running);
   CHECK(s.task_running);
@@ -93,7 +93,7 @@ TEST_CASE("a sandbox runs a task in rise-sim and rise-trainer; stop writes the r
   CHECK(report["end_reason"].asString() == "interrupted");
 }
 
-TEST_CASE("a sandbox start stops the earlier run; without a task only rise-sim runs", "[instructor][sandbox]") {
+TEST_CASE("a sandbox start stops the earlier run and without a task only rise-sim runs", "[instructor][sandbox]") {
   Scratch scratch;
   const std::string station = "sandboxb" + std::to_string(::getpid());
   Sandbox sandbox(kBin, rise::msgs::kDefaultLcmUrl);
@@ -109,7 +109,6 @@ TEST_CASE("a sandbox start stops the earlier run; without a task only rise-sim r
   CHECK(alive(second.sim_pid));
   CHECK(second.task_pid == -1);
   CHECK(second.report_json.empty());
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
   CHECK(sandbox.status().sim_running);
   sandbox.stop();
   CHECK_FALSE(alive(second.sim_pid));

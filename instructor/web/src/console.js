@@ -4,7 +4,7 @@ import { api, getJson, postJson, stream, el, token, ROBOT_COLOUR } from './commo
 import { createView, camera, buildWorld, robotMesh as makeRobotMesh, poseRobot, placeObjects, onboardMount, placeOnboard,
   placeChase, cameraBlackedOut, renderInto, canvasStats } from './scene3d.js';
 import { foldEvent, lineText } from './event_fold.js';
-import { drawWorldMap, drawBox as drawMapBox } from './map_draw.js';
+import { worldBounds, mapView, drawWorld, drawObjects, drawRobot } from './world_map.js';
 
 const state = {
   world: null,
@@ -32,35 +32,24 @@ function updatePanelLink() {
   document.getElementById('builder-link').href = 'training.html?token=' + encodeURIComponent(token);
 }
 
-// ---- top-down map (map_draw.js, shared with the Environment Builder) ------
+// ---- top-down map (world_map.js) -----------------------------------------
 function drawMap() {
   const c = document.getElementById('map'), g = c.getContext('2d');
-  if (!state.world) { g.fillStyle = '#101215'; g.fillRect(0, 0, c.width, c.height); return; }
-  const trails = [];
-  for (const t of state.trainees.values()) trails.push(...t.trail);
-  const frame = drawWorldMap(c, state.world, { points: trails });
-  const { s, px } = frame;
-  const drawBox = (center, size, yaw, fill) => drawMapBox(g, frame, center, size, yaw, fill);
+  g.fillStyle = '#101215'; g.fillRect(0, 0, c.width, c.height);
+  if (!state.world) return;
+  const trails = [...state.trainees.values()].flatMap((t) => t.trail);
+  const view = mapView(c, worldBounds(state.world, trails));
+  drawWorld(g, view, state.world);
   for (const [id, t] of state.trainees) {
     const r = t.robot_state;
-    const objects = r ? r.objects : state.world.objects.map((o) => ({ name: o.name, position: o.center }));
-    for (const o of objects) {
-      const w = state.world.objects.find((x) => x.name === o.name);
-      drawBox(o.position, w ? w.size : [0.3, 0.3, 0.3], 0, '#e3b341');
-    }
+    drawObjects(g, view, state.world, r ? r.objects : null);
     if (t.trail.length > 1) {
       g.strokeStyle = id === state.selected ? 'rgba(255,90,0,0.8)' : 'rgba(255,255,255,0.4)'; g.lineWidth = 2;
       g.beginPath();
-      t.trail.forEach((p, i) => { const [x, y] = px(p[0], p[1]); if (i) g.lineTo(x, y); else g.moveTo(x, y); });
+      t.trail.forEach((p, i) => { const [x, y] = view.px(p[0], p[1]); if (i) g.lineTo(x, y); else g.moveTo(x, y); });
       g.stroke();
     }
-    if (r) {
-      drawBox(r.position, [0.8, 0.6], r.yaw, colourHex);
-      const [x, y] = px(r.position[0], r.position[1]);
-      g.strokeStyle = '#fff'; g.beginPath(); g.moveTo(x, y);
-      g.lineTo(x + Math.cos(r.yaw) * 0.6 * s, y - Math.sin(r.yaw) * 0.6 * s); g.stroke();
-      g.fillStyle = '#fff'; g.font = '11px sans-serif'; g.fillText(id, x + 8, y - 8);
-    }
+    if (r) drawRobot(g, view, r.position, r.yaw, colourHex, id);
   }
 }
 

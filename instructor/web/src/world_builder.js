@@ -1,5 +1,5 @@
 // The Environment Builder (/world_builder.html): opens a world file of the
-// server's --worlds folder, draws it top-down (map_draw.js, as the console
+// server's --worlds folder, draws it top-down (world_map.js, as the console
 // does) and in 3D (scene3d.js); walls (with openings), doors, stairs,
 // objects, props and regions are selected, moved, added and deleted with the
 // mouse (snapping to 5 cm and to wall ends and openings) or typed in the
@@ -10,7 +10,7 @@
 import * as THREE from 'three';
 import { getJson, postJson, el, token } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
-import { drawWorldMap, worldBounds, MAP_FILLS } from './map_draw.js';
+import { drawWorld, mapView, worldBounds, BOX_FILLS } from './world_map.js';
 import { createView, camera, buildWorld, renderInto, canvasStats } from './scene3d.js';
 
 const $ = (id) => document.getElementById(id);
@@ -235,7 +235,8 @@ function selectedEntity() {
 
 function drawMap() {
   const c = $('map'), g = c.getContext('2d');
-  state.frame = drawWorldMap(c, state.view, { bounds: state.bounds });
+  state.frame = mapView(c, state.bounds);
+  drawWorld(g, state.frame, state.view);
   const { px, s } = state.frame;
   // Movable objects and the robot's start, as the console shows them.
   for (const o of state.world.objects) {
@@ -250,7 +251,7 @@ function drawMap() {
     const [hx, hy] = px(...d.hinge), yaw = d.yaw_deg * DEG, open = d.open_deg_max * DEG;
     g.strokeStyle = 'rgba(160,82,45,0.7)'; g.lineWidth = 1; g.setLineDash([4, 3]);
     g.beginPath(); g.arc(hx, hy, Math.max(0, d.width) * s, -(yaw + open), -(yaw - open)); g.stroke(); g.setLineDash([]);
-    g.fillStyle = MAP_FILLS.door; g.beginPath(); g.arc(hx, hy, 3, 0, 2 * Math.PI); g.fill();
+    g.fillStyle = BOX_FILLS.door; g.beginPath(); g.arc(hx, hy, 3, 0, 2 * Math.PI); g.fill();
   }
   const e = selectedEntity();
   if (!e) return;
@@ -360,7 +361,7 @@ function build3d() {
 // ---- the mouse ------------------------------------------------------------
 function mouseWorld(ev) {
   const c = $('map'), r = c.getBoundingClientRect();
-  return state.frame.world((ev.clientX - r.left) * c.width / r.width, (ev.clientY - r.top) * c.height / r.height);
+  return state.frame.metres((ev.clientX - r.left) * c.width / r.width, (ev.clientY - r.top) * c.height / r.height);
 }
 
 function hitTest(p) {
