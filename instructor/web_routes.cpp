@@ -17,6 +17,7 @@
 
 #include "hil/panel_state_message.hpp"
 #include "instructor/builder_routes.hpp"
+#include "instructor/console_builder.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/trainee_directory.hpp"
@@ -365,6 +366,7 @@ void add_routes(httplib::Server& http, const WebRouteContext& context) {
   http.Post(R"(/api/sim/([^/]+)/(pause|resume|step|reset))",
             [ctx](const Req& req, Res& res) { handle_sim_control(*ctx, req, res); });
   add_builder_routes(http, ctx->settings.designs_dir);
+  add_console_builder_routes(http, ctx->settings.consoles_dir, ctx->settings.console_sources);
 }
 
 }  // namespace rise::instructor

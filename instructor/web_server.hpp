@@ -16,6 +16,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "instructor/fault_presets.hpp"  // the console's fault buttons
 #include "msgs/channels.hpp"
@@ -51,6 +52,9 @@ struct WebServerSettings {
   /// The files the builder pages read and write (/training.html:
   /// instructor/builder_routes.hpp); "" → the builders are off.
   std::string designs_dir;
+  /// The Console Builder's panel definitions and its live view's source URLs (instructor/console_builder.hpp).
+  std::string consoles_dir;
+  std::vector<std::string> console_sources;
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;

@@ -31,6 +31,8 @@ struct ServeOptions {
   std::string reports_dir;
   std::string scenarios_dir = "instructor/scenarios";
   std::string designs = "sim/training/examples";
+  std::string consoles = "panels/definitions";
+  std::vector<std::string> console_sources;
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
@@ -78,6 +80,8 @@ int serve(const ServeOptions& o) {
   if (!s.designs_dir.empty() && !std::filesystem::is_directory(s.designs_dir))
     throw std::runtime_error(s.designs_dir + ": cannot open: " +
                              std::strerror(std::filesystem::exists(s.designs_dir) ? ENOTDIR : ENOENT));
+  s.consoles_dir = o.consoles.empty() ? "" : panels::find_data_file(o.consoles);
+  s.console_sources = o.console_sources;
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
@@ -119,6 +123,11 @@ void add_serve_command(CLI::App& app) {
   cmd->add_option("--designs", o->designs,
                   "the folder of training and task files the builder pages read and write (\"\": builders off)")
       ->capture_default_str();
+  cmd->add_option("--consoles", o->consoles,
+                  "the folder of panel definitions the Console Builder reads and writes (\"\": off)")
+      ->capture_default_str();
+  cmd->add_option("--console-source", o->console_sources,
+                  "the Console Builder's live view: each source's URL, as rise-hild --source (repeat per source)");
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist, installed or of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")

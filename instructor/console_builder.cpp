@@ -1,0 +1,715 @@
+#include "instructor/console_builder.hpp"
+
+#include <httplib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <regex>
+#include <sstream>
+#include <tuple>
+
+#include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/dbc.hpp"
+#include "hil/bridge.hpp"
+#include "hil/source_factory.hpp"
+#include "instructor/design_files.hpp"
+#include "instructor/web_json.hpp"
+#include "instructor/web_requests.hpp"
+#include "msgs/clock.hpp"
+
+namespace rise::instructor {
+
+namespace fs = std::filesystem;
+using panels::ControlEntry;
+using panels::FieldValue;
+
+namespace {
+
+Json::Value field_json(const FieldValue& v) {
+  if (!v.list) return v.scalar;
+  Json::Value items(Json::arrayValue);
+  for (const auto& item : v.items) items.append(field_json(item));
+  return items;
+}
+
+std::optional<FieldValue> field_from_json(const Json::Value& v, int depth) {
+  FieldValue f;
+  if (v.isArray() && depth < 4) {
+    f.list = true;
+    for (const auto& item : v) {
+      auto inner = field_from_json(item, depth + 1);
+      if (!inner) return std::nullopt;
+      f.items.push_back(*inner);
+    }
+  } else if (v.isString()) {
+    f.scalar = v.asString();
+  } else if (v.isBool()) {
+    f.scalar = v.asBool() ? "true" : "false";
+  } else if (v.isNumeric()) {
+    f.scalar = json_text(v);
+  } else {
+    return std::nullopt;
+  }
+  return f;
+}
+
+// "file:line: key: message" (panels/yaml_reader.hpp) → its parts.
+BuilderError loader_error(const std::string& what) {
+  static const std::regex located(R"(^(.+?):(\d+): (.*)$)");
+  static const std::regex keyed(R"(^([^ :]+): (.*)$)");
+  BuilderError e;
+  std::smatch m;
+  std::string rest = what;
+  if (std::regex_match(what, m, located)) {
+    e.file = fs::path(m[1].str()).filename().string();
+    e.line = std::stoi(m[2].str());
+    rest = m[3].str();
+  }
+  if (std::regex_match(rest, m, keyed) && m[1].str().find_first_of("[.") != std::string::npos) {
+    e.key = m[1].str();
+    rest = m[2].str();
+  }
+  e.message = rest;
+  return e;
+}
+
+// Whether the live view opens a source: one that only listens.
+bool passive(const panels::SourceDefinition& s) { return !s.is_j1939() && !s.is_canopen(); }
+
+FieldValue scalar(std::string s) { return FieldValue{false, std::move(s), {}}; }
+
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// An axis' physical range for a DBC signal: the file's, else what its bits hold.
+std::pair<double, double> dbc_range(const firmware_protocol::DbcSignal& s) {
+  if (s.maximum > s.minimum) return {s.minimum, s.maximum};
+  const double bits = std::min<double>(s.length_bits, 53);
+  double lo = s.is_signed ? -std::pow(2.0, bits - 1) : 0.0;
+  double hi = s.is_signed ? std::pow(2.0, bits - 1) - 1 : std::pow(2.0, bits) - 1;
+  lo = lo * s.factor + s.offset;
+  hi = hi * s.factor + s.offset;
+  if (lo > hi) std::swap(lo, hi);
+  return {lo, hi};
+}
+
+constexpr int kSwitchPositions = 256;  // a switch signal is one byte
+
+// The wide definition's control reading signal `i`.
+ControlEntry wide_entry(const panels::PanelDefinition& def, const RawSignal& r, std::size_t i,
+                        const std::vector<ControlEntry>& controls) {
+  ControlEntry e;
+  const auto& source = def.sources[r.source];
+  const bool named = source.is_hid() || source.is_generic_modbus() || source.is_canopen();
+  if (named) {
+    // The definition's own entry, less what makes it more than a reading.
+    for (const auto& c : controls) {
+      const FieldValue* signal = c.find("signal");
+      const FieldValue* src = c.find("source");
+      const std::string src_name = src ? src->scalar : def.sources[0].name;
+      if (!signal || signal->scalar != r.signal || src_name != source.name) continue;
+      for (const auto& [k, v] : c.fields)
+        if (k != "name" && k != "role" && k != "motion" && k != "source") e.fields.emplace_back(k, v);
+      break;
+    }
+  } else {
+    e.fields = {{"kind", scalar(r.kind)}, {"signal", scalar(r.signal)}};
+    if (r.kind == "axis") e.fields.emplace_back("safe", scalar("0.0"));
+    if (r.kind == "button") e.fields.emplace_back("safe", scalar("false"));
+    if (r.kind == "switch") {
+      FieldValue positions{true, "", {}};
+      for (int p = 0; p < kSwitchPositions; ++p) positions.items.push_back(scalar("p" + std::to_string(p)));
+      e.fields.emplace_back("positions", positions);
+      e.fields.emplace_back("safe", scalar("p0"));
+    }
+    if (source.is_dbc() && r.kind == "axis")
+      e.fields.emplace_back("range", FieldValue{true, "", {scalar(number(r.lo)), scalar(number(r.hi))}});
+  }
+  e.fields.insert(e.fields.begin(), {{"name", scalar("raw_" + std::to_string(i))}, {"source", scalar(source.name)}});
+  return e;
+}
+
+// The value a control of the wide definition shows for its signal.
+double raw_value(const RawSignal& r, const hil::ControlValue& v, bool dbc) {
+  if (r.kind == "button") return v.pressed ? 1.0 : 0.0;
+  if (r.kind == "switch") return v.position;
+  return dbc ? r.lo + (v.axis + 1.0) / 2.0 * (r.hi - r.lo) : v.axis;
+}
+
+double round_to(double v, double step) { return std::round(v / step) * step; }
+
+// ---- The live view -------------------------------------------------------
+
+struct LearnStats {
+  bool seen = false;
+  double rest = 0, min = 0, max = 0;
+};
+
+class LiveView {
+ public:
+  LiveView(std::string file, const std::string& text, const std::string& path, const std::vector<std::string>& urls) :
+      file_(std::move(file)), urls_(urls) {
+    const panels::PanelDefinition def = panels::parse_panel_definition(text, path);
+    for (const auto& s : def.sources)
+      if (!passive(s))
+        throw std::runtime_error("source '" + s.name + "' (" + s.protocol +
+                                 ") is not opened by the builder: it takes part in its bus; read it through rise-hild");
+    if (urls.size() != def.sources.size())
+      throw std::runtime_error(file_ + " has " + std::to_string(def.sources.size()) + " source(s), the server " +
+                               std::to_string(urls.size()) +
+                               " --console-source URL(s): give one per source, in the definition's order");
+    const auto controls = panels::read_panel_controls(text, path);
+    signals_ = raw_signals(def, controls);
+    std::vector<ControlEntry> wide;
+    for (std::size_t i = 0; i < signals_.size(); ++i) wide.push_back(wide_entry(def, signals_[i], i, controls));
+    wide_definition_ = panels::parse_panel_definition(panels::write_panel_controls(text, wide), path);
+    values_.assign(signals_.size(), 0.0);
+    stats_.assign(signals_.size(), {});
+    raw_ = start_bridge(wide_definition_, [this](const hil::PanelSnapshot& s) { on_raw(s); });
+  }
+  ~LiveView() {
+    if (preview_) preview_->stop();
+    if (raw_) raw_->stop();
+  }
+
+  const std::string& file() const { return file_; }
+
+  /// Runs `def` as rise-hild would, for the preview.
+  void set_preview(panels::PanelDefinition def) {
+    if (preview_) preview_->stop();
+    preview_.reset();
+    for (const auto& s : def.sources)
+      if (!passive(s)) return;
+    if (def.sources.size() != urls_.size()) return;
+    preview_ = start_bridge(std::move(def), [](const hil::PanelSnapshot&) {});
+  }
+
+  void learn(double seconds) {
+    std::lock_guard lock(mutex_);
+    stats_.assign(signals_.size(), {});
+    learn_until_us_ = msgs::monotonic_us() + static_cast<int64_t>(seconds * 1e6);
+    learning_ = true;
+  }
+
+  Json::Value signals_json() const {
+    Json::Value out(Json::arrayValue);
+    for (std::size_t i = 0; i < signals_.size(); ++i) {
+      const auto& r = signals_[i];
+      Json::Value j;
+      j["id"] = static_cast<int>(i);
+      j["source"] = wide_definition_.sources[r.source].name;
+      j["protocol"] = wide_definition_.sources[r.source].protocol;
+      j["signal"] = r.signal;
+      j["kind"] = r.kind;
+      j["lo"] = r.lo;
+      j["hi"] = r.hi;
+      j["bound"] = r.bound;
+      out.append(j);
+    }
+    return out;
+  }
+
+  Json::Value state_json() {
+    Json::Value v;
+    v["file"] = file_;
+    {
+      std::lock_guard lock(mutex_);
+      Json::Value values(Json::arrayValue);
+      for (double x : values_) values.append(x);
+      v["values"] = values;
+      Json::Value sources(Json::arrayValue);
+      for (const auto& s : source_status_) sources.append(s);
+      v["sources"] = sources;
+      if (learning_ && msgs::monotonic_us() >= learn_until_us_) finish_learning();
+      v["learning"] = learning_;
+      v["learn_left_s"] = learning_ ? (learn_until_us_ - msgs::monotonic_us()) / 1e6 : 0.0;
+      if (!proposal_.isNull()) v["proposal"] = proposal_;
+    }
+    if (preview_) v["preview"] = preview_json(preview_->snapshot(), preview_->definition());
+    return v;
+  }
+
+ private:
+  std::unique_ptr<hil::Bridge> start_bridge(panels::PanelDefinition def, hil::Bridge::PublishFn publish) {
+    // No feedback: the console's LEDs stay rise-hild's.
+    def.leds.clear();
+    def.displays.clear();
+    def.rumbles.clear();
+    def.buzzer_source.reset();
+    std::vector<std::unique_ptr<hil::SourceTransport>> transports;
+    for (std::size_t i = 0; i < def.sources.size(); ++i) transports.push_back(hil::open_source(def, i, urls_[i]));
+    auto bridge = std::make_unique<hil::Bridge>(std::move(def), std::move(transports), std::move(publish));
+    bridge->start();
+    return bridge;
+  }
+
+  static Json::Value preview_json(const hil::PanelSnapshot& snap, const panels::PanelDefinition& def) {
+    Json::Value v;
+    v["failsafe"] = snap.failsafe;
+    v["failsafe_reason"] = snap.failsafe_reason;
+    v["deadman"] = snap.deadman;
+    Json::Value controls(Json::arrayValue);
+    for (std::size_t i = 0; i < def.controls.size() && i < snap.controls.size(); ++i) {
+      const auto& c = def.controls[i];
+      const auto& x = snap.controls[i];
+      Json::Value j;
+      j["name"] = c.name;
+      switch (c.kind) {
+        case panels::ControlKind::Axis: j["kind"] = "axis"; j["value"] = x.axis; break;
+        case panels::ControlKind::Button: j["kind"] = "button"; j["value"] = x.pressed; break;
+        case panels::ControlKind::Switch:
+          j["kind"] = "switch";
+          j["value"] = x.position < c.positions.size() ? c.positions[x.position] : std::to_string(x.position);
+          break;
+      }
+      j["forced_safe"] = x.forced_safe;
+      controls.append(j);
+    }
+    v["controls"] = controls;
+    return v;
+  }
+
+  // From the raw bridge's publisher thread, at the definition's rate and on change.
+  void on_raw(const hil::PanelSnapshot& snap) {
+    std::lock_guard lock(mutex_);
+    source_status_.clear();
+    for (const auto& s : snap.sources) {
+      Json::Value j;
+      j["name"] = s.name;
+      j["connected"] = s.connected;
+      j["stale"] = s.stale;
+      j["frames_ok"] = static_cast<Json::Int64>(s.frames_ok);
+      j["down_reason"] = s.down_reason;
+      source_status_.push_back(j);
+    }
+    for (std::size_t i = 0; i < signals_.size() && i < snap.controls.size(); ++i) {
+      if (snap.controls[i].forced_safe) continue;  // stale: not what the control does
+      const double x = raw_value(signals_[i], snap.controls[i], wide_definition_.sources[signals_[i].source].is_dbc());
+      values_[i] = x;
+      if (!learning_) continue;
+      LearnStats& st = stats_[i];
+      if (!st.seen) st = {true, x, x, x};
+      st.min = std::min(st.min, x);
+      st.max = std::max(st.max, x);
+    }
+    if (learning_ && snap.time_us >= learn_until_us_) finish_learning();
+  }
+
+  // The signal that moved most for its range; its rest, min and max set what is proposed.
+  void finish_learning() {
+    learning_ = false;
+    proposal_ = Json::Value(Json::objectValue);
+    double best = 0.0;
+    std::size_t best_i = 0;
+    for (std::size_t i = 0; i < signals_.size(); ++i) {
+      const LearnStats& st = stats_[i];
+      if (!st.seen) continue;
+      const RawSignal& r = signals_[i];
+      const double span = r.kind == "axis" ? r.hi - r.lo : 1.0;
+      const double score = std::min(1.0, (st.max - st.min) / span);
+      if (score > best) best = score, best_i = i;
+    }
+    if (best < 0.05) {
+      proposal_["none"] = "nothing moved in the learn window";
+      return;
+    }
+    const RawSignal& r = signals_[best_i];
+    const LearnStats& st = stats_[best_i];
+    proposal_["id"] = static_cast<int>(best_i);
+    proposal_["source"] = wide_definition_.sources[r.source].name;
+    proposal_["signal"] = r.signal;
+    proposal_["kind"] = r.kind;
+    proposal_["bound"] = r.bound;
+    proposal_["rest"] = st.rest;
+    proposal_["min"] = st.min;
+    proposal_["max"] = st.max;
+    proposal_["score"] = best;
+    if (r.kind == "button") {
+      proposal_["pressed_value"] = st.rest > 0.5 ? 0 : 1;
+    } else if (r.kind == "switch") {
+      proposal_["positions"] = static_cast<int>(st.max) + 1;
+    } else {
+      // Moved to its positive end first: the side it went further from rest.
+      proposal_["invert"] = (st.rest - st.min) > (st.max - st.rest);
+      const bool physical = wide_definition_.sources[r.source].is_dbc() ||
+                            wide_definition_.sources[r.source].is_generic_modbus();
+      const double lo = physical ? st.min : -1.0, hi = physical ? st.max : 1.0;
+      const double rest_norm = hi > lo ? 2.0 * (st.rest - lo) / (hi - lo) - 1.0 : 0.0;
+      // A centred stick rests near 0: its offset plus a margin is the deadband;
+      // a lever resting at an end needs only the margin.
+      const double deadband = std::fabs(rest_norm) < 0.5 ? std::fabs(rest_norm) + 0.03 : 0.03;
+      proposal_["deadband"] = round_to(std::min(deadband, 0.3), 0.01);
+      if (physical) {
+        Json::Value range(Json::arrayValue);
+        range.append(st.min);
+        range.append(st.max);
+        proposal_["range"] = range;
+      }
+    }
+  }
+
+  std::string file_;
+  std::vector<std::string> urls_;
+  std::vector<RawSignal> signals_;
+  panels::PanelDefinition wide_definition_;
+  std::mutex mutex_;  // guards what follows
+  std::vector<double> values_;
+  std::vector<Json::Value> source_status_;
+  std::vector<LearnStats> stats_;
+  bool learning_ = false;
+  int64_t learn_until_us_ = 0;
+  Json::Value proposal_;
+  std::unique_ptr<hil::Bridge> raw_;  // after what its callback uses: stopped first
+  std::unique_ptr<hil::Bridge> preview_;
+};
+
+// ---- Routes --------------------------------------------------------------
+
+using Req = httplib::Request;
+using Res = httplib::Response;
+
+struct ConsoleBuilder {
+  ConsoleBuilder(const std::string& dir, std::vector<std::string> u) : folder(dir), urls(std::move(u)) {}
+  DesignFolder folder;
+  std::vector<std::string> urls;
+  std::mutex live_mutex;
+  std::unique_ptr<LiveView> live;
+};
+
+void reply(Res& res, const Json::Value& v, int status = 200) {
+  res.status = status;
+  res.set_content(json_text(v), "application/json");
+}
+
+void reply_error(Res& res, int status, const std::string& message) {
+  Json::Value v;
+  v["error"] = message;
+  reply(res, v, status);
+}
+
+// The request's file name after checking it; "" after replying.
+std::string console_name(const ConsoleBuilder& b, const Req& req, Res& res) {
+  if (b.folder.dir().empty()) {
+    reply_error(res, 503, "no consoles folder (rise-instructor serve --consoles DIR)");
+    return "";
+  }
+  const std::string name = req.matches[1];
+  if (!valid_design_name(name, ".yaml")) {
+    reply_error(res, 400, "file '" + name + "': a .yaml name of the consoles folder (letters, digits, _ . -)");
+    return "";
+  }
+  return name;
+}
+
+// The body's controls; nullopt after replying 400.
+std::optional<std::vector<ControlEntry>> body_controls(const Req& req, Res& res, Json::Value* body) {
+  std::string error;
+  auto parsed = parse_json_object(req.body, &error);
+  if (!parsed) return reply_error(res, 400, error), std::nullopt;
+  *body = *parsed;
+  auto controls = controls_from_json((*body)["controls"], &error);
+  if (!controls) reply_error(res, 400, "controls: " + error);
+  return controls;
+}
+
+// The file's text; nullopt after replying 404.
+std::optional<DesignText> read_design(const ConsoleBuilder& b, const std::string& name, Res& res) {
+  try {
+    return b.folder.read(name);
+  } catch (const std::exception& e) {
+    reply_error(res, 404, e.what());
+    return std::nullopt;
+  }
+}
+
+void handle_list(const ConsoleBuilder& b, Res& res) {
+  if (b.folder.dir().empty()) return reply_error(res, 503, "no consoles folder (rise-instructor serve --consoles DIR)");
+  Json::Value v, files(Json::arrayValue), urls(Json::arrayValue);
+  for (const auto& f : b.folder.list(".yaml")) files.append(f);
+  for (const auto& u : b.urls) urls.append(u);
+  v["dir"] = b.folder.dir();
+  v["files"] = files;
+  v["urls"] = urls;
+  reply(res, v);
+}
+
+void handle_read(const ConsoleBuilder& b, const Req& req, Res& res) {
+  const std::string name = console_name(b, req, res);
+  if (name.empty()) return;
+  const auto file = read_design(b, name, res);
+  if (!file) return;
+  Json::Value v;
+  v["file"] = name;
+  v["version"] = file->version;
+  v["text"] = file->text;
+  try {
+    const auto controls = panels::read_panel_controls(file->text, b.folder.path(name));
+    v["controls"] = controls_json(controls);
+    const ConsoleCheck check = check_console(file->text, controls, b.folder.path(name));
+    v["check"] = check_json(check);
+    Json::Value sources(Json::arrayValue);
+    if (check.definition)
+      for (const auto& s : check.definition->sources) {
+        Json::Value j;
+        j["name"] = s.name;
+        j["protocol"] = s.protocol;
+        sources.append(j);
+      }
+    v["sources"] = sources;
+  } catch (const std::exception& e) {
+    v["load_error"] = e.what();  // no controls list: the page shows the text and the error
+  }
+  reply(res, v);
+}
+
+void handle_check(ConsoleBuilder& b, const Req& req, Res& res) {
+  const std::string name = console_name(b, req, res);
+  if (name.empty()) return;
+  Json::Value body;
+  const auto controls = body_controls(req, res, &body);
+  if (!controls) return;
+  const auto file = read_design(b, name, res);
+  if (!file) return;
+  ConsoleCheck check = check_console(file->text, *controls, b.folder.path(name));
+  Json::Value v = check_json(check);
+  std::lock_guard lock(b.live_mutex);
+  if (b.live && b.live->file() == name && check.definition) {
+    try {
+      b.live->set_preview(std::move(*check.definition));
+      v["preview"] = true;
+    } catch (const std::exception& e) {
+      v["preview_error"] = e.what();
+    }
+  }
+  reply(res, v);
+}
+
+void handle_save(ConsoleBuilder& b, const Req& req, Res& res) {
+  const std::string name = console_name(b, req, res);
+  if (name.empty()) return;
+  Json::Value body;
+  const auto controls = body_controls(req, res, &body);
+  if (!controls) return;
+  if (!body["version"].isString()) return reply_error(res, 400, "version: expected the version the page loaded");
+  // The controls go into the text the page loaded: read that version, or refuse.
+  const auto file = read_design(b, name, res);
+  if (!file) return;
+  Json::Value v;
+  v["file"] = name;
+  if (file->version != body["version"].asString()) {
+    v["error"] = name + " changed on disk since this page loaded it (version " + body["version"].asString() + ", now " +
+                 file->version + "): not saved. Reload it, or overwrite the other change.";
+    v["current_version"] = file->version;
+    return reply(res, v, 409);
+  }
+  const ConsoleCheck check = check_console(file->text, *controls, b.folder.path(name));
+  if (!check.errors.empty()) {
+    v = check_json(check);
+    v["error"] = name + ": not saved: the definition has errors";
+    return reply(res, v, 422);
+  }
+  SaveOutcome saved;
+  try {
+    saved = b.folder.save(name, check.yaml, file->version);
+  } catch (const std::exception& e) {
+    return reply_error(res, 500, e.what());
+  }
+  if (saved.status == SaveStatus::Conflict) {
+    v["error"] = name + " changed on disk while saving: not saved. Reload it.";
+    v["current_version"] = saved.version;
+    return reply(res, v, 409);
+  }
+  v["saved"] = true;
+  v["version"] = saved.version;
+  v["yaml"] = check.yaml;
+  reply(res, v);
+}
+
+void handle_live_start(ConsoleBuilder& b, const Req& req, Res& res) {
+  const std::string name = console_name(b, req, res);
+  if (name.empty()) return;
+  const auto file = read_design(b, name, res);
+  if (!file) return;
+  std::lock_guard lock(b.live_mutex);
+  b.live.reset();  // one live view: its sources closed before another opens them
+  try {
+    b.live = std::make_unique<LiveView>(name, file->text, b.folder.path(name), b.urls);
+  } catch (const std::exception& e) {
+    return reply_error(res, 422, e.what());
+  }
+  Json::Value v;
+  v["file"] = name;
+  v["signals"] = b.live->signals_json();
+  reply(res, v);
+}
+
+void handle_live_state(ConsoleBuilder& b, Res& res) {
+  std::lock_guard lock(b.live_mutex);
+  if (!b.live) return reply_error(res, 404, "no live view: open one (POST /api/builder/console/NAME/live)");
+  reply(res, b.live->state_json());
+}
+
+void handle_learn(ConsoleBuilder& b, const Req& req, Res& res) {
+  std::string error;
+  const auto body = parse_json_object(req.body, &error);
+  if (!body) return reply_error(res, 400, error);
+  const double seconds = (*body)["seconds"].isNumeric() ? (*body)["seconds"].asDouble() : 3.0;
+  if (!(seconds > 0.2 && seconds <= 30.0)) return reply_error(res, 400, "seconds: 0.2 < s <= 30");
+  std::lock_guard lock(b.live_mutex);
+  if (!b.live) return reply_error(res, 404, "no live view: open one (POST /api/builder/console/NAME/live)");
+  b.live->learn(seconds);
+  Json::Value v;
+  v["learning"] = true;
+  v["seconds"] = seconds;
+  reply(res, v);
+}
+
+}  // namespace
+
+Json::Value controls_json(const std::vector<ControlEntry>& controls) {
+  Json::Value out(Json::arrayValue);
+  for (const auto& c : controls) {
+    Json::Value j, fields(Json::arrayValue);
+    j["comment"] = c.comment;
+    for (const auto& [k, v] : c.fields) {
+      Json::Value pair(Json::arrayValue);
+      pair.append(k);
+      pair.append(field_json(v));
+      fields.append(pair);
+    }
+    j["fields"] = fields;
+    out.append(j);
+  }
+  return out;
+}
+
+std::optional<std::vector<ControlEntry>> controls_from_json(const Json::Value& controls, std::string* error) {
+  if (!controls.isArray()) return *error = "expected a list", std::nullopt;
+  std::vector<ControlEntry> out;
+  for (Json::ArrayIndex i = 0; i < controls.size(); ++i) {
+    const std::string where = "controls[" + std::to_string(i) + "]";
+    const Json::Value& c = controls[i];
+    if (!c.isObject() || !c["fields"].isArray()) return *error = where + ": expected {comment, fields}", std::nullopt;
+    ControlEntry e;
+    if (c["comment"].isString()) e.comment = c["comment"].asString();
+    for (Json::ArrayIndex k = 0; k < c["fields"].size(); ++k) {
+      const Json::Value& pair = c["fields"][k];
+      const std::string at = where + ".fields[" + std::to_string(k) + "]";
+      if (!pair.isArray() || pair.size() != 2 || !pair[0].isString() || pair[0].asString().empty())
+        return *error = at + ": expected [key, value]", std::nullopt;
+      auto value = field_from_json(pair[1], 0);
+      if (!value) return *error = at + ": a value is text, a number, true/false or a list", std::nullopt;
+      e.fields.emplace_back(pair[0].asString(), *value);
+    }
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+ConsoleCheck check_console(const std::string& text, const std::vector<ControlEntry>& controls, const std::string& path) {
+  ConsoleCheck check;
+  try {
+    check.yaml = panels::write_panel_controls(text, controls, &check.lines);
+    check.definition = panels::parse_panel_definition(check.yaml, path);
+  } catch (const std::exception& e) {
+    check.errors.push_back(loader_error(e.what()));
+  }
+  return check;
+}
+
+Json::Value check_json(const ConsoleCheck& check) {
+  Json::Value v;
+  v["yaml"] = check.yaml;
+  v["ok"] = check.errors.empty();
+  Json::Value errors(Json::arrayValue), lines(Json::arrayValue);
+  for (const auto& e : check.errors) {
+    Json::Value j;
+    j["file"] = e.file;
+    j["line"] = e.line;
+    j["key"] = e.key;
+    j["message"] = e.message;
+    // The control whose lines hold the error (-1: none).
+    int control = -1;
+    for (std::size_t i = 0; i < check.lines.size(); ++i)
+      if (check.lines[i] <= e.line) control = static_cast<int>(i);
+    if (control >= 0 && static_cast<std::size_t>(control) + 1 == check.lines.size() &&
+        e.line > check.lines.back() + 1)
+      control = -1;  // after the last control: another section's
+    j["control"] = control;
+    errors.append(j);
+  }
+  for (int l : check.lines) lines.append(l);
+  v["errors"] = errors;
+  v["lines"] = lines;
+  return v;
+}
+
+std::vector<RawSignal> raw_signals(const panels::PanelDefinition& def, const std::vector<ControlEntry>& controls) {
+  std::vector<RawSignal> out;
+  auto bound = [&](std::size_t source, const std::string& signal) {
+    for (const auto& c : def.controls) {
+      if (c.source != source) continue;
+      if (c.dbc_signal && c.dbc_message->name + "." + c.dbc_signal->name == signal) return true;
+      if (!c.dbc_signal && c.hid_signal.empty() && !c.modbus_point && c.bits.empty() &&
+          panels::to_string(c.signal) == signal)
+        return true;
+    }
+    return false;
+  };
+  for (std::size_t s = 0; s < def.sources.size(); ++s) {
+    const auto& source = def.sources[s];
+    if (source.is_dbc()) {
+      for (const auto& m : source.dbc->messages()) {
+        if (source.is_j1939() && !m.extended) continue;
+        for (const auto& sig : m.signals) {
+          RawSignal r{s, m.name + "." + sig.name, sig.length_bits == 1 ? "button" : "axis"};
+          if (r.kind == "axis") std::tie(r.lo, r.hi) = dbc_range(sig);
+          if (r.kind == "axis" && !(r.hi > r.lo)) continue;
+          r.bound = bound(s, r.signal);
+          out.push_back(r);
+        }
+      }
+    } else if (source.is_hid() || source.is_generic_modbus() || source.is_canopen()) {
+      for (const auto& c : def.controls) {
+        if (c.source != s) continue;
+        const ControlEntry* entry = nullptr;
+        for (const auto& e : controls)
+          if (const FieldValue* n = e.find("name"); n && n->scalar == c.name) entry = &e;
+        const FieldValue* signal = entry ? entry->find("signal") : nullptr;
+        if (!signal || signal->list) continue;
+        const char* kind = c.kind == panels::ControlKind::Axis     ? "axis"
+                           : c.kind == panels::ControlKind::Button ? "button"
+                                                                   : "switch";
+        out.push_back(RawSignal{s, signal->scalar, kind, -1.0, 1.0, true});
+      }
+    } else {  // rise-can-v1, rise-modbus-v1
+      for (std::size_t i = 0; i < firmware_protocol::kMaxAxes; ++i) out.push_back({s, "axis." + std::to_string(i), "axis"});
+      for (std::size_t i = 0; i < firmware_protocol::kMaxButtons; ++i)
+        out.push_back({s, "button." + std::to_string(i), "button"});
+      for (std::size_t i = 0; i < firmware_protocol::kMaxSwitches; ++i)
+        out.push_back({s, "switch." + std::to_string(i), "switch"});
+      for (auto& r : out)
+        if (r.source == s) r.bound = bound(s, r.signal);
+    }
+  }
+  return out;
+}
+
+void add_console_builder_routes(httplib::Server& http, const std::string& dir, const std::vector<std::string>& urls) {
+  auto b = std::make_shared<ConsoleBuilder>(dir, urls);
+  http.Get("/api/builder/consoles", [b](const Req&, Res& res) { handle_list(*b, res); });
+  http.Get(R"(/api/builder/console/([^/]+))", [b](const Req& req, Res& res) { handle_read(*b, req, res); });
+  http.Post(R"(/api/builder/console/([^/]+)/check)", [b](const Req& req, Res& res) { handle_check(*b, req, res); });
+  http.Post(R"(/api/builder/console/([^/]+)/live)", [b](const Req& req, Res& res) { handle_live_start(*b, req, res); });
+  http.Post(R"(/api/builder/console/([^/]+))", [b](const Req& req, Res& res) { handle_save(*b, req, res); });
+  http.Get("/api/builder/console_live", [b](const Req&, Res& res) { handle_live_state(*b, res); });
+  http.Post("/api/builder/console_learn", [b](const Req& req, Res& res) { handle_learn(*b, req, res); });
+}
+
+}  // namespace rise::instructor

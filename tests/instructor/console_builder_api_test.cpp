@@ -1,0 +1,185 @@
+// The Console Builder's endpoints, in this process over real HTTP: the
+// definitions of --consoles listed and read with their controls, a proposed
+// control checked by rise-hild's loader (the error with its line, the key
+// and the control it belongs to), saved atomically with its comment, 409
+// when the file changed on disk since it was read, 422 when it would not
+// load, a name with '/' refused, and a live view refused for a count of
+// source URLs that is not the definition's.
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+
+#include "instructor/console_builder.hpp"
+#include "instructor/web_server.hpp"
+#include "panels/panel_definition.hpp"
+#include "web_peer.hpp"
+
+namespace fs = std::filesystem;
+using namespace rise::instructor_test;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
+
+struct ConsoleFixture {
+  fs::path dir;
+  rise::instructor::WebServerSettings settings;
+
+  ConsoleFixture() {
+    char tmpl[] = "/tmp/rise-console-builder-XXXXXX";
+    dir = ::mkdtemp(tmpl);
+    fs::create_directories(dir / "www");
+    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
+    fs::create_directories(dir / "consoles");
+    for (const auto& e : fs::directory_iterator(std::string(RISE_SOURCE_DIR) + "/panels/definitions"))
+      fs::copy_file(e.path(), dir / "consoles" / e.path().filename());
+    settings.port = 0;
+    settings.token = "tok-console";
+    settings.web_dir = (dir / "www").string();
+    settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
+    settings.designs_dir = "";
+    settings.consoles_dir = (dir / "consoles").string();
+  }
+  ~ConsoleFixture() { fs::remove_all(dir); }
+  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
+};
+
+// A control as the page sends it.
+Json::Value control(const std::string& comment, std::vector<std::pair<std::string, std::string>> fields) {
+  Json::Value c;
+  c["comment"] = comment;
+  c["fields"] = Json::Value(Json::arrayValue);
+  for (const auto& [k, v] : fields) {
+    Json::Value pair(Json::arrayValue);
+    pair.append(k);
+    pair.append(v);
+    c["fields"].append(pair);
+  }
+  return c;
+}
+
+std::string body(const Json::Value& controls, const std::string& version = "") {
+  Json::Value b;
+  b["controls"] = controls;
+  if (!version.empty()) b["version"] = version;
+  return text(b);
+}
+
+}  // namespace
+
+TEST_CASE("the console builder lists, reads, checks and saves a definition's controls", "[instructor][console_builder]") {
+  ConsoleFixture f;
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  httplib::Client http("127.0.0.1", server.port());
+  const std::string url = "/api/builder/console/rise_console.yaml";
+  CHECK(http.Get(url)->status == 401);
+
+  const auto listing = parse_json(http.Get("/api/builder/consoles", f.auth())->body);
+  REQUIRE(listing["files"].isArray());
+  CHECK(text(listing["files"]).find("rise_console.yaml") != std::string::npos);
+  CHECK(text(listing["files"]).find(".eds") == std::string::npos);  // only .yaml names
+
+  const auto opened = parse_json(http.Get(url, f.auth())->body);
+  REQUIRE(opened["controls"].size() == 11);
+  CHECK(opened["check"]["ok"].asBool());
+  CHECK(opened["controls"][0]["comment"].asString() == "Drive stick: y forward, x right (the robot file maps them to v and ω).");
+  CHECK(opened["sources"][0]["protocol"].asString() == "rise-can-v1");
+  const std::string version = opened["version"].asString();
+  Json::Value controls = opened["controls"];
+
+  SECTION("an error names its line, key and control, and is not saved (422)") {
+    // A button without its safe value.
+    controls.append(control("horn", {{"name", "horn"}, {"kind", "button"}, {"signal", "button.7"}}));
+    const auto check = parse_json(http.Post(url + "/check", body(controls), "application/json")->body);
+    REQUIRE_FALSE(check["ok"].asBool());
+    REQUIRE(check["errors"].size() == 1);
+    const auto& e = check["errors"][0];
+    CHECK(e["key"].asString() == "controls.horn.safe");
+    CHECK(e["file"].asString() == "rise_console.yaml");
+    CHECK(e["control"].asInt() == 11);
+    CHECK(e["line"].asInt() == check["lines"][11].asInt());
+    CHECK(e["message"].asString().find("missing") != std::string::npos);
+    // The line is the one the YAML holds the control on.
+    std::istringstream yaml(check["yaml"].asString());
+    std::string line;
+    for (int i = 0; i < e["line"].asInt(); ++i) std::getline(yaml, line);
+    CHECK(line.find("name: horn") != std::string::npos);
+    auto r = http.Post(url, body(controls, version), "application/json");
+    CHECK(r->status == 422);
+    CHECK(slurp(f.dir / "consoles" / "rise_console.yaml") == slurp(std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml"));
+    // A signal bound twice is the loader's error too, on the second control's line.
+    controls[11] = control("", {{"name", "horn"}, {"kind", "button"}, {"signal", "button.2"}, {"safe", "false"}});
+    const auto twice = parse_json(http.Post(url + "/check", body(controls), "application/json")->body);
+    REQUIRE(twice["errors"].size() == 1);
+    CHECK(twice["errors"][0]["control"].asInt() >= 7);
+  }
+  SECTION("a new control saves with its comment and loads in the loader rise-hild uses") {
+    controls.append(control("learned: button.7 of console", {{"name", "horn"}, {"kind", "button"}, {"signal", "button.7"}, {"safe", "false"}}));
+    auto r = http.Post(url, body(controls, version), "application/json");
+    REQUIRE(r->status == 200);
+    const auto saved = parse_json(r->body);
+    const std::string on_disk = slurp(f.dir / "consoles" / "rise_console.yaml");
+    CHECK(saved["version"].asString() == rise::instructor::content_version(on_disk));
+    CHECK(on_disk.find("  # learned: button.7 of console\n  - {name: horn, kind: button, signal: button.7, safe: false}\n") !=
+          std::string::npos);
+    CHECK(on_disk.find("feedback:\n  leds:") != std::string::npos);  // the rest of the file is kept
+    const auto def = rise::panels::load_panel_definition((f.dir / "consoles" / "rise_console.yaml").string());
+    REQUIRE(def.find_control("horn"));
+    SECTION("a second save at the old version is refused (409) and writes nothing") {
+      controls[11] = control("", {{"name", "horn2"}, {"kind", "button"}, {"signal", "button.7"}, {"safe", "false"}});
+      r = http.Post(url, body(controls, version), "application/json");
+      CHECK(r->status == 409);
+      CHECK(parse_json(r->body)["current_version"].asString() == saved["version"].asString());
+      CHECK(slurp(f.dir / "consoles" / "rise_console.yaml") == on_disk);
+    }
+  }
+  SECTION("a file changed on disk since it was read is not overwritten (409)") {
+    std::ofstream(f.dir / "consoles" / "rise_console.yaml", std::ios::app) << "# edited elsewhere\n";
+    const auto r = http.Post(url, body(controls, version), "application/json");
+    CHECK(r->status == 409);
+    CHECK(slurp(f.dir / "consoles" / "rise_console.yaml").find("# edited elsewhere") != std::string::npos);
+  }
+  SECTION("names outside the folder and malformed bodies are refused") {
+    CHECK(http.Get("/api/builder/console/..%2Fconsoles%2Frise_console.yaml", f.auth())->status == 400);
+    CHECK(http.Get("/api/builder/console/rise_console_j1939.dbc", f.auth())->status == 400);
+    CHECK(http.Post("/api/builder/console/a%2Fb.yaml", body(controls, version), "application/json")->status == 400);
+    CHECK(http.Get("/api/builder/console/missing.yaml", f.auth())->status == 404);
+    CHECK(http.Post(url, "not json", "application/json")->status == 400);
+    Json::Value bad = controls;
+    bad[0]["fields"][0] = "name";
+    const auto r = http.Post(url + "/check", body(bad), "application/json");
+    CHECK(r->status == 400);
+    CHECK(parse_json(r->body)["error"].asString().find("controls[0].fields[0]") != std::string::npos);
+  }
+  SECTION("the live view needs one source URL per source") {
+    const auto r = http.Post(url + "/live", "{}", "application/json");
+    CHECK(r->status == 422);
+    CHECK(parse_json(r->body)["error"].asString().find("--console-source") != std::string::npos);
+    CHECK(http.Get("/api/builder/console_live", f.auth())->status == 404);
+  }
+  server.stop();
+}
+
+TEST_CASE("the live view lists every signal of a rise-can-v1 and a dbc source, bound or not", "[instructor][console_builder]") {
+  const std::string dir = std::string(RISE_SOURCE_DIR) + "/panels/definitions/";
+  for (const char* file : {"rise_console.yaml", "rise_console_j1939.yaml"}) {
+    INFO(file);
+    const std::string path = dir + file;
+    const auto def = rise::panels::load_panel_definition(path);
+    const auto signals = rise::instructor::raw_signals(def, rise::panels::read_panel_controls(slurp(path), path));
+    std::size_t bound = 0;
+    for (const auto& s : signals) bound += s.bound;
+    CHECK(bound == def.controls.size());  // each bound signal once
+    CHECK(signals.size() > def.controls.size());  // and the ones not bound yet
+  }
+}
