@@ -228,7 +228,7 @@ class LiveView {
       v["sources"] = sources;
       if (learning_ && msgs::monotonic_us() >= learn_until_us_) finish_learning();
       v["learning"] = learning_;
-      v["learn_left_s"] = learning_ ? (learn_until_us_ - msgs::monotonic_us()) / 1e6 : 0.0;
+      v["learn_left_s"] = learning_ ? static_cast<double>(learn_until_us_ - msgs::monotonic_us()) / 1e6 : 0.0;
       if (!proposal_.isNull()) v["proposal"] = proposal_;
     }
     if (preview_) v["preview"] = preview_json(preview_->snapshot(), preview_->definition());

@@ -12,6 +12,7 @@
 #include <fstream>
 
 #include "instructor/console_builder.hpp"
+#include "instructor/design_files.hpp"
 #include "instructor/web_server.hpp"
 #include "panels/panel_definition.hpp"
 #include "web_peer.hpp"
@@ -83,6 +84,8 @@ TEST_CASE("the console builder lists, reads, checks and saves a definition's con
   httplib::Client http("127.0.0.1", server.port());
   const std::string url = "/api/builder/console/rise_console.yaml";
   CHECK(http.Get(url)->status == 401);
+  CHECK(http.Post(url, "{}", "application/json")->status == 401);
+  http.set_default_headers(f.auth());
 
   const auto listing = parse_json(http.Get("/api/builder/consoles", f.auth())->body);
   REQUIRE(listing["files"].isArray());
@@ -150,9 +153,15 @@ TEST_CASE("the console builder lists, reads, checks and saves a definition's con
     CHECK(slurp(f.dir / "consoles" / "rise_console.yaml").find("# edited elsewhere") != std::string::npos);
   }
   SECTION("names outside the folder and malformed bodies are refused") {
-    CHECK(http.Get("/api/builder/console/..%2Fconsoles%2Frise_console.yaml", f.auth())->status == 400);
+    // A '/' in the name matches no route (404); the handler's own check refuses the rest (400).
+    CHECK(http.Get("/api/builder/console/..%2Fconsoles%2Frise_console.yaml", f.auth())->status == 404);
+    CHECK(http.Post("/api/builder/console/..%2Fx.yaml", body(controls, ""), "application/json")->status == 404);
+    CHECK_FALSE(fs::exists(f.dir / "x.yaml"));
+    CHECK_FALSE(rise::instructor::valid_design_name("../x.yaml", ".yaml"));
+    CHECK_FALSE(rise::instructor::valid_design_name("a/b.yaml", ".yaml"));
     CHECK(http.Get("/api/builder/console/rise_console_j1939.dbc", f.auth())->status == 400);
-    CHECK(http.Post("/api/builder/console/a%2Fb.yaml", body(controls, version), "application/json")->status == 400);
+    CHECK(http.Post("/api/builder/console/a%20b.yaml", body(controls, version), "application/json")->status == 400);
+    CHECK(http.Post("/api/builder/console/..yaml/live", "{}", "application/json")->status == 400);
     CHECK(http.Get("/api/builder/console/missing.yaml", f.auth())->status == 404);
     CHECK(http.Post(url, "not json", "application/json")->status == 400);
     Json::Value bad = controls;
