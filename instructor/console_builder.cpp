@@ -148,7 +148,8 @@ double round_to(double v, double step) { return std::round(v / step) * step; }
 
 struct LearnStats {
   bool seen = false;
-  double rest = 0, min = 0, max = 0;
+  double rest = 0, min = 0, max = 0;  // rest: the first value (the user moves it after the window opens)
+  int samples = 0, nonzero = 0;       // a button rests in the state it was in longer
 };
 
 class LiveView {
@@ -294,7 +295,9 @@ class LiveView {
       values_[i] = x;
       if (!learning_) continue;
       LearnStats& st = stats_[i];
-      if (!st.seen) st = {true, x, x, x};
+      if (!st.seen) st = {true, x, x, x, 0, 0};
+      ++st.samples;
+      st.nonzero += x != 0.0;
       st.min = std::min(st.min, x);
       st.max = std::max(st.max, x);
     }
@@ -331,7 +334,9 @@ class LiveView {
     proposal_["max"] = st.max;
     proposal_["score"] = best;
     if (r.kind == "button") {
-      proposal_["pressed_value"] = st.rest > 0.5 ? 0 : 1;
+      const bool rests_pressed = 2 * st.nonzero > st.samples;
+      proposal_["rest"] = rests_pressed ? 1 : 0;
+      proposal_["pressed_value"] = rests_pressed ? 0 : 1;
     } else if (r.kind == "switch") {
       proposal_["positions"] = static_cast<int>(st.max) + 1;
     } else {

@@ -1,7 +1,7 @@
 // The Console Builder end to end ("[console_builder]"): an emulated console
 // (rise-panel emulate on socketcand over loopback) whose firmware has a horn
 // on button.7, which the definition being edited (a copy of
-// rise_console.yaml) does not bind, pressed and released every 0.6 s; the
+// rise_console.yaml) does not bind, pressed for 0.3 s every 1.2 s; the
 // server reads the console itself (--console-source); the page learns that
 // signal, the user names it, picks kind and safe value, saves; the saved file
 // loads in `rise-panel check`, and a rise-hild started with it publishes
@@ -51,7 +51,7 @@ TEST_CASE("the console builder learns an unbound button, saves it, and rise-hild
   const std::string shipped = read_file(kSource + "/panels/definitions/rise_console.yaml");
   std::ofstream(consoles / "rise_console.yaml") << shipped;
   std::ofstream(dir / "firmware.yaml") << firmware_definition(shipped);
-  std::ofstream(dir / "press.txt") << "0.0 mode drive\n0.0 horn pressed\n0.6 horn released\n1.2 horn released\n";
+  std::ofstream(dir / "press.txt") << "0.0 mode drive\n0.0 horn released\n0.6 horn pressed\n0.9 horn released\n1.2 horn released\n";
   const std::string bus = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
   ChildProcess emulator({kBin + "/rise-panel", "emulate", "--panel", (dir / "firmware.yaml").string(), "--can",
                          "socketcand+listen://" + bus, "--script", (dir / "press.txt").string(), "--loop"},
@@ -84,6 +84,7 @@ TEST_CASE("the console builder learns an unbound button, saves it, and rise-hild
   CHECK(r["form"]["source"].asString() == "console");
   CHECK(r["proposal"].asString().find("button.7 of console moved") == 0);
   CHECK(r["proposal"].asString().find("already bound") == std::string::npos);
+  CHECK(r["proposal"].asString().find("pressed = 1") != std::string::npos);  // it rests released
   // Without a signal the loader's error shows with its line and key, beside the control.
   REQUIRE(r["missing_signal_errors"].size() == 1);
   CHECK(r["missing_signal_errors"][0]["key"].asString() == "controls.horn.signal");
