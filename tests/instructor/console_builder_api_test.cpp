@@ -8,13 +8,22 @@
 
 #include <catch2/catch.hpp>
 
+#include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <mutex>
+#include <thread>
 
 #include "instructor/console_builder.hpp"
 #include "instructor/design_files.hpp"
 #include "instructor/web_server.hpp"
+#include "hil/io/can_bus.hpp"
+#include "msgs/clock.hpp"
+#include "panels/console_emulator.hpp"
 #include "panels/panel_definition.hpp"
+#include "panels/timeline.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -191,4 +200,109 @@ TEST_CASE("the live view lists every signal of a rise-can-v1 and a dbc source, b
     CHECK(bound == def.controls.size());  // each bound signal once
     CHECK(signals.size() > def.controls.size());  // and the ones not bound yet
   }
+}
+
+namespace {
+
+// rise_console's firmware with a winch lever on axis.5 (the definition does
+// not bind it), played in this process on socketcand over loopback; the
+// test moves the lever as a person would.
+struct WinchConsole {
+  rise::panels::PanelDefinition firmware;
+  std::unique_ptr<rise::hil::io::CanBus> bus;
+  std::size_t winch = 0;
+  std::mutex mutex;  // guards emulator
+  std::unique_ptr<rise::panels::ConsoleEmulator> emulator;
+  std::atomic<bool> stop{false};
+  std::thread thread;
+
+  explicit WinchConsole(const std::string& url) {
+    std::string text = slurp(std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml");
+    text.insert(text.find("\nfeedback:"), "  - {name: winch, kind: axis, signal: axis.5, safe: 0.0}\n");
+    firmware = rise::panels::parse_panel_definition(text, "firmware.yaml");
+    winch = *firmware.find_control("winch");
+    emulator = std::make_unique<rise::panels::ConsoleEmulator>(firmware, 0);
+    bus = rise::hil::io::open_can_bus("socketcand+listen://" + url);
+    bus->reopen();
+    thread = std::thread([this] {
+      while (!stop) {
+        {
+          std::lock_guard lock(mutex);
+          emulator->tick(*bus, rise::msgs::monotonic_us());
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+    });
+  }
+  ~WinchConsole() {
+    stop = true;
+    thread.join();
+  }
+  void set(float value) {
+    rise::panels::TimelineEvent e;
+    e.control = winch;
+    e.axis = value;
+    std::lock_guard lock(mutex);
+    emulator->apply(e);
+  }
+};
+
+}  // namespace
+
+TEST_CASE("learning an axis proposes its signal, invert and deadband from its rest, min and max",
+          "[instructor][console_builder]") {
+  ConsoleFixture f;
+  const std::string url = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
+  WinchConsole console(url);
+  f.settings.console_sources = {"socketcand://" + url};
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  httplib::Client http("127.0.0.1", server.port());
+  http.set_default_headers(f.auth());
+  const auto live = http.Post("/api/builder/console/rise_console.yaml/live", "{}", "application/json");
+  REQUIRE(live->status == 200);
+  const auto signals = parse_json(live->body)["signals"];
+  CHECK(signals.size() == 6 + 32 + 6);
+  CHECK(signals[5]["signal"].asString() == "axis.5");
+  CHECK_FALSE(signals[5]["bound"].asBool());
+  CHECK(signals[4]["bound"].asBool());
+  // Live: the source up, the lever read before anyone learns.
+  console.set(0.02f);  // a lever resting a little off centre
+  auto state = [&] { return parse_json(http.Get("/api/builder/console_live")->body); };
+  const auto wait_for = [&](const std::function<bool(const Json::Value&)>& done) {
+    for (int i = 0; i < 100; ++i) {
+      if (done(state())) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  };
+  REQUIRE(wait_for([](const Json::Value& s) {
+    return s["sources"].size() == 1 && s["sources"][0]["connected"].asBool() && !s["sources"][0]["stale"].asBool() &&
+           std::fabs(s["values"][5].asDouble() - 0.02) < 0.001;
+  }));
+  CHECK(http.Post("/api/builder/console_learn", R"({"seconds": 100})", "application/json")->status == 400);
+  REQUIRE(http.Post("/api/builder/console_learn", R"({"seconds": 1.5})", "application/json")->status == 200);
+  REQUIRE(wait_for([](const Json::Value& s) { return s["learning"].asBool(); }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  // Pulled to its negative end and let go: it is wired the other way round.
+  console.set(-0.9f);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  console.set(0.02f);
+  REQUIRE(wait_for([](const Json::Value& s) { return !s["learning"].asBool() && s.isMember("proposal"); }));
+  const auto p = state()["proposal"];
+  INFO(text(p));
+  CHECK(p["signal"].asString() == "axis.5");
+  CHECK(p["kind"].asString() == "axis");
+  CHECK_FALSE(p["bound"].asBool());
+  CHECK(p["rest"].asDouble() == Approx(0.02).margin(0.001));
+  CHECK(p["min"].asDouble() == Approx(-0.9).margin(0.001));
+  CHECK(p["invert"].asBool());
+  CHECK(p["deadband"].asDouble() == Approx(0.05).margin(0.001));  // 0.02 off centre + 0.03
+  CHECK_FALSE(p.isMember("range"));  // rise-can-v1 axes are -1..1 already
+  // A learn window in which nothing moves proposes nothing.
+  REQUIRE(http.Post("/api/builder/console_learn", R"({"seconds": 0.5})", "application/json")->status == 200);
+  REQUIRE(wait_for([](const Json::Value& s) { return s["learning"].asBool(); }));
+  REQUIRE(wait_for([](const Json::Value& s) { return !s["learning"].asBool(); }));
+  CHECK(state()["proposal"].isMember("none"));
+  server.stop();
 }
