@@ -17,7 +17,8 @@ add_library(rise_instructor_web
   design_files.cpp
   training_builder.cpp
   builder_routes.cpp
-  console_builder.cpp)
+  console_builder.cpp
+  console_builder_model.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs

@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, inputs, configs, training_graph, training_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, console_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -57,6 +57,13 @@ case "$target" in
     sources=("$root"/instructor/{training_builder,design_files}.cpp
              "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report}.cpp
              "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
+    ;;
+  # The Console Builder's request body: JSON → controls → the panel's text →
+  # rise-hild's loader (no server, no sources: console_builder_model.cpp).
+  console_builder)
+    sources=("$root/instructor/console_builder_model.cpp"
+             "$root"/panels/{panel_writer,panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
+             "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp)
     ;;
   urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
   mesh) sources=("$root/sim/mesh_file.cpp") ;;
@@ -117,6 +124,10 @@ if [ $rebuild -eq 1 ]; then
     mesh) libs=(-lassimp) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
     training_builder)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-lyaml-cpp -ljsoncpp)
+      ;;
+    console_builder)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-lyaml-cpp -ljsoncpp)
       ;;
@@ -306,6 +317,14 @@ case "$target" in
     printf '%s' "$g" >"$corpus/graph.json"
     printf '%s' "${g/\"if\":\"success EQ 1\"/\"if\":\"score LT five\"}" >"$corpus/bad-condition.json"
     printf '%s' '{"training":"t","nodes":[{"name":"a","task":"../x.yaml"},{"name":"b","task":"metro_transport.yaml","max_attempts":0}],"transitions":[{"from":"START","to":"c"},{"from":"a","to":"a","if":"events.nope GE 1"}]}' >"$corpus/errors.json"
+    ;;
+  console_builder)
+    # The page's controls: rise_console.yaml's as /api/builder/console/NAME
+    # gives them, one with a learned button added, one with errors.
+    c='{"controls":[{"comment":"Drive stick","fields":[["name","drive_x"],["kind","axis"],["signal","axis.0"],["deadband","0.05"],["motion","true"],["safe","0.0"]]},{"comment":"","fields":[["name","deadman"],["kind","button"],["signal","button.0"],["role","deadman"],["safe","false"]]},{"comment":"","fields":[["name","mode"],["kind","switch"],["signal","switch.0"],["positions",["drive","arm"]],["safe","drive"]]}]}'
+    printf '%s' "$c" >"$corpus/controls.json"
+    printf '%s' '{"controls":[{"comment":"learned: button.7\nsecond","fields":[["name","horn: x"],["kind","button"],["signal","button.7"],["safe",false]]},{"comment":"","fields":[["name","lever"],["kind","axis"],["signal","axis.5"],["invert","true"],["deadband",0.05],["safe","0.0"]]}]}' >"$corpus/learned.json"
+    printf '%s' '{"controls":[{"fields":[["name","a"],["kind","axis"],["signal","axis.9"],["safe",1]]},{"fields":[["name","a"],["kind","knob"]]},{"fields":[["range",[1,[2]]]]}]}' >"$corpus/errors.json"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.
