@@ -4,7 +4,9 @@
 // and the control it belongs to), saved atomically with its comment, 409
 // when the file changed on disk since it was read, 422 when it would not
 // load, a name with '/' refused, and a live view refused for a count of
-// source URLs that is not the definition's.
+// source URLs that is not the definition's. And learning, against a console
+// emulated in this process on socketcand and on Modbus/TCP: an axis the
+// definition does not bind, moved, is proposed with its invert and deadband.
 
 #include <catch2/catch.hpp>
 
@@ -20,6 +22,7 @@
 #include "instructor/design_files.hpp"
 #include "instructor/web_server.hpp"
 #include "hil/io/can_bus.hpp"
+#include "hil/io/modbus_server.hpp"
 #include "msgs/clock.hpp"
 #include "panels/console_emulator.hpp"
 #include "panels/panel_definition.hpp"
@@ -204,31 +207,38 @@ TEST_CASE("the live view lists every signal of a rise-can-v1 and a dbc source, b
 
 namespace {
 
-// rise_console's firmware with a winch lever on axis.5 (the definition does
-// not bind it), played in this process on socketcand over loopback; the
-// test moves the lever as a person would.
+// A rise console's firmware (rise_console.yaml on socketcand, or
+// rise_console_modbus.yaml as a Modbus/TCP slave) with a winch lever on
+// axis.5 (the definition does not bind it), played in this process over
+// loopback; the test moves the lever as a person would.
 struct WinchConsole {
   rise::panels::PanelDefinition firmware;
   std::unique_ptr<rise::hil::io::CanBus> bus;
+  std::unique_ptr<rise::hil::io::ModbusServer> slave;
   std::size_t winch = 0;
   std::mutex mutex;  // guards emulator
   std::unique_ptr<rise::panels::ConsoleEmulator> emulator;
   std::atomic<bool> stop{false};
   std::thread thread;
 
-  explicit WinchConsole(const std::string& url) {
-    std::string text = slurp(std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml");
+  WinchConsole(const std::string& file, const std::string& listen_url) {
+    std::string text = slurp(std::string(RISE_SOURCE_DIR) + "/panels/definitions/" + file);
     text.insert(text.find("\nfeedback:"), "  - {name: winch, kind: axis, signal: axis.5, safe: 0.0}\n");
     firmware = rise::panels::parse_panel_definition(text, "firmware.yaml");
     winch = *firmware.find_control("winch");
     emulator = std::make_unique<rise::panels::ConsoleEmulator>(firmware, 0);
-    bus = rise::hil::io::open_can_bus("socketcand+listen://" + url);
-    bus->reopen();
+    if (firmware.sources[0].is_modbus()) {
+      slave = std::make_unique<rise::hil::io::ModbusServer>(listen_url, rise::panels::ConsoleEmulator::modbus_table_sizes());
+    } else {
+      bus = rise::hil::io::open_can_bus(listen_url);
+      bus->reopen();
+    }
     thread = std::thread([this] {
       while (!stop) {
         {
           std::lock_guard lock(mutex);
-          emulator->tick(*bus, rise::msgs::monotonic_us());
+          if (slave) emulator->tick_modbus(*slave, rise::msgs::monotonic_us());
+          else emulator->tick(*bus, rise::msgs::monotonic_us());
         }
         std::this_thread::sleep_for(std::chrono::milliseconds(1));
       }
@@ -252,14 +262,20 @@ struct WinchConsole {
 TEST_CASE("learning an axis proposes its signal, invert and deadband from its rest, min and max",
           "[instructor][console_builder]") {
   ConsoleFixture f;
-  const std::string url = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
-  WinchConsole console(url);
-  f.settings.console_sources = {"socketcand://" + url};
+  const std::string port = std::to_string(free_port());
+  // The same console on CAN (socketcand) and on Modbus/TCP: the same signals.
+  const bool modbus = GENERATE(false, true);
+  const std::string file = modbus ? "rise_console_modbus.yaml" : "rise_console.yaml";
+  INFO(file);
+  WinchConsole console(file, modbus ? "modbus+tcp-listen://127.0.0.1:" + port + "?unit=1"
+                                    : "socketcand+listen://127.0.0.1:" + port + "/can0");
+  f.settings.console_sources = {modbus ? "modbus+tcp://127.0.0.1:" + port + "?unit=1"
+                                       : "socketcand://127.0.0.1:" + port + "/can0"};
   rise::instructor::WebServer server(f.settings);
   server.start();
   httplib::Client http("127.0.0.1", server.port());
   http.set_default_headers(f.auth());
-  const auto live = http.Post("/api/builder/console/rise_console.yaml/live", "{}", "application/json");
+  const auto live = http.Post("/api/builder/console/" + file + "/live", "{}", "application/json");
   REQUIRE(live->status == 200);
   const auto signals = parse_json(live->body)["signals"];
   CHECK(signals.size() == 6 + 32 + 6);
