@@ -13,7 +13,10 @@
 
 #include "firmware_protocol/console_can.hpp"
 #include "firmware_protocol/dbc.hpp"
+#include "firmware_protocol/hid_descriptor.hpp"
+#include "firmware_protocol/hid_report.hpp"
 #include "hil/bridge.hpp"
+#include "hil/io/input_device.hpp"
 #include "hil/source_factory.hpp"
 #include "instructor/design_files.hpp"
 #include "instructor/web_json.hpp"
@@ -39,6 +42,30 @@ std::string number(double v) {
   return s.str();
 }
 
+// A hid source's input signals, from its device's report descriptor (the
+// device opened once, then closed for the bridge): a gamepad's buttons the
+// definition does not bind show too. Axes, buttons and hats (as switches:
+// the direction index); relative fields and array slots are left out.
+std::vector<RawSignal> hid_raw_signals(const panels::PanelDefinition& def, std::size_t source, const std::string& url) {
+  const std::string device_url = url == "-" ? def.sources[source].device : url;
+  auto device = hil::io::open_input_device(device_url);
+  if (device->reopen() != hil::io::IoStatus::Ok)
+    throw std::runtime_error("source '" + def.sources[source].name + "': " + device_url + ": cannot open: " +
+                             device->last_error());
+  const auto parsed = firmware_protocol::parse_hid_descriptor(device->report_descriptor());
+  device->close();
+  if (!parsed) throw std::runtime_error("source '" + def.sources[source].name + "': its report descriptor does not parse");
+  std::vector<RawSignal> out;
+  for (const auto& sig : firmware_protocol::hid_signals(parsed.descriptor, firmware_protocol::HidReportKind::Input)) {
+    using K = firmware_protocol::HidSignalKind;
+    if (sig.name == "padding" || (sig.kind != K::Axis && sig.kind != K::Button && sig.kind != K::Hat)) continue;
+    RawSignal r{source, sig.name, sig.kind == K::Axis ? "axis" : sig.kind == K::Button ? "button" : "switch"};
+    for (const auto& c : def.controls) r.bound = r.bound || (c.source == source && c.hid_signal == sig.name);
+    out.push_back(r);
+  }
+  return out;
+}
+
 constexpr int kSwitchPositions = 256;  // a switch signal is one byte
 
 // The wide definition's control reading signal `i`.
@@ -47,6 +74,7 @@ ControlEntry wide_entry(const panels::PanelDefinition& def, const RawSignal& r, 
   ControlEntry e;
   const auto& source = def.sources[r.source];
   const bool named = source.is_hid() || source.is_generic_modbus() || source.is_canopen();
+  bool copied = false;
   if (named) {
     // The definition's own entry, less what makes it more than a reading.
     for (const auto& c : controls) {
@@ -56,9 +84,11 @@ ControlEntry wide_entry(const panels::PanelDefinition& def, const RawSignal& r, 
       if (!signal || signal->scalar != r.signal || src_name != source.name) continue;
       for (const auto& [k, v] : c.fields)
         if (k != "name" && k != "role" && k != "motion" && k != "source") e.fields.emplace_back(k, v);
+      copied = true;
       break;
     }
-  } else {
+  }
+  if (!copied) {  // a signal of its own: a reading of it at the mapper's defaults
     e.fields = {{"kind", scalar(r.kind)}, {"signal", scalar(r.signal)}};
     if (r.kind == "axis") e.fields.emplace_back("safe", scalar("0.0"));
     if (r.kind == "button") e.fields.emplace_back("safe", scalar("false"));
@@ -107,6 +137,11 @@ class LiveView {
                                " --console-source URL(s): give one per source, in the definition's order");
     const auto controls = panels::read_panel_controls(text, path);
     signals_ = raw_signals(def, controls);
+    for (std::size_t i = 0; i < def.sources.size(); ++i) {
+      if (!def.sources[i].is_hid() || def.sources[i].mapping == "sdl" || urls[i].rfind("evdev:", 0) == 0) continue;
+      std::erase_if(signals_, [i](const RawSignal& r) { return r.source == i; });
+      for (auto& r : hid_raw_signals(def, i, urls[i])) signals_.push_back(std::move(r));
+    }
     std::vector<ControlEntry> wide;
     for (std::size_t i = 0; i < signals_.size(); ++i) wide.push_back(wide_entry(def, signals_[i], i, controls));
     wide_definition_ = panels::parse_panel_definition(panels::write_panel_controls(text, wide), path);

@@ -12,14 +12,15 @@
 // Bridge (hil/source_factory.hpp, hil/bridge.hpp) on a "wide" copy of the
 // definition that binds every signal the source has: rise-can-v1 and
 // rise-modbus-v1 every axis.N, button.N and switch.N, a dbc source every
-// signal of its DBC; so a button the definition does not bind yet shows and
-// can be learned. Why not a raw-signal message from rise-hild: that needs a
+// signal of its DBC, a hid source every input axis, button and hat of its
+// device's report descriptor (read by opening the device once first); so a
+// button the definition does not bind yet shows and can be learned. Why not a raw-signal message from rise-hild: that needs a
 // new LCM type, a tap in the mapper's cyclic path and a daemon running with
 // a definition that may not load yet (the one being built); opening the
 // source again needs no new code in hil, and CAN (socketcan, socketcand),
 // Modbus/TCP slaves and hidraw take several readers at once, so the view
-// runs beside a rise-hild. A hid, generic modbus or canopen source shows the
-// signals its definition binds; j1939 and canopen sources are not opened
+// runs beside a rise-hild. A generic modbus source, and a hid source read
+// through evdev:// or an SDL mapping, shows the signals its definition binds; j1939 and canopen sources are not opened
 // (they claim an address / drive the node's NMT state, which a second
 // master on the bus must not), nor is the feedback written (no LEDs).
 // The preview runs the page's definition (once it loads) through a second
@@ -71,9 +72,10 @@ struct RawSignal {
   bool bound = false;  ///< the definition binds it already
 };
 
-/// Every signal of `definition`'s sources the live view reads (see above).
-/// `controls`: the definition's entries (for the signals hid, modbus and
-/// canopen sources bind).
+/// Every signal of `definition`'s sources the live view reads (see above;
+/// a hid source: those its definition binds, the live view adds its
+/// device's). `controls`: the definition's entries (for the signals hid,
+/// modbus and canopen sources bind).
 std::vector<RawSignal> raw_signals(const panels::PanelDefinition& definition,
                                    const std::vector<panels::ControlEntry>& controls);
 

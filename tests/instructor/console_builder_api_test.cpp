@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <thread>
 
@@ -320,5 +321,71 @@ TEST_CASE("learning an axis proposes its signal, invert and deadband from its re
   REQUIRE(wait_for([](const Json::Value& s) { return s["learning"].asBool(); }));
   REQUIRE(wait_for([](const Json::Value& s) { return !s["learning"].asBool(); }));
   CHECK(state()["proposal"].isMember("none"));
+  server.stop();
+}
+
+TEST_CASE("a hid source lists every signal of its device's descriptor and learns a button the definition does not bind",
+          "[instructor][console_builder]") {
+  ConsoleFixture f;
+  // The HID golden's pad (a Gravis GamePad Pro: x, y, button_1..10) as a
+  // hid-recorder file whose button_7, not bound by pad.yaml, is pressed for
+  // 0.3 s every 1.2 s; reports every 20 ms as the pad sends them.
+  const std::string golden = slurp(std::string(RISE_SOURCE_DIR) + "/tests/data/replay/hid/pad.hid");
+  std::ofstream rec(f.dir / "pad.hid");
+  std::istringstream in(golden);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("R:", 0) == 0 || line.rfind("N:", 0) == 0 || line.rfind("I:", 0) == 0) rec << line << "\n";
+  for (int i = 0; i < 60; ++i) {
+    char event[64];
+    std::snprintf(event, sizeof event, "E: %06d.%06d 4 80 80 %s 00\n", i * 20000 / 1000000, i * 20000 % 1000000, i >= 30 && i < 45 ? "40" : "00");
+    rec << event;
+  }
+  rec.close();
+  fs::copy_file(std::string(RISE_SOURCE_DIR) + "/tests/data/replay/hid/pad.yaml", f.dir / "consoles" / "pad.yaml");
+  f.settings.console_sources = {"replay://" + (f.dir / "pad.hid").string() + "?loop=1000"};
+  rise::instructor::WebServer server(f.settings);
+  server.start();
+  httplib::Client http("127.0.0.1", server.port());
+  http.set_default_headers(f.auth());
+  const auto live = http.Post("/api/builder/console/pad.yaml/live", "{}", "application/json");
+  INFO(live->body);
+  REQUIRE(live->status == 200);
+  std::map<std::string, Json::Value> signals;
+  const Json::Value listed = parse_json(live->body);
+  for (const auto& s : listed["signals"]) signals[s["signal"].asString()] = s;
+  CHECK(signals.size() == 12);  // x, y, button_1..10 (not the padding)
+  REQUIRE(signals.count("button_7"));
+  CHECK(signals["button_7"]["kind"].asString() == "button");
+  CHECK_FALSE(signals["button_7"]["bound"].asBool());
+  CHECK(signals["button_2"]["bound"].asBool());
+  CHECK(signals["x"]["kind"].asString() == "axis");
+  auto state = [&] { return parse_json(http.Get("/api/builder/console_live")->body); };
+  const auto wait_for = [&](const std::function<bool(const Json::Value&)>& done) {
+    for (int i = 0; i < 100; ++i) {
+      if (done(state())) return true;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    return false;
+  };
+  REQUIRE(wait_for([](const Json::Value& s) { return s["sources"][0]["connected"].asBool() && !s["sources"][0]["stale"].asBool(); }));
+  REQUIRE(http.Post("/api/builder/console_learn", R"({"seconds": 2})", "application/json")->status == 200);
+  REQUIRE(wait_for([](const Json::Value& s) { return s["learning"].asBool(); }));
+  REQUIRE(wait_for([](const Json::Value& s) { return !s["learning"].asBool() && s.isMember("proposal"); }));
+  const auto p = state()["proposal"];
+  INFO(text(p));
+  CHECK(p["signal"].asString() == "button_7");
+  CHECK(p["source"].asString() == "pad");
+  CHECK(p["kind"].asString() == "button");
+  CHECK(p["pressed_value"].asInt() == 1);
+  // Bound and saved: it loads.
+  const auto opened = parse_json(http.Get("/api/builder/console/pad.yaml")->body);
+  Json::Value controls = opened["controls"];
+  controls.append(control("learned: button_7 of pad", {{"name", "wipers"}, {"kind", "button"}, {"signal", "button_7"}, {"safe", "false"}}));
+  const auto r = http.Post("/api/builder/console/pad.yaml", body(controls, opened["version"].asString()), "application/json");
+  CHECK(r->status == 200);
+  const auto def = rise::panels::load_panel_definition((f.dir / "consoles" / "pad.yaml").string());
+  REQUIRE(def.find_control("wipers"));
+  CHECK(def.controls[*def.find_control("wipers")].hid_signal == "button_7");
   server.stop();
 }
