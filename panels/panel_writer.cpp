@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -146,7 +147,11 @@ std::string write_panel_controls(const std::string& text, const std::vector<Cont
     if (!c.comment.empty()) {
       std::istringstream comment(c.comment);
       std::string l;
-      while (std::getline(comment, l)) put("  #" + (l.empty() ? "" : " " + l));
+      while (std::getline(comment, l)) {
+        // A carriage return would end the comment for YAML and start a line of the file's.
+        std::replace(l.begin(), l.end(), '\r', ' ');
+        put("  #" + (l.empty() ? "" : " " + l));
+      }
     }
     put(control_line(c));
     if (lines_out) lines_out->push_back(line);

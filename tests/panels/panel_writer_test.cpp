@@ -139,6 +139,11 @@ TEST_CASE("a text without controls gets them appended; a malformed one names its
   c.fields = {{"name", {false, "x", {}}}, {"positions", {true, "", {{false, "a", {}}, {false, "b", {}}}}}};
   const std::string written = write_panel_controls("panel: p\n", {c});
   CHECK(written == "panel: p\n\ncontrols:\n  - {name: x, positions: [a, b]}\n");
+  // A comment cannot end itself: a carriage return in it is no line break.
+  c.comment = "x\rcontrols: 3";
+  const std::string commented = write_panel_controls("panel: p\n", {c});
+  CHECK(commented.find("  # x controls: 3\n") != std::string::npos);
+  CHECK(read_panel_controls(commented, "f.yaml").size() == 1);
   CHECK_THROWS_WITH(read_panel_controls("panel: p\ncontrols: 3\n", "f.yaml"),
                     Catch::Contains("f.yaml:2: controls: expected a list"));
   CHECK_THROWS_WITH(read_panel_controls("panel: p\ncontrols:\n  - [1, 2]\n", "f.yaml"),
