@@ -3,6 +3,7 @@
 #include <httplib.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -61,6 +62,10 @@ std::vector<RawSignal> hid_raw_signals(const panels::PanelDefinition& def, std::
     if (sig.name == "padding" || (sig.kind != K::Axis && sig.kind != K::Button && sig.kind != K::Hat)) continue;
     RawSignal r{source, sig.name, sig.kind == K::Axis ? "axis" : sig.kind == K::Button ? "button" : "switch"};
     for (const auto& c : def.controls) r.bound = r.bound || (c.source == source && c.hid_signal == sig.name);
+    char usage[32];
+    std::snprintf(usage, sizeof usage, "usage 0x%04X:0x%04X", firmware_protocol::hid_usage_page(sig.usage),
+                  static_cast<unsigned>(sig.usage & 0xffff));
+    r.wire = usage;
     out.push_back(r);
   }
   return out;
@@ -186,6 +191,7 @@ class LiveView {
       j["lo"] = r.lo;
       j["hi"] = r.hi;
       j["bound"] = r.bound;
+      j["wire"] = r.wire;
       out.append(j);
     }
     return out;

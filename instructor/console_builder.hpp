@@ -70,6 +70,7 @@ struct RawSignal {
   std::string kind;    ///< axis, button, switch
   double lo = -1.0, hi = 1.0;  ///< an axis' physical range (dbc: the DBC's, else -1..1)
   bool bound = false;  ///< the definition binds it already
+  std::string wire{};  ///< where it travels: "CAN 0x130", "discrete input 7", "usage 0x0009:0x0007"
 };
 
 /// Every signal of `definition`'s sources the live view reads (see above;

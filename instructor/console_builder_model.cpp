@@ -5,12 +5,14 @@
 #include <json/json.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <filesystem>
 #include <regex>
 #include <tuple>
 
 #include "firmware_protocol/console_can.hpp"
+#include "firmware_protocol/console_modbus.hpp"
 #include "firmware_protocol/dbc.hpp"
 #include "instructor/console_builder.hpp"
 
@@ -68,6 +70,12 @@ BuilderError loader_error(const std::string& what) {
   }
   e.message = rest;
   return e;
+}
+
+std::string hex(uint32_t v, int digits) {
+  char text[16];
+  std::snprintf(text, sizeof text, "0x%0*X", digits, v);
+  return text;
 }
 
 // An axis' physical range for a DBC signal: the file's, else what its bits hold.
@@ -181,6 +189,7 @@ std::vector<RawSignal> raw_signals(const panels::PanelDefinition& def, const std
         if (source.is_j1939() && !m.extended) continue;
         for (const auto& sig : m.signals) {
           RawSignal r{s, m.name + "." + sig.name, sig.length_bits == 1 ? "button" : "axis"};
+          r.wire = "CAN " + hex(m.id, m.extended ? 8 : 3) + (m.extended ? " (29-bit)" : "");
           if (r.kind == "axis") std::tie(r.lo, r.hi) = dbc_range(sig);
           if (r.kind == "axis" && !(r.hi > r.lo)) continue;
           r.bound = bound(s, r.signal);
@@ -200,12 +209,21 @@ std::vector<RawSignal> raw_signals(const panels::PanelDefinition& def, const std
                                                                    : "switch";
         out.push_back(RawSignal{s, signal->scalar, kind, -1.0, 1.0, true});
       }
-    } else {  // rise-can-v1, rise-modbus-v1
-      for (std::size_t i = 0; i < firmware_protocol::kMaxAxes; ++i) out.push_back({s, "axis." + std::to_string(i), "axis"});
-      for (std::size_t i = 0; i < firmware_protocol::kMaxButtons; ++i)
-        out.push_back({s, "button." + std::to_string(i), "button"});
-      for (std::size_t i = 0; i < firmware_protocol::kMaxSwitches; ++i)
-        out.push_back({s, "switch." + std::to_string(i), "switch"});
+    } else {  // rise-can-v1, rise-modbus-v1: the register map of firmware_protocol/README.md
+      namespace fp = firmware_protocol;
+      const bool modbus = source.is_modbus();
+      const auto can = [&](fp::FrameType t) { return "CAN " + hex(fp::can_id(t, source.node), 3); };
+      for (std::size_t i = 0; i < fp::kMaxAxes; ++i)
+        out.push_back({s, "axis." + std::to_string(i), "axis", -1.0, 1.0, false,
+                       modbus ? "input register " + std::to_string(fp::modbus_ir::kAxis0 + i)
+                              : can(i < fp::kAxesPerFrame ? fp::FrameType::Axes0 : fp::FrameType::Axes1)});
+      for (std::size_t i = 0; i < fp::kMaxButtons; ++i)
+        out.push_back({s, "button." + std::to_string(i), "button", -1.0, 1.0, false,
+                       modbus ? "discrete input " + std::to_string(i) : can(fp::FrameType::Buttons)});
+      for (std::size_t i = 0; i < fp::kMaxSwitches; ++i)
+        out.push_back({s, "switch." + std::to_string(i), "switch", -1.0, 1.0, false,
+                       modbus ? "input register " + std::to_string(fp::modbus_ir::kSwitch0 + i)
+                              : can(fp::FrameType::Switches)});
       for (auto& r : out)
         if (r.source == s) r.bound = bound(s, r.signal);
     }

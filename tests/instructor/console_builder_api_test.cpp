@@ -203,6 +203,7 @@ TEST_CASE("the live view lists every signal of a rise-can-v1 and a dbc source, b
     for (const auto& s : signals) bound += s.bound;
     CHECK(bound == def.controls.size());  // each bound signal once
     CHECK(signals.size() > def.controls.size());  // and the ones not bound yet
+    for (const auto& s : signals) CHECK(s.wire.rfind("CAN 0x", 0) == 0);
   }
 }
 
@@ -281,6 +282,9 @@ TEST_CASE("learning an axis proposes its signal, invert and deadband from its re
   const auto signals = parse_json(live->body)["signals"];
   CHECK(signals.size() == 6 + 32 + 6);
   CHECK(signals[5]["signal"].asString() == "axis.5");
+  // Where each travels: the frame of its node (0) or the register of its unit.
+  CHECK(signals[5]["wire"].asString() == (modbus ? "input register 5" : "CAN 0x120"));
+  CHECK(signals[13]["wire"].asString() == (modbus ? "discrete input 7" : "CAN 0x130"));
   CHECK_FALSE(signals[5]["bound"].asBool());
   CHECK(signals[4]["bound"].asBool());
   // Live: the source up, the lever read before anyone learns.
@@ -359,6 +363,8 @@ TEST_CASE("a hid source lists every signal of its device's descriptor and learns
   CHECK(signals["button_7"]["kind"].asString() == "button");
   CHECK_FALSE(signals["button_7"]["bound"].asBool());
   CHECK(signals["button_2"]["bound"].asBool());
+  CHECK(signals["button_7"]["wire"].asString() == "usage 0x0009:0x0007");  // Button page, button 7
+  CHECK(signals["x"]["wire"].asString() == "usage 0x0001:0x0030");
   CHECK(signals["x"]["kind"].asString() == "axis");
   auto state = [&] { return parse_json(http.Get("/api/builder/console_live")->body); };
   const auto wait_for = [&](const std::function<bool(const Json::Value&)>& done) {

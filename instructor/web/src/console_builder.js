@@ -208,9 +208,10 @@ async function startLive() {
 }
 
 function renderSignals() {
-  const rows = [el('tr', {}, ...['source', 'signal', 'kind', 'value', ''].map((h) => el('th', {}, h)))];
+  const rows = [el('tr', {}, ...['source', 'signal', 'on the wire', 'kind', 'value', ''].map((h) => el('th', {}, h)))];
   for (const s of state.signals)
-    rows.push(el('tr', { 'data-signal': s.signal, 'data-id': s.id }, el('td', {}, s.source), el('td', {}, s.signal), el('td', {}, s.kind),
+    rows.push(el('tr', { 'data-signal': s.signal, 'data-id': s.id }, el('td', {}, s.source), el('td', {}, s.signal),
+                 el('td', { class: 'dim' }, s.wire || ''), el('td', {}, s.kind),
                  el('td', { class: 'value', id: 'v' + s.id }, ''), el('td', {}, s.bound ? '●' : '')));
   $('signals').replaceChildren(...rows);
 }
