@@ -150,7 +150,7 @@ Json::Value design_check_json(const DesignCheck& check) {
   Json::Value v = check_json(TrainingCheck{check.yaml, check.errors});
   if (check.extra.isObject())
     for (const auto& key : check.extra.getMemberNames())
-      if (!v.isMember(key)) v[key] = check.extra[key];
+      v[key] = check.extra[key];
   return v;
 }
 

@@ -37,7 +37,7 @@ namespace rise::instructor {
 struct DesignCheck {
   std::string yaml;
   std::vector<BuilderError> errors;
-  Json::Value extra;  ///< an object, or null
+  Json::Value extra;  ///< an object (its members replace the reply's: a builder's richer errors), or null
 };
 
 struct DesignKind {
@@ -70,7 +70,7 @@ std::string design_name(const DesignFolder& folder, const DesignKind& kind, cons
                         httplib::Response& res);
 /// The file's text on disk now, "" when there is none.
 std::string disk_text(const DesignFolder& folder, const std::string& name);
-/// check_json's {yaml, ok, errors} with the check's extra fields.
+/// check_json's {yaml, ok, errors}, then the check's extra fields.
 Json::Value design_check_json(const DesignCheck& check);
 
 }  // namespace rise::instructor

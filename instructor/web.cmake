@@ -24,7 +24,9 @@ add_library(rise_instructor_web
   robot_builder.cpp
   robot_builder_routes.cpp
   task_builder.cpp
-  task_builder_routes.cpp)
+  task_builder_routes.cpp
+  console_builder.cpp
+  console_builder_model.cpp)
 add_library(rise::instructor_web ALIAS rise_instructor_web)
 rise_target_options(rise_instructor_web)
 target_link_libraries(rise_instructor_web PUBLIC rise::hil rise::msgs

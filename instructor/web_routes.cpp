@@ -19,6 +19,7 @@
 #include "instructor/builder_routes.hpp"
 #include "instructor/world_builder_routes.hpp"
 #include "instructor/robot_builder_routes.hpp"
+#include "instructor/console_builder.hpp"
 #include "instructor/fault_presets.hpp"
 #include "instructor/scenario.hpp"
 #include "instructor/task_builder_routes.hpp"
@@ -372,6 +373,7 @@ void add_routes(httplib::Server& http, const WebRouteContext& context) {
   add_world_builder_routes(http, ctx->settings.worlds_dir);
   add_robot_builder_routes(http, {ctx->settings.robots_dir, ctx->settings.world_file, ctx->settings.lcm_url});
   add_task_builder_routes(http, ctx->settings.designs_dir, process::executable_dir(), ctx->settings.lcm_url);
+  add_console_builder_routes(http, ctx->settings.consoles_dir, ctx->settings.console_sources);
 }
 
 }  // namespace rise::instructor

@@ -16,6 +16,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "instructor/fault_presets.hpp"  // the console's fault buttons
 #include "msgs/channels.hpp"
@@ -54,6 +55,9 @@ struct WebServerSettings {
   /// The world files the Environment Builder edits (instructor/world_builder.hpp); "" → off.
   std::string worlds_dir;
   std::string robots_dir;  ///< the robot files /robot_builder.html edits (instructor/robot_builder_routes.hpp); "" → off
+  /// The Console Builder's panel definitions and its live view's source URLs (instructor/console_builder.hpp).
+  std::string consoles_dir;
+  std::vector<std::string> console_sources;
   /// Told (from the LCM thread) when another process publishes on a channel
   /// where one of this server's virtual panels does; the program logs it.
   std::function<void(const std::string&)> on_duplicate_publisher;

@@ -33,6 +33,8 @@ struct ServeOptions {
   std::string designs = "sim/training/examples";
   std::string worlds = "sim/worlds";
   std::string robots = "sim/robots";
+  std::string consoles = "panels/definitions";
+  std::vector<std::string> console_sources;
   std::string web_dir;
   std::string panel = "panels/definitions/rise_console.yaml";
   uint32_t virtual_timeout_ms = 200;
@@ -82,6 +84,8 @@ int serve(const ServeOptions& o) {
                              std::strerror(std::filesystem::exists(s.designs_dir) ? ENOTDIR : ENOENT));
   s.worlds_dir = o.worlds.empty() ? "" : panels::find_data_file(o.worlds);
   s.robots_dir = o.robots.empty() ? "" : panels::find_data_file(o.robots);
+  s.consoles_dir = o.consoles.empty() ? "" : panels::find_data_file(o.consoles);
+  s.console_sources = o.console_sources;
   s.panel_file = panels::find_data_file(o.panel);
   s.virtual_timeout_ms = o.virtual_timeout_ms;
   s.push_hz = o.push_hz;
@@ -127,6 +131,11 @@ void add_serve_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--robots", o->robots, "the folder of robot files the Robot Builder reads and writes (\"\": off)")
       ->capture_default_str();
+  cmd->add_option("--consoles", o->consoles,
+                  "the folder of panel definitions the Console Builder reads and writes (\"\": off)")
+      ->capture_default_str();
+  cmd->add_option("--console-source", o->console_sources,
+                  "the Console Builder's live view: each source's URL, as rise-hild --source (repeat per source)");
   cmd->add_option("--web-dir", o->web_dir, "the built pages (default: instructor/web/dist, installed or of the source tree)");
   cmd->add_option("--panel", o->panel, "console definition the virtual panel copies")->capture_default_str();
   cmd->add_option("--virtual-timeout-ms", o->virtual_timeout_ms, "a virtual panel without an update this long fails safe")

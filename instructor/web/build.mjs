@@ -10,7 +10,7 @@ const dist = join(here, 'dist');
 rmSync(dist, { recursive: true, force: true });
 mkdirSync(dist, { recursive: true });
 await build({
-  entryPoints: ['console.js', 'panel.js', 'trainee.js', 'training.js', 'world_builder.js', 'robot_builder.js', 'task_builder.js'].map((f) => join(here, 'src', f)),
+  entryPoints: ['console.js', 'panel.js', 'trainee.js', 'training.js', 'world_builder.js', 'robot_builder.js', 'task_builder.js', 'console_builder.js'].map((f) => join(here, 'src', f)),
   bundle: true,
   format: 'esm',
   minify: true,
@@ -19,5 +19,5 @@ await build({
   outdir: dist,
   logLevel: 'warning',
 });
-for (const f of ['index.html', 'panel.html', 'trainee.html', 'training.html', 'world_builder.html', 'robot_builder.html', 'task_builder.html', 'style.css']) cpSync(join(here, 'src', f), join(dist, f));
+for (const f of ['index.html', 'panel.html', 'trainee.html', 'training.html', 'world_builder.html', 'robot_builder.html', 'task_builder.html', 'console_builder.html', 'style.css']) cpSync(join(here, 'src', f), join(dist, f));
 console.log('built', dist);

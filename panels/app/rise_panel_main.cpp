@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cstdio>
 #include <csignal>
 #include <thread>
 
@@ -337,6 +338,22 @@ int run_emulate(const EmulateOptions& o) {
 }
 }  // namespace
 
+// `rise-panel check`: 0 when every file loads, else 1 (the loader's message per file).
+int check_definitions(const std::vector<std::string>& files) {
+  int code = 0;
+  for (const auto& file : files) {
+    try {
+      const auto def = rise::panels::load_panel_definition(file);
+      std::printf("%s: ok: panel %s, %zu sources, %zu controls\n", file.c_str(), def.name.c_str(), def.sources.size(),
+                  def.controls.size());
+    } catch (const std::exception& e) {
+      std::printf("%s\n", e.what());
+      code = 1;
+    }
+  }
+  return code;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"rise-panel: console emulators and tools for the RISE console protocol"};
   app.require_subcommand(1);
@@ -386,9 +403,14 @@ int main(int argc, char** argv) {
   CLI::App* rp = app.add_subcommand("replay", "play a CAN capture onto a live transport, like canplayer");
   rise::panels::add_replay_options(*rp, replay);
 
+  std::vector<std::string> check_files;
+  CLI::App* ck = app.add_subcommand("check", "load panel definitions as rise-hild --panel does; each error with file:line and key");
+  ck->add_option("files", check_files, "panel definitions (YAML)")->required();
+
   if (const auto code = rise::cli::parse_command_line(app, "rise-panel", argc, argv)) return *code;
   spdlog::set_level(spdlog::level::from_str(log_level));
   if (em->parsed()) return run_emulate(emulate);
+  if (ck->parsed()) return check_definitions(check_files);
   if (rp->parsed()) {
     std::signal(SIGINT, on_signal);
     std::signal(SIGTERM, on_signal);

@@ -283,6 +283,7 @@ TrainingGraph parse_training_graph(const std::string& text, const std::string& f
       r.fail(n["name"], where + ".name", "must not be empty, START or END");
     if (!names.insert(node.name).second) r.fail(n["name"], where + ".name", "duplicate node '" + node.name + "'");
     const auto task = r.as<std::string>(n["task"], where + ".task");
+    if (task.empty()) r.fail(n["task"], where + ".task", "must name a task file");
     node.task_path = task;
     node.comment = trailing_comment(text, node.line);
     node.task_file = std::filesystem::path(task).is_absolute()

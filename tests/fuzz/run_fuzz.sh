@@ -6,7 +6,7 @@
 # RUNS -1: no bound but the time, RISE_FUZZ_SECONDS (default 50);
 # RISE_FUZZ_BUILD_ONLY=1: compile and stop (bench/fuzz_all builds them all first).
 # TARGET is console_can, console_modbus, dbc, canopen_eds, j1939, hid_descriptor, ply, scan3d, pcd, maps, carmen, logs,
-# line_protocols, command_auth, inputs, configs, training_graph, training_builder, world_builder, robot_builder, task_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
+# line_protocols, command_auth, inputs, configs, training_graph, training_builder, world_builder, robot_builder, task_builder, console_builder, urdf, mesh, web_requests or lcm_messages; sources are tests/fuzz/TARGET_fuzz.cpp plus the
 # library sources it needs. Crash inputs land in WORKDIR/TARGET-artifacts/.
 set -euo pipefail
 clangxx=$1 root=$2 work=$3 target=$4 runs=$5
@@ -75,6 +75,13 @@ case "$target" in
     sources=("$root"/instructor/{robot_builder,web_json,trainee_directory}.cpp "$root"/msgs/{channels,publisher_session,failsafe}.cpp
              "$root"/sim/{yaml_edit,robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp
              "$root/panels/yaml_reader.cpp")
+    ;;
+  # The Console Builder's request body: JSON → controls → the panel's text →
+  # rise-hild's loader (no server, no sources: console_builder_model.cpp).
+  console_builder)
+    sources=("$root/instructor/console_builder_model.cpp"
+             "$root"/panels/{panel_writer,panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
+             "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp)
     ;;
   urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
   mesh) sources=("$root/sim/mesh_file.cpp") ;;
@@ -146,6 +153,10 @@ if [ $rebuild -eq 1 ]; then
       bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen-all" "$root"/msgs/lcmtypes/*.lcm
       flags=(-I"$work/lcmgen-all" -isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-ljsoncpp -llcm -lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
+      ;;
+    console_builder)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-lyaml-cpp -ljsoncpp)
       ;;
     configs)
       flags=(-isystem /usr/include/eigen3)
@@ -339,6 +350,7 @@ case "$target" in
     printf '\x00%s' '{"world":"w","ground_friction":1,"robot_start":{"xy_m":[0,0],"yaw_deg":0},"robot_starts":[{"xy_m":[1,1],"yaw_deg":90}],"ceiling":{"height_m":2.6,"thickness_m":0.1,"follows_walls":true},"boxes":[{"name":"b","center_m":[3,3,0.3],"size_m":[0.6,0.6,0.6],"yaw_deg":23}],"props":[{"name":"p","kind":"shelf","center_m":[5,5,1],"size_m":[0.4,2,2],"yaw_deg":45}],"walls":[{"name":"w1","from":[-4,-3],"to":[9,-3],"height":2.5,"thickness":0.15,"openings":[{"at_m":3,"width_m":0.9,"height_m":2}]}],"doors":[{"name":"d","hinge":[-1,-3],"width":0.9,"yaw_deg":0,"open_deg_max":100,"break_torque_nm":900}],"stairs":[{"name":"s","start":[0.5,4.25],"yaw_deg":0,"steps":6}],"objects":[{"name":"o","size_m":[0.3,0.3,0.3],"mass_kg":4,"center_m":[6,1.5,0.15]}],"regions":[{"name":"r","min":[7,-2.5,0],"max":[8.5,-1,1.5]}]}' >"$corpus/world.json"
     printf '\x00%s' '{"world":"w","walls":[{"name":"w","from":[0,0],"to":[0,0],"openings":[{"at_m":-1}]}],"doors":[{"name":"w","hinge":[0,0],"width":-1}],"stairs":[{"name":"s","start":[0,0],"steps":0}]}' >"$corpus/errors.json"
     for f in "$root"/sim/worlds/*.yaml; do { printf '\x01'; cat "$f"; } >"$corpus/$(basename "$f")"; done
+    ;;
   robot_builder)
     # The page's bodies on skid4.yaml (a limit, an invert added, a picked
     # button, a bad value, a bad path), and edits of a text of every YAML form.
@@ -346,6 +358,7 @@ case "$target" in
     printf '{"edits":[{"path":"sounds.horn.button","value":"gripper_open"},{"path":"wheels.max_torque_nm","value":"-1"}]}' >"$corpus/bad.json"
     printf '{"edits":[{"path":"control.speed_scale.values[2]","value":"two words"},{"path":"control..x","value":"1"}]}' >"$corpus/paths.json"
     printf 'a: {b: 1, c: "q\\"", d: [1, 2]}  # c\nl:\n  - {x: 1}\n  - y\nm:\n  n: 2\n\0[{"path":"a.e","value":"1"},{"path":"l[0].z","value":"#"},{"path":"m.o.p","value":""}]' >"$corpus/forms"
+    ;;
   task_builder)
     # The page's task of the shipped approach_object.yaml (as /api/builder/task/NAME
     # gives it), one with an event of every kind, and one with errors of each kind.
@@ -354,6 +367,14 @@ case "$target" in
     printf '%s' "${t/\"end_on\":\[\"object_touched\"\]/\"end_on\":[\"object_touched\",\"nope\"]}" >"$corpus/bad-end.json"
     printf '%s' '{"task":"k","robot":"r.yaml","world":"../../worlds/building.yaml","events":[{"name":"a","kind":"object_in_region","object":"hazardous_object","region":"neutralization_area","hold_s":1},{"name":"b","kind":"neutralize_object","object":"hazardous_object","within_m":0.4,"hold_s":2},{"name":"c","kind":"robot_damaged","max_count":0},{"name":"d","kind":"robot_disabled"},{"name":"e","kind":"collision","per":"second"}]}' >"$corpus/kinds.json"
     printf '%s' '{"task":"","robot":"","world":"x.yaml","time_limit_s":-1,"regions":[{"name":"z","min":[1,1,1],"max":[0,0,0]}],"events":[{"name":"a","kind":"reach_region","region":"nowhere","object":"o","after_s":-1},{"name":"a","kind":"time_exceeded"}],"success":["q"]}' >"$corpus/errors.json"
+    ;;
+  console_builder)
+    # The page's controls: rise_console.yaml's as /api/builder/console/NAME
+    # gives them, one with a learned button added, one with errors.
+    c='{"controls":[{"comment":"Drive stick","fields":[["name","drive_x"],["kind","axis"],["signal","axis.0"],["deadband","0.05"],["motion","true"],["safe","0.0"]]},{"comment":"","fields":[["name","deadman"],["kind","button"],["signal","button.0"],["role","deadman"],["safe","false"]]},{"comment":"","fields":[["name","mode"],["kind","switch"],["signal","switch.0"],["positions",["drive","arm"]],["safe","drive"]]}]}'
+    printf '%s' "$c" >"$corpus/controls.json"
+    printf '%s' '{"controls":[{"comment":"learned: button.7\nsecond","fields":[["name","horn: x"],["kind","button"],["signal","button.7"],["safe",false]]},{"comment":"","fields":[["name","lever"],["kind","axis"],["signal","axis.5"],["invert","true"],["deadband",0.05],["safe","0.0"]]}]}' >"$corpus/learned.json"
+    printf '%s' '{"controls":[{"fields":[["name","a"],["kind","axis"],["signal","axis.9"],["safe",1]]},{"fields":[["name","a"],["kind","knob"]]},{"fields":[["range",[1,[2]]]]}]}' >"$corpus/errors.json"
     ;;
   web_requests)
     # The bodies the pages and tests/instructor/web_server_test.cpp post, and a cookie header.

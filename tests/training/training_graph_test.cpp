@@ -127,6 +127,11 @@ TEST_CASE("invalid training graphs are refused with a message naming file and li
     CHECK_THAT(graph_error("training: bad\nnodes:\n  - {name: a, task: x.yaml}\ntransitions:\n  - {from: START, to: a}\n  - {from: a, to: a}\n"),
                Contains(kBad + ":3: loop a → a has no exit"));
   }
+  SECTION("a node whose task is empty (the fuzzer's `task: !b.yaml`, a tag without a value)") {
+    CHECK_THAT(graph_error("training: bad\nnodes:\n  - {name: a, task: !b.yaml}\ntransitions:\n  - {from: START, to: a}\n"
+                           "  - {from: a, to: END}\n"),
+               Contains(kBad + ":3: nodes[0].task: must name a task file"));
+  }
   SECTION("nothing leaves START") {
     CHECK_THAT(graph_error(head + "transitions:\n  - {from: a, to: b}\n  - {from: b, to: END}\n"),
                Contains(kBad + ":1: no transition from START"));
