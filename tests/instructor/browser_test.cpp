@@ -709,6 +709,9 @@ TEST_CASE("the Training Builder adds a task and a conditioned edge by clicks and
   // The shipped graph drawn: START, three tasks, END; 11 arrows, three of them repeats.
   CHECK(text(r["boxes"]) == text(parse_json(R"(["START","mission1","mission2","mission3","END"])")));
   CHECK(r["arrows"].asInt() == 11);
+  // The line to the other builders and the console, this page's own marked.
+  CHECK(text(r["nav"]) == text(parse_json(R"([["console_builder.html",""],["robot_builder.html",""],
+    ["world_builder.html",""],["task_builder.html",""],["training.html","current"],["/",""]])")));
   CHECK(r["loop_labels"].size() == 3);
   CHECK(r["opened"]["cls"].asString() == "ok");
   // A lone task: the validator's error inline, on its line, and no saving.

@@ -113,7 +113,7 @@ TEST_CASE("the Environment Builder moves a door, deletes an object and adds a re
   CHECK(r["status"].asInt() == 200);
   CHECK(r["opened"].asString() == "ok");
   CHECK(r["entities"].size() == 13);  // 9 walls, a door, the stairs, an object, a region
-  CHECK(text(r["nav"]) == text(parse_json(R"(["/","robot_builder.html","world_builder.html","task_builder.html","training.html"])")));
+  CHECK(text(r["nav"]) == text(parse_json(R"(["console_builder.html","robot_builder.html","world_builder.html","task_builder.html","training.html","/"])")));
   // Both views drew something: the map and the 3D view are not one flat colour.
   CHECK(r["stats_before"]["map"]["variance"].asDouble() > 100);
   CHECK(r["stats_before"]["view3d"]["variance"].asDouble() > 50);

@@ -7,6 +7,7 @@
 // (errors with line and key, beside their control), previews the PanelState
 // the PanelMapper makes of it, and saves the YAML (a comment per control)
 // atomically, or says the file changed on disk (409) and offers the way out.
+import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el, token } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
 
@@ -26,13 +27,6 @@ function set(c, k, v) {
   if (i >= 0) c.fields[i][1] = v; else c.fields.push([k, v]);
 }
 
-function navLine() {
-  const t = encodeURIComponent(token);
-  const pages = [['Console', 'console_builder.html'], ['Robot', 'robot_builder.html'], ['World', 'world_builder.html'],
-                 ['Task', 'task_builder.html'], ['Training', 'training.html']];
-  $('builders').replaceChildren(...pages.flatMap(([n, p], i) => [i ? ' · ' : '', el('a', { href: `${p}?token=${t}` }, n)]),
-                                ' · ', el('a', { href: `/?token=${t}` }, 'instructor console'));
-}
 
 async function openFile(file) {
   const r = await getJson('/api/builder/console/' + encodeURIComponent(file));
@@ -313,7 +307,7 @@ async function save(version) {
 }
 
 async function main() {
-  navLine();
+  drawBuilderNav($('builders'), 'console_builder.html');
   conflict = new ConflictBanner($('conflict'), { onReload: () => openFile(state.file), onOverwrite: (v) => save(v) });
   const listing = await getJson('/api/builder/consoles');
   $('file').replaceChildren(...listing.files.map((f) => el('option', { value: f }, f)));

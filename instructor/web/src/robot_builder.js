@@ -8,6 +8,7 @@
 // (every comment stays), or says that the file changed on disk (409). Test
 // drive runs rise-sim with the saved file in the sandbox world; the virtual
 // panel of that station drives it, and the view follows its RobotState.
+import { drawBuilderNav } from './builder_nav.js';
 import * as THREE from 'three';
 import { getJson, postJson, stream, el, token } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
@@ -21,14 +22,6 @@ const state = {
 };
 let conflict = null;
 
-const BUILDERS = [['Console', 'console_builder.html'], ['Robot', 'robot_builder.html'], ['World', 'world_builder.html'],
-                  ['Task', 'task_builder.html'], ['Training', 'training.html']];
-function nav() {
-  const q = '?token=' + encodeURIComponent(token);
-  $('builders').replaceChildren(...BUILDERS.flatMap(([name, page], i) =>
-    [i ? ' · ' : '', page === 'robot_builder.html' ? el('b', {}, name) : el('a', { href: page + q }, name)]),
-  ' · ', el('a', { href: '/' + q }, 'instructor console'));
-}
 
 // ---- the property panel ----------------------------------------------------
 const MOTOR_KEY = /\.(max_mps|max_radps|max_torque_nm|max_speed_radps|max_speed_mps|max|max_effort|break_torque_nm|speed_mps|max_force_n|gain_per_s)$/;
@@ -367,7 +360,7 @@ async function save(version = state.version) {
 }
 
 async function main() {
-  nav();
+  drawBuilderNav($('builders'), 'robot_builder.html');
   conflict = new ConflictBanner($('conflict'), {
     onReload: () => openFile(state.file),
     onOverwrite: (current) => save(current),

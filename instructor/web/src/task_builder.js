@@ -10,6 +10,7 @@
 // (409). "Try it" runs the saved task in rise-sim with rise-trainer on the
 // sandbox station, opens the virtual panel page of that station (a window
 // of its own) for the user to drive, and shows the report when the task ends.
+import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el, token, ROBOT_COLOUR } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
 import { worldBounds, mapView, drawWorld, drawObjects, drawRobot, drawRegion } from './world_map.js';
@@ -490,7 +491,7 @@ function wireHeader() {
 }
 
 function wireNav() {
-  for (const a of document.querySelectorAll('#builder-nav a')) a.href = `${a.dataset.page || '/'}?token=${encodeURIComponent(token)}`;
+  drawBuilderNav($('builders'), 'task_builder.html');
 }
 
 async function main() {

@@ -4,6 +4,7 @@
 // with the loader `rise-trainer check` uses, whose errors show here with
 // their line and key; Save writes the YAML atomically, or says that the file
 // changed on disk since it was loaded (409) and offers to reload or overwrite.
+import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
 import { draw } from './graph_draw.js';
@@ -250,7 +251,7 @@ async function save(version) {
 async function main() {
   conflict = new ConflictBanner($('conflict'), { onReload: () => openFile(state.file), onOverwrite: (v) => save(v) });
   const trainings = await loadListing();
-  $('console-link').href = '/?token=' + encodeURIComponent(params.get('token') || '');
+  drawBuilderNav($('builders'), 'training.html');
   $('file').addEventListener('change', () => openFile($('file').value));
   $('edge-from').addEventListener('change', () => fieldsFor($('edge-from').value));
   $('edge-field').addEventListener('change', () => fieldsFor($('edge-from').value));

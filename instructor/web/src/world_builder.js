@@ -7,6 +7,7 @@
 // rise-sim, whose error shows here with its line and key; Save writes the
 // YAML atomically (keeping the file's comments), or says that the file
 // changed on disk since it was loaded (409) and offers to reload or overwrite.
+import { drawBuilderNav } from './builder_nav.js';
 import * as THREE from 'three';
 import { getJson, postJson, el, token } from './common.js';
 import { ConflictBanner, saveDesign } from './design_file.js';
@@ -471,14 +472,6 @@ function onMouseUp(ev) {
 }
 
 // ---- start ------------------------------------------------------------------
-function navLine() {
-  const t = encodeURIComponent(token);
-  const links = [['Console', '/'], ['Robot', 'robot_builder.html'], ['World', 'world_builder.html'], ['Task', 'task_builder.html'],
-    ['Training', 'training.html']];
-  $('builders').replaceChildren(...links.flatMap(([label, href], n) => [n ? ' · ' : '',
-    el('a', { href: `${href}?token=${t}`, class: label === 'World' ? 'current' : '' }, label)]));
-  $('console-link').href = '/?token=' + t;
-}
 
 window.riseWorldBuilder = {
   state,
@@ -491,7 +484,7 @@ window.riseWorldBuilder = {
 };
 
 async function main() {
-  navLine();
+  drawBuilderNav($('builders'), 'world_builder.html');
   conflict = new ConflictBanner($('conflict'), {
     onReload: () => openFile(state.file),
     onOverwrite: (current) => save(current),

@@ -45,7 +45,7 @@ run(async () => {
     await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
     result.opened = await page.$eval('#check-state', (e) => e.className);
     result.kinds = await page.$$eval('#event-kind option', (o) => o.map((e) => e.value));
-    result.nav = await page.$$eval('#builder-nav a', (a) => a.map((e) => e.getAttribute('href')));
+    result.nav = await page.$$eval('#builders a', (a) => a.map((e) => e.getAttribute('href')));
 
     // The start pose: dragged, turned by its knob, the yaw typed back.
     await drag(page, [4.0, 0.0], [3.8, -0.15]);

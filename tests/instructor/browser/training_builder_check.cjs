@@ -40,6 +40,7 @@ run(async () => {
     result.status = (await page.goto(`${base}/training.html?token=${encodeURIComponent(token)}&file=fig10_training.yaml`)).status();
     await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
     result.opened = await checkState(page);
+    result.nav = await page.$$eval('#builders a', (a) => a.map((e) => [e.getAttribute('href').split('?')[0], e.className]));
     result.boxes = await page.$$eval('#graph g.node', (g) => g.map((e) => e.dataset.name));
     result.arrows = await page.$$eval('#graph g.edge', (g) => g.length);
     result.loop_labels = await page.$$eval('#graph g.edge text', (t) => t.map((e) => e.textContent).filter((s) => s.includes('↻')));
