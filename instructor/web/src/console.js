@@ -1,5 +1,6 @@
 // The instructor console: live map, 3D view, panels, faults, training, reports.
 import * as THREE from 'three';
+import { drawBuilderNav } from './builder_nav.js';
 import { api, getJson, postJson, stream, el, token, ROBOT_COLOUR } from './common.js';
 import { createView, camera, buildWorld, robotMesh as makeRobotMesh, poseRobot, placeObjects, onboardMount, placeOnboard,
   placeChase, cameraBlackedOut, renderInto, canvasStats } from './scene3d.js';
@@ -29,7 +30,7 @@ function trainee(id) {
 function updatePanelLink() {
   document.getElementById('panel-link').href =
     'panel.html?id=' + encodeURIComponent(state.selected || 't1') + '&token=' + encodeURIComponent(token);
-  document.getElementById('builder-link').href = 'training.html?token=' + encodeURIComponent(token);
+  drawBuilderNav(document.getElementById('builders'), '/');
 }
 
 // ---- top-down map (world_map.js) -----------------------------------------
