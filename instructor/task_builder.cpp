@@ -179,9 +179,8 @@ std::string entry_at(const tr::TaskYamlLines& lines, int line) {
   return "";
 }
 
-// One line of the loader's message as an error with line and key.
-BuilderError builder_error(const std::string& text, const std::string& path, const tr::TaskYamlLines& lines) {
-  BuilderError e = loader_error(text, path);
+// A loader's error of the written task without a key: the entry its line holds.
+BuilderError with_entry(BuilderError e, const std::string& path, const tr::TaskYamlLines& lines) {
   if (e.key.empty() && e.line > 0 && e.file == fs::path(path).filename().string()) e.key = entry_at(lines, e.line);
   return e;
 }
@@ -272,16 +271,12 @@ TaskCheck check_task(const tr::TaskDescription& task, const std::string& path) {
     const auto loaded = tr::parse_task_description(out.yaml, path);
     tr::check_against_world(loaded, sim::load_world_description(loaded.world_file));
   } catch (const std::exception& e) {
-    std::istringstream in(e.what());
-    std::string line;
-    while (std::getline(in, line))
-      if (!line.empty()) out.errors.push_back(builder_error(line, path, lines));
+    for (auto& err : loader_errors(e.what(), path)) out.errors.push_back(with_entry(std::move(err), path, lines));
   }
   return out;
 }
 
-Json::Value check_json(const TaskCheck& check) { return check_json(check.yaml, check.errors);
-}
+Json::Value check_json(const TaskCheck& check) { return check_json(check.yaml, check.errors); }
 
 Json::Value task_files_json(const std::string& dir, const std::vector<std::string>& yaml_files) {
   static const std::regex task_key("(^|\n)task:");  // as rise-trainer check tells them apart

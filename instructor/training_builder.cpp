@@ -64,9 +64,9 @@ bool read_transition(const Json::Value& t, const std::string& where, tr::Transit
   return true;
 }
 
-// One line of the loader's message as an error with line and key.
-BuilderError builder_error(const std::string& text, const std::string& path, const tr::TrainingYamlLines& lines) {
-  BuilderError e = loader_error(text, path);
+// A loader's error of the written training without a key: the node or
+// transition its line holds.
+BuilderError with_entry(BuilderError e, const std::string& path, const tr::TrainingYamlLines& lines) {
   if (e.key.empty() && e.line > 0 && e.file == fs::path(path).filename().string()) {
     for (std::size_t i = 0; i < lines.nodes.size(); ++i)
       if (lines.nodes[i] == e.line) e.key = "nodes[" + std::to_string(i) + "]";
@@ -166,16 +166,12 @@ TrainingCheck check_training(const tr::TrainingGraph& graph, const std::string& 
   try {
     tr::parse_training_graph(out.yaml, path, true);
   } catch (const std::exception& e) {
-    std::istringstream in(e.what());
-    std::string line;
-    while (std::getline(in, line))
-      if (!line.empty()) out.errors.push_back(builder_error(line, path, lines));
+    for (auto& err : loader_errors(e.what(), path)) out.errors.push_back(with_entry(std::move(err), path, lines));
   }
   return out;
 }
 
-Json::Value check_json(const TrainingCheck& check) { return check_json(check.yaml, check.errors);
-}
+Json::Value check_json(const TrainingCheck& check) { return check_json(check.yaml, check.errors); }
 
 Json::Value training_files_json(const std::string& dir, const std::vector<std::string>& yaml_files) {
   static const std::regex training_key("(^|\n)training:");  // as rise-trainer check tells them apart

@@ -9,7 +9,7 @@
 // atomically, or says the file changed on disk (409) and offers the way out.
 import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el, token } from './common.js';
-import { ConflictBanner, errorText as fileErrorText, postCheck, saveDesign, showCheck, showEdited, showSaved } from './design_file.js';
+import { ConflictBanner, errorText as fileErrorText, postCheck, saveDesign, edited, showCheck, showSaved } from './design_file.js';
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
@@ -56,12 +56,7 @@ async function check() {
   render();
 }
 
-function changed() {
-  state.dirty = true;
-  showEdited();
-  render();
-  check();
-}
+const changed = () => edited(state, render, check);
 
 const errorText = (e) => fileErrorText(e, state.file, true);
 const show = (v) => Array.isArray(v) ? `[${v.map(show).join(', ')}]` : v === undefined ? '' : String(v);

@@ -81,6 +81,14 @@ export function showEdited() {
   byId('save-state').className = 'warn';
 }
 
+// An edit of the page's model: marked unsaved, drawn, checked.
+export function edited(state, render, check) {
+  state.dirty = true;
+  showEdited();
+  render();
+  check();
+}
+
 // A save's answer in #save-state and #version, the banner on a 409; returns
 // whether it saved. The caller keeps the new version and takes body.errors.
 export function showSaved(status, body, conflict) {

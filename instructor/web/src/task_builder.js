@@ -12,7 +12,7 @@
 // of its own) for the user to drive, and shows the report when the task ends.
 import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el, token, ROBOT_COLOUR } from './common.js';
-import { ConflictBanner, errorText, postCheck, saveDesign, showCheck, showEdited, showSaved } from './design_file.js';
+import { ConflictBanner, errorText, postCheck, saveDesign, edited, showCheck, showSaved } from './design_file.js';
 import { worldBounds, mapView, drawWorld, drawObjects, drawRobot, drawRegion } from './world_map.js';
 
 const $ = (id) => document.getElementById(id);
@@ -75,12 +75,7 @@ async function check() {
   render();
 }
 
-function changed() {
-  state.dirty = true;
-  showEdited();
-  render();
-  check();
-}
+const changed = () => edited(state, render, check);
 
 async function save(version, file = state.file) {
   $('save').disabled = true;

@@ -6,7 +6,7 @@
 // changed on disk since it was loaded (409) and offers to reload or overwrite.
 import { drawBuilderNav } from './builder_nav.js';
 import { getJson, el } from './common.js';
-import { ConflictBanner, errorText, postCheck, saveDesign, showCheck, showEdited, showSaved } from './design_file.js';
+import { ConflictBanner, errorText, postCheck, saveDesign, edited, showCheck, showSaved } from './design_file.js';
 import { draw } from './graph_draw.js';
 
 const $ = (id) => document.getElementById(id);
@@ -57,12 +57,7 @@ async function check() {
   render();
 }
 
-function changed() {
-  state.dirty = true;
-  showEdited();
-  render();
-  check();
-}
+const changed = () => edited(state, render, check);
 
 // "transitions[3].if" → "transitions[3]": what an error belongs to.
 function badEntries() {
