@@ -16,6 +16,8 @@
 #include "firmware_protocol/dbc.hpp"
 #include "instructor/console_builder.hpp"
 
+#include "instructor/builder_errors.hpp"
+
 namespace rise::instructor {
 
 namespace fs = std::filesystem;
@@ -53,17 +55,13 @@ std::optional<FieldValue> field_from_json(const Json::Value& v, int depth) {
 }
 
 // "file:line: key: message" (panels/yaml_reader.hpp) → its parts.
-BuilderError loader_error(const std::string& what) {
-  static const std::regex located(R"(^(.+?):(\d+): (.*)$)");
-  static const std::regex keyed(R"(^([^ :]+): (.*)$)");
+BuilderError console_loader_error(const std::string& what) {
   BuilderError e;
-  std::smatch m;
   std::string rest = what;
-  if (std::regex_match(what, m, located)) {
-    e.file = fs::path(m[1].str()).filename().string();
-    e.line = std::stoi(m[2].str());
-    rest = m[3].str();
-  }
+  if (std::string file; split_location(what, &file, &e.line, &rest)) e.file = fs::path(file).filename().string();
+  // Only a path with [ or . is a key here ("controls[2].bit"), not "panel".
+  static const std::regex keyed(R"(^([^ :]+): (.*)$)");
+  std::smatch m;
   if (std::regex_match(rest, m, keyed) && m[1].str().find_first_of("[.") != std::string::npos) {
     e.key = m[1].str();
     rest = m[2].str();
@@ -138,7 +136,7 @@ ConsoleCheck check_console(const std::string& text, const std::vector<ControlEnt
     check.yaml = panels::write_panel_controls(text, controls, &check.lines);
     check.definition = panels::parse_panel_definition(check.yaml, path);
   } catch (const std::exception& e) {
-    check.errors.push_back(loader_error(e.what()));
+    check.errors.push_back(console_loader_error(e.what()));
   }
   return check;
 }
@@ -149,11 +147,7 @@ Json::Value check_json(const ConsoleCheck& check) {
   v["ok"] = check.errors.empty();
   Json::Value errors(Json::arrayValue), lines(Json::arrayValue);
   for (const auto& e : check.errors) {
-    Json::Value j;
-    j["file"] = e.file;
-    j["line"] = e.line;
-    j["key"] = e.key;
-    j["message"] = e.message;
+    Json::Value j = builder_error_json(e);
     // The control whose lines hold the error (-1: none).
     int control = -1;
     for (std::size_t i = 0; i < check.lines.size(); ++i)

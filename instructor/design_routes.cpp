@@ -2,6 +2,7 @@
 
 #include <httplib.h>
 
+#include "instructor/builder_errors.hpp"
 #include "instructor/training_builder.hpp"
 #include "instructor/web_json.hpp"
 #include "instructor/web_requests.hpp"
@@ -147,7 +148,7 @@ std::string disk_text(const DesignFolder& folder, const std::string& name) {
 }
 
 Json::Value design_check_json(const DesignCheck& check) {
-  Json::Value v = check_json(TrainingCheck{check.yaml, check.errors});
+  Json::Value v = check_json(check.yaml, check.errors);
   if (check.extra.isObject())
     for (const auto& key : check.extra.getMemberNames())
       v[key] = check.extra[key];

@@ -1,5 +1,7 @@
 #include "instructor/robot_builder.hpp"
 
+#include "instructor/builder_errors.hpp"
+
 #include <filesystem>
 #include <regex>
 #include <sstream>
@@ -48,29 +50,6 @@ int line_of(const std::string& text, const std::string& path) {
   } catch (const std::exception&) {
   }
   return 0;
-}
-
-// "path:line: key: message" (the loader's form) → the error with line and key.
-BuilderError loader_error(const std::string& text, const std::string& path) {
-  BuilderError e;
-  e.file = fs::path(path).filename().string();
-  static const std::regex re(R"(^(.+?):(\d{1,9}): (.*)$)");
-  std::smatch m;
-  if (!std::regex_match(text, m, re)) {
-    e.message = text;
-    return e;
-  }
-  e.file = fs::path(m[1].str()).filename().string();
-  e.line = std::stoi(m[2]);
-  const std::string rest = m[3];
-  static const std::regex key_re(R"(^([A-Za-z_][A-Za-z0-9_\-]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_\-]*(\[\d+\])?)*): (.*)$)");
-  if (std::regex_match(rest, m, key_re)) {
-    e.key = m[1];
-    e.message = m[5];
-  } else {
-    e.message = rest;
-  }
-  return e;
 }
 
 Json::Value laser_json(const sim::LaserDescription& l) {
@@ -143,9 +122,7 @@ RobotCheck check_robot(const std::string& text, const std::vector<sim::YamlEdit>
   try {
     out.robot = sim::parse_robot_description(out.yaml, path);
   } catch (const std::exception& e) {
-    std::istringstream in(e.what());
-    for (std::string line; std::getline(in, line);)
-      if (!line.empty()) out.errors.push_back(loader_error(line, path));
+    for (auto& err : loader_errors(e.what(), path, true)) out.errors.push_back(std::move(err));
   }
   return out;
 }
@@ -166,19 +143,7 @@ Json::Value robot_scalars_json(const std::string& text) {
 }
 
 Json::Value robot_check_json(const RobotCheck& check) {
-  Json::Value v;
-  v["yaml"] = check.yaml;
-  v["ok"] = check.errors.empty();
-  Json::Value errors(Json::arrayValue);
-  for (const auto& e : check.errors) {
-    Json::Value j;
-    j["file"] = e.file;
-    j["line"] = e.line;
-    j["key"] = e.key;
-    j["message"] = e.message;
-    errors.append(j);
-  }
-  v["errors"] = errors;
+  Json::Value v = check_json(check.yaml, check.errors);
   v["scalars"] = robot_scalars_json(check.yaml);
   if (check.robot) {
     const std::string urdf = urdf_name(check.yaml);

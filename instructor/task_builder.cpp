@@ -1,5 +1,7 @@
 #include "instructor/task_builder.hpp"
 
+#include "instructor/builder_errors.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <regex>
@@ -166,17 +168,6 @@ Json::Value event_json(const tr::TaskEventSpec& e) {
   return j;
 }
 
-// "file:line: rest" → file, line, rest (false when the text has no such start).
-bool split_location(const std::string& text, std::string* file, int* line, std::string* rest) {
-  static const std::regex re(R"(^(.+?):(\d{1,9}): (.*)$)");
-  std::smatch m;
-  if (!std::regex_match(text, m, re)) return false;
-  *file = m[1];
-  *line = std::stoi(m[2]);
-  *rest = m[3];
-  return true;
-}
-
 // The entry of the written text that line `line` holds ("events[2]", "start"), or "".
 std::string entry_at(const tr::TaskYamlLines& lines, int line) {
   for (std::size_t i = 0; i < lines.events.size(); ++i)
@@ -188,25 +179,9 @@ std::string entry_at(const tr::TaskYamlLines& lines, int line) {
   return "";
 }
 
-// One line of the loader's message as an error with line and key.
-BuilderError builder_error(const std::string& text, const std::string& path, const tr::TaskYamlLines& lines) {
-  BuilderError e;
-  std::string file, rest;
-  if (!split_location(text, &file, &e.line, &rest)) {
-    e.file = fs::path(path).filename().string();
-    e.message = text;
-    return e;
-  }
-  e.file = fs::path(file).filename().string();
-  static const std::regex key_re(R"(^([A-Za-z_][A-Za-z0-9_]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?)*): (.*)$)");
-  std::smatch m;
-  if (std::regex_match(rest, m, key_re)) {
-    e.key = m[1];
-    e.message = m[5];
-  } else {
-    e.message = rest;
-  }
-  if (e.key.empty() && file == path) e.key = entry_at(lines, e.line);
+// A loader's error of the written task without a key: the entry its line holds.
+BuilderError with_entry(BuilderError e, const std::string& path, const tr::TaskYamlLines& lines) {
+  if (e.key.empty() && e.line > 0 && e.file == fs::path(path).filename().string()) e.key = entry_at(lines, e.line);
   return e;
 }
 
@@ -296,20 +271,12 @@ TaskCheck check_task(const tr::TaskDescription& task, const std::string& path) {
     const auto loaded = tr::parse_task_description(out.yaml, path);
     tr::check_against_world(loaded, sim::load_world_description(loaded.world_file));
   } catch (const std::exception& e) {
-    std::istringstream in(e.what());
-    std::string line;
-    while (std::getline(in, line))
-      if (!line.empty()) out.errors.push_back(builder_error(line, path, lines));
+    for (auto& err : loader_errors(e.what(), path)) out.errors.push_back(with_entry(std::move(err), path, lines));
   }
   return out;
 }
 
-Json::Value check_json(const TaskCheck& check) {
-  TrainingCheck same;
-  same.yaml = check.yaml;
-  same.errors = check.errors;
-  return check_json(same);
-}
+Json::Value check_json(const TaskCheck& check) { return check_json(check.yaml, check.errors); }
 
 Json::Value task_files_json(const std::string& dir, const std::vector<std::string>& yaml_files) {
   static const std::regex task_key("(^|\n)task:");  // as rise-trainer check tells them apart

@@ -1,5 +1,7 @@
 #include "instructor/training_builder.hpp"
 
+#include "instructor/builder_errors.hpp"
+
 #include <filesystem>
 #include <regex>
 #include <sstream>
@@ -62,36 +64,10 @@ bool read_transition(const Json::Value& t, const std::string& where, tr::Transit
   return true;
 }
 
-// "file:line: rest" → file, line, rest (false when the text has no such start).
-bool split_location(const std::string& text, std::string* file, int* line, std::string* rest) {
-  static const std::regex re(R"(^(.+?):(\d{1,9}): (.*)$)");
-  std::smatch m;
-  if (!std::regex_match(text, m, re)) return false;
-  *file = m[1];
-  *line = std::stoi(m[2]);
-  *rest = m[3];
-  return true;
-}
-
-// One line of the loader's message as an error with line and key.
-BuilderError builder_error(const std::string& text, const std::string& path, const tr::TrainingYamlLines& lines) {
-  BuilderError e;
-  std::string file, rest;
-  if (!split_location(text, &file, &e.line, &rest)) {
-    e.file = fs::path(path).filename().string();
-    e.message = text;
-    return e;
-  }
-  e.file = fs::path(file).filename().string();
-  static const std::regex key_re(R"(^([A-Za-z_][A-Za-z0-9_]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?)*): (.*)$)");
-  std::smatch m;
-  if (std::regex_match(rest, m, key_re)) {
-    e.key = m[1];
-    e.message = m[5];
-  } else {
-    e.message = rest;
-  }
-  if (e.key.empty() && file == path) {
+// A loader's error of the written training without a key: the node or
+// transition its line holds.
+BuilderError with_entry(BuilderError e, const std::string& path, const tr::TrainingYamlLines& lines) {
+  if (e.key.empty() && e.line > 0 && e.file == fs::path(path).filename().string()) {
     for (std::size_t i = 0; i < lines.nodes.size(); ++i)
       if (lines.nodes[i] == e.line) e.key = "nodes[" + std::to_string(i) + "]";
     for (std::size_t i = 0; i < lines.transitions.size(); ++i)
@@ -190,30 +166,12 @@ TrainingCheck check_training(const tr::TrainingGraph& graph, const std::string& 
   try {
     tr::parse_training_graph(out.yaml, path, true);
   } catch (const std::exception& e) {
-    std::istringstream in(e.what());
-    std::string line;
-    while (std::getline(in, line))
-      if (!line.empty()) out.errors.push_back(builder_error(line, path, lines));
+    for (auto& err : loader_errors(e.what(), path)) out.errors.push_back(with_entry(std::move(err), path, lines));
   }
   return out;
 }
 
-Json::Value check_json(const TrainingCheck& check) {
-  Json::Value v;
-  v["yaml"] = check.yaml;
-  v["ok"] = check.errors.empty();
-  Json::Value errors(Json::arrayValue);
-  for (const auto& e : check.errors) {
-    Json::Value j;
-    j["file"] = e.file;
-    j["line"] = e.line;
-    j["key"] = e.key;
-    j["message"] = e.message;
-    errors.append(j);
-  }
-  v["errors"] = errors;
-  return v;
-}
+Json::Value check_json(const TrainingCheck& check) { return check_json(check.yaml, check.errors); }
 
 Json::Value training_files_json(const std::string& dir, const std::vector<std::string>& yaml_files) {
   static const std::regex training_key("(^|\n)training:");  // as rise-trainer check tells them apart

@@ -15,6 +15,7 @@ add_library(rise_instructor_web
   scenario_processes.cpp
   launcher_thread.cpp
   design_files.cpp
+  builder_errors.cpp
   training_builder.cpp
   builder_routes.cpp
   design_routes.cpp

@@ -1,5 +1,7 @@
 #include "instructor/world_builder.hpp"
 
+#include "instructor/builder_errors.hpp"
+
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -270,23 +272,6 @@ sim::WorldDescription world_of(const Json::Value& body) {
 }
 
 // ---- the loader's error ------------------------------------------------------
-
-// "file:line: key: message" → its parts (the key when the text has one).
-BuilderError loader_error(const std::string& message, const std::string& path) {
-  BuilderError e;
-  e.file = fs::path(path).filename().string();
-  static const std::regex re(
-      R"(^(.+?):(\d{1,9}): (([A-Za-z_][A-Za-z0-9_]*(\[\d+\])?(\.[A-Za-z_][A-Za-z0-9_]*(\[\d+\])?)*): )?(.*)$)");
-  std::smatch m;
-  if (!std::regex_match(message, m, re)) {
-    e.message = message;
-    return e;
-  }
-  e.line = std::stoi(m[2]);
-  e.key = m[4];
-  e.message = m[8];
-  return e;
-}
 
 }  // namespace
 

@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "panels/yaml_writer.hpp"
+
 namespace rise::sim {
 
 namespace {
@@ -59,62 +61,18 @@ std::string vec(const std::array<double, N>& a) {
 
 // ---- strings ---------------------------------------------------------------
 
-bool plain_safe(const std::string& s) {
-  if (s.empty()) return false;
-  const auto c0 = static_cast<unsigned char>(s[0]);
-  if (!(std::isalpha(c0) || s[0] == '_')) return false;
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (!(std::isalnum(c) || ch == '_' || ch == '.' || ch == '-')) return false;
-  }
-  // Words YAML reads as something else than a string.
-  static const char* const kReserved[] = {"true", "false", "yes", "no", "on", "off", "null", "y", "n", "nan", "inf"};
-  std::string lower;
-  for (const char ch : s) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  for (const char* r : kReserved)
-    if (lower == r) return false;
-  return true;
-}
-
-std::string str(const std::string& text) {
-  if (plain_safe(text)) return text;
-  std::string out = "\"";
-  for (const char ch : text) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += ch;
-    }
-  }
-  return out + "\"";
-}
+std::string str(const std::string& text) { return panels::yaml_string(text); }
 
 // ---- comments --------------------------------------------------------------
 
 // The text after a '#' that starts a comment on `line` (outside quotes,
 // at the start or after a blank), or "".
 std::string trailing_comment(const std::string& line) {
-  char quote = 0;
-  for (std::size_t i = 0; i < line.size(); ++i) {
-    const char c = line[i];
-    if (quote) {
-      if (c == '\\' && quote == '"') ++i;
-      else if (c == quote) quote = 0;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-    } else if (c == '#' && (i == 0 || line[i - 1] == ' ' || line[i - 1] == '\t')) {
-      std::string t = line.substr(i + 1);
-      const auto a = t.find_first_not_of(' '), b = t.find_last_not_of(" \r");
-      return a == std::string::npos ? "" : t.substr(a, b - a + 1);
-    }
-  }
-  return "";
+  const std::size_t hash = panels::yaml_comment_start(line);
+  if (hash == std::string::npos) return "";
+  const std::string t = line.substr(hash + 1);
+  const auto a = t.find_first_not_of(' '), b = t.find_last_not_of(" \r");
+  return a == std::string::npos ? "" : t.substr(a, b - a + 1);
 }
 
 // A line as written back: no control characters but tabs (a CR inside a

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "panels/yaml_reader.hpp"
+#include "panels/yaml_writer.hpp"
 
 namespace rise::sim {
 
@@ -225,22 +226,7 @@ bool plain_safe(const std::string& s) {
 }  // namespace
 
 std::string yaml_flow_scalar(const std::string& value) {
-  if (plain_safe(value)) return value;
-  std::string out = "\"";
-  for (const char ch : value) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += ch;
-    }
-  }
-  return out + "\"";
+  return plain_safe(value) ? value : panels::yaml_double_quoted(value);
 }
 
 std::vector<YamlScalar> yaml_scalars(const std::string& text) {

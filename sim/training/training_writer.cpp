@@ -1,46 +1,12 @@
 #include "sim/training/training_writer.hpp"
 
-#include <cstdio>
-
+#include "panels/yaml_writer.hpp"
 #include "sim/training/yaml_comments.hpp"
 
 namespace rise::sim::training {
 
-namespace {
-
-bool plain_safe(const std::string& s) {
-  if (s.empty()) return false;
-  const auto c0 = static_cast<unsigned char>(s[0]);
-  if (!(std::isalpha(c0) || s[0] == '_')) return false;
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (!(std::isalnum(c) || ch == '_' || ch == '.' || ch == '/' || ch == '-')) return false;
-  }
-  return true;
-}
-
-}  // namespace
-
-std::string yaml_scalar(const std::string& text) {
-  if (plain_safe(text)) return text;
-  std::string out = "\"";
-  for (const char ch : text) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (ch == '"' || ch == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (ch == '\n') {
-      out += "\\n";
-    } else if (c < 0x20 || c == 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += ch;
-    }
-  }
-  return out + "\"";
-}
+// Names and file paths ('/' too) plain where they read back the same.
+std::string yaml_scalar(const std::string& text) { return panels::yaml_string(text, "/"); }
 
 std::string write_training_graph(const TrainingGraph& g, TrainingYamlLines* where) {
   CommentedLines out;

@@ -2,6 +2,8 @@
 
 #include <sstream>
 
+#include "panels/yaml_writer.hpp"
+
 namespace rise::sim::training {
 
 namespace {
@@ -47,19 +49,8 @@ std::string line_text(const std::string& text, int line) {
 // 1.2 section 6.6), without the # and the blanks around it.
 std::string trailing_comment(const std::string& text, int line) {
   const std::string l = line_text(text, line);
-  char quote = 0;
-  for (std::size_t i = 0; i < l.size(); ++i) {
-    const char c = l[i];
-    if (quote) {
-      if (c == quote) quote = 0;
-      else if (c == '\\' && quote == '"') ++i;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-    } else if (c == '#' && (i == 0 || l[i - 1] == ' ' || l[i - 1] == '\t')) {
-      return trim(l.substr(i + 1));
-    }
-  }
-  return "";
+  const std::size_t hash = panels::yaml_comment_start(l);
+  return hash == std::string::npos ? "" : trim(l.substr(hash + 1));
 }
 
 // The comment lines that open the file, before its first key: what the file

@@ -17,7 +17,7 @@
 
 #include "instructor/console_builder.hpp"
 #include "panels/panel_writer.hpp"
-#include "tests/fuzz/fuzz_check.hpp"
+#include "tests/fuzz/builder_fuzz.hpp"
 
 namespace ins = rise::instructor;
 namespace panels = rise::panels;
@@ -27,19 +27,8 @@ namespace {
 const std::string kFile = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
 
 const std::string& shipped_text() {
-  static const std::string text = [] {
-    std::ifstream in(kFile);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }();
+  static const std::string text = rise::fuzz::file_text(kFile);
   return text;
-}
-
-int line_count(const std::string& text) {
-  int n = 0;
-  for (const char c : text) n += c == '\n';
-  return n;
 }
 
 }  // namespace
@@ -47,10 +36,8 @@ int line_count(const std::string& text) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   Json::Value body;
-  std::string parse_error;
-  const std::unique_ptr<Json::CharReader> reader(Json::CharReaderBuilder().newCharReader());
   // The server takes only an object (web_requests.hpp parse_json_object).
-  if (!reader->parse(text.data(), text.data() + text.size(), &body, &parse_error) || !body.isObject()) return 0;
+  if (!rise::fuzz::parse_json(text, &body) || !body.isObject()) return 0;
   std::string error;
   const auto controls = ins::controls_from_json(body["controls"], &error);
   if (!controls) {
@@ -63,7 +50,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   const Json::Value j = ins::check_json(check);
   for (const auto& e : j["errors"]) {
     fuzz_check(!e["message"].asString().empty());
-    fuzz_check(e["line"].asInt() >= 0 && e["line"].asInt() <= line_count(check.yaml) + 1);
+    fuzz_check(e["line"].asInt() >= 0 && e["line"].asInt() <= rise::fuzz::line_count(check.yaml) + 1);
     fuzz_check(e["control"].asInt() >= -1 && e["control"].asInt() < static_cast<int>(controls->size()));
   }
   if (check.definition) {

@@ -17,7 +17,7 @@
 #include "instructor/robot_builder.hpp"
 #include "panels/yaml_reader.hpp"
 #include "sim/yaml_edit.hpp"
-#include "tests/fuzz/fuzz_check.hpp"
+#include "tests/fuzz/builder_fuzz.hpp"
 
 namespace ins = rise::instructor;
 namespace sim = rise::sim;
@@ -27,12 +27,7 @@ namespace {
 const std::string kFile = std::string(RISE_SOURCE_DIR) + "/sim/robots/skid4.yaml";
 
 const std::string& shipped() {
-  static const std::string text = [] {
-    std::ifstream in(kFile);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }();
+  static const std::string text = rise::fuzz::file_text(kFile);
   return text;
 }
 

@@ -39,7 +39,7 @@ case "$target" in
                    "$root"/semantic/{pose_graph_io,cloud_formats,text_reading,cloud}.cpp "$root/msgs/command_auth.cpp"
                    "$root"/hil/io/{can_url,modbus_url,host_port,hid_device,usb_hotplug,evdev_device,posix_io}.cpp) ;;
   configs)
-    sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
+    sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,yaml_writer,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
              "$root"/sim/{robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp "$root"/sim/training/{task_description,yaml_comments}.cpp
              "$root/instructor/scenario.cpp")
@@ -48,38 +48,38 @@ case "$target" in
   # executor, so neither the executor nor the simulator is linked).
   training_graph)
     sources=("$root"/sim/training/{training_graph,training_writer,task_result,task_description,yaml_comments}.cpp "$root"/sim/world_description.cpp
-             "$root/panels/yaml_reader.cpp")
+             "$root"/panels/{yaml_reader,yaml_writer}.cpp)
     ;;
   # The Training Builder's request body: JSON → graph → YAML → the trainer's
   # loader with the shipped task files (design_files.cpp: the name check; its
   # atomic save is report.cpp's).
   training_builder)
-    sources=("$root"/instructor/{training_builder,design_files}.cpp
+    sources=("$root"/instructor/{training_builder,design_files,builder_errors}.cpp
              "$root"/sim/training/{training_graph,training_writer,task_result,task_description,report,yaml_comments}.cpp
-             "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
+             "$root"/sim/world_description.cpp "$root"/panels/{yaml_reader,yaml_writer}.cpp)
     ;;
   # The Task Builder's request body: JSON → task → YAML → the trainer's loader
   # and the task's world (training_builder.cpp: the errors' JSON).
   task_builder)
-    sources=("$root"/instructor/{task_builder,training_builder,design_files}.cpp
+    sources=("$root"/instructor/{task_builder,training_builder,design_files,builder_errors}.cpp
              "$root"/sim/training/{task_writer,training_graph,training_writer,task_result,task_description,report,yaml_comments}.cpp
-             "$root"/sim/world_description.cpp "$root/panels/yaml_reader.cpp")
+             "$root"/sim/world_description.cpp "$root"/panels/{yaml_reader,yaml_writer}.cpp)
     ;;
   # The Environment Builder's body (JSON → world → YAML → rise-sim's loader) and world files written back.
   world_builder)
-    sources=("$root/instructor/world_builder.cpp" "$root"/sim/{world_writer,world_description}.cpp "$root/panels/yaml_reader.cpp") ;;
+    sources=("$root"/instructor/{world_builder,builder_errors}.cpp "$root"/sim/{world_writer,world_description}.cpp "$root"/panels/{yaml_reader,yaml_writer}.cpp) ;;
   # The Robot Builder's request body: its edits written in place into a
   # robot's text (sim/yaml_edit.cpp) and loaded as rise-sim loads it;
   # web_json.cpp draws the view (its message types by lcm-gen here).
   robot_builder)
-    sources=("$root"/instructor/{robot_builder,web_json,trainee_directory}.cpp "$root"/msgs/{channels,publisher_session,failsafe}.cpp
+    sources=("$root"/instructor/{robot_builder,builder_errors,web_json,trainee_directory}.cpp "$root"/msgs/{channels,publisher_session,failsafe}.cpp
              "$root"/sim/{yaml_edit,robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp
-             "$root/panels/yaml_reader.cpp")
+             "$root"/panels/{yaml_reader,yaml_writer}.cpp)
     ;;
   # The Console Builder's request body: JSON → controls → the panel's text →
   # rise-hild's loader (no server, no sources: console_builder_model.cpp).
   console_builder)
-    sources=("$root/instructor/console_builder_model.cpp"
+    sources=("$root"/instructor/{console_builder_model,builder_errors}.cpp
              "$root"/panels/{panel_writer,panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp)
     ;;

@@ -14,7 +14,7 @@
 
 #include "instructor/training_builder.hpp"
 #include "sim/training/training_writer.hpp"
-#include "tests/fuzz/fuzz_check.hpp"
+#include "tests/fuzz/builder_fuzz.hpp"
 
 namespace ins = rise::instructor;
 namespace training = rise::sim::training;
@@ -23,12 +23,6 @@ namespace {
 
 // Beside the shipped task files, so that a graph naming them loads them.
 const std::string kFile = std::string(RISE_SOURCE_DIR) + "/sim/training/examples/fuzz_training.yaml";
-
-int line_count(const std::string& text) {
-  int n = 0;
-  for (const char c : text) n += c == '\n';
-  return n;
-}
 
 void json_round_trip(const std::string& yaml) {
   training::TrainingGraph loaded;
@@ -48,9 +42,7 @@ void json_round_trip(const std::string& yaml) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   Json::Value body;
-  std::string parse_error;
-  const std::unique_ptr<Json::CharReader> reader(Json::CharReaderBuilder().newCharReader());
-  if (!reader->parse(text.data(), text.data() + text.size(), &body, &parse_error)) return 0;
+  if (!rise::fuzz::parse_json(text, &body)) return 0;
   std::string error;
   const auto graph = ins::training_graph_from_json(body, &error);
   if (!graph) {
@@ -59,10 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, std::size_t size) {
   }
   const ins::TrainingCheck check = ins::check_training(*graph, kFile);
   fuzz_check(!check.yaml.empty());
-  for (const auto& e : check.errors) {
-    fuzz_check(!e.message.empty());
-    if (e.file == "fuzz_training.yaml") fuzz_check(e.line >= 0 && e.line <= line_count(check.yaml) + 1);
-  }
+  rise::fuzz::check_builder_errors(check.errors, check.yaml, "fuzz_training.yaml");
   json_round_trip(check.yaml);
   return 0;
 }

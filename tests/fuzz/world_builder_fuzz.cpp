@@ -16,7 +16,7 @@
 #include "instructor/world_builder.hpp"
 #include "panels/yaml_reader.hpp"
 #include "sim/world_writer.hpp"
-#include "tests/fuzz/fuzz_check.hpp"
+#include "tests/fuzz/builder_fuzz.hpp"
 
 namespace ins = rise::instructor;
 namespace sim = rise::sim;
@@ -30,17 +30,9 @@ const std::string& building_text() {
   return text;
 }
 
-int line_count(const std::string& text) {
-  int n = 0;
-  for (const char c : text) n += c == '\n';
-  return n;
-}
-
 void page_body(const std::string& text) {
   Json::Value body;
-  std::string parse_error;
-  const std::unique_ptr<Json::CharReader> reader(Json::CharReaderBuilder().newCharReader());
-  if (!reader->parse(text.data(), text.data() + text.size(), &body, &parse_error)) return;
+  if (!rise::fuzz::parse_json(text, &body)) return;
   std::string error;
   const auto world = ins::world_model_from_json(body, &error);
   if (!world) {
@@ -50,10 +42,7 @@ void page_body(const std::string& text) {
   const ins::WorldCheck check = ins::check_world(*world, kFile, building_text());
   fuzz_check(!check.yaml.empty());
   fuzz_check(check.loaded.has_value() == check.errors.empty());
-  for (const auto& e : check.errors) {
-    fuzz_check(!e.message.empty());
-    fuzz_check(e.line >= 0 && e.line <= line_count(check.yaml) + 1);
-  }
+  rise::fuzz::check_builder_errors(check.errors, check.yaml);
   if (!check.loaded) return;
   const auto again = ins::world_model_from_json(ins::world_model_json(*check.loaded), &error);
   fuzz_check(again.has_value());

@@ -13,6 +13,7 @@
 #include "instructor/training_builder.hpp"
 #include "instructor/web_server.hpp"
 #include "sim/training/training_graph.hpp"
+#include "builder_api_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -21,35 +22,10 @@ using rise::instructor::DesignFolder;
 using rise::instructor::SaveStatus;
 
 namespace {
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
-
-struct BuilderFixture {
-  fs::path dir;
-  rise::instructor::WebServerSettings settings;
-
-  BuilderFixture() {
-    char tmpl[] = "/tmp/rise-builder-api-XXXXXX";
-    dir = ::mkdtemp(tmpl);
-    fs::create_directories(dir / "www");
-    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
-    fs::create_directories(dir / "designs");
-    for (const auto& e : fs::directory_iterator(std::string(RISE_SOURCE_DIR) + "/sim/training/examples"))
-      if (e.path().extension() == ".yaml") fs::copy_file(e.path(), dir / "designs" / e.path().filename());
-    settings.port = 0;
-    settings.token = "tok-builder";
-    settings.web_dir = (dir / "www").string();
-    settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
-    settings.designs_dir = (dir / "designs").string();
+struct BuilderFixture : BuilderApiFixture {
+  BuilderFixture() : BuilderApiFixture("builder-api", "tok-builder") {
+    settings.designs_dir = copy_shipped("sim/training/examples", "designs", ".yaml");
   }
-  ~BuilderFixture() { fs::remove_all(dir); }
-  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
   fs::path training() const { return dir / "designs" / "fig10_training.yaml"; }
 };
 

@@ -28,6 +28,7 @@
 #include "panels/console_emulator.hpp"
 #include "panels/panel_definition.hpp"
 #include "panels/timeline.hpp"
+#include "builder_api_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -35,36 +36,11 @@ using namespace rise::instructor_test;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
-
-struct ConsoleFixture {
-  fs::path dir;
-  rise::instructor::WebServerSettings settings;
-
-  ConsoleFixture() {
-    char tmpl[] = "/tmp/rise-console-builder-XXXXXX";
-    dir = ::mkdtemp(tmpl);
-    fs::create_directories(dir / "www");
-    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
-    fs::create_directories(dir / "consoles");
-    for (const auto& e : fs::directory_iterator(std::string(RISE_SOURCE_DIR) + "/panels/definitions"))
-      fs::copy_file(e.path(), dir / "consoles" / e.path().filename());
-    settings.port = 0;
-    settings.token = "tok-console";
-    settings.web_dir = (dir / "www").string();
-    settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
+struct ConsoleFixture : BuilderApiFixture {
+  ConsoleFixture() : BuilderApiFixture("console-builder", "tok-console") {
     settings.designs_dir = "";
-    settings.consoles_dir = (dir / "consoles").string();
+    settings.consoles_dir = copy_shipped("panels/definitions", "consoles", "");
   }
-  ~ConsoleFixture() { fs::remove_all(dir); }
-  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
 };
 
 // A control as the page sends it.

@@ -13,6 +13,7 @@
 
 #include "instructor/web_server.hpp"
 #include "sim/robot_description.hpp"
+#include "builder_api_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -20,33 +21,11 @@ using namespace rise::instructor_test;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
-
-struct RobotFixture {
-  fs::path dir;
-  rise::instructor::WebServerSettings settings;
-
-  RobotFixture() {
-    char tmpl[] = "/tmp/rise-robot-api-XXXXXX";
-    dir = ::mkdtemp(tmpl);
-    fs::create_directories(dir / "www");
-    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
-    fs::copy(std::string(RISE_SOURCE_DIR) + "/sim/robots", dir / "robots", fs::copy_options::recursive);
-    settings.port = 0;
-    settings.token = "tok-robot";
-    settings.web_dir = (dir / "www").string();
-    settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
+struct RobotFixture : BuilderApiFixture {
+  RobotFixture() : BuilderApiFixture("robot-api", "tok-robot") {
+    fs::copy(std::string(RISE_SOURCE_DIR) + "/sim/robots", dir / "robots", fs::copy_options::recursive);  // with the URDFs' folders
     settings.robots_dir = (dir / "robots").string();
   }
-  ~RobotFixture() { fs::remove_all(dir); }
-  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
 };
 
 // {version, edits: [{path, value}]}.

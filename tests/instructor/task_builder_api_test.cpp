@@ -16,6 +16,7 @@
 #include "instructor/task_builder.hpp"
 #include "instructor/web_server.hpp"
 #include "sim/training/task_description.hpp"
+#include "builder_api_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
@@ -25,42 +26,18 @@ namespace {
 
 const std::string kSrc = RISE_SOURCE_DIR;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string text(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
-
 // dir/sim/training/examples holds copies of the task files; the folders they
 // name (robots, worlds, panels, scenarios) are links to the source tree's.
-struct TaskFixture {
-  fs::path dir;
+struct TaskFixture : BuilderApiFixture {
   fs::path designs;
-  rise::instructor::WebServerSettings settings;
 
-  TaskFixture() {
-    char tmpl[] = "/tmp/rise-task-api-XXXXXX";
-    dir = ::mkdtemp(tmpl);
-    designs = dir / "sim" / "training" / "examples";
-    fs::create_directories(designs);
+  TaskFixture() : BuilderApiFixture("task-api", "tok-task") {
+    designs = copy_shipped("sim/training/examples", fs::path("sim") / "training" / "examples", "");
     fs::create_directories(dir / "instructor");
-    fs::create_directories(dir / "www");
-    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
     for (const char* d : {"sim/robots", "sim/worlds", "panels", "instructor/scenarios"})
       fs::create_directory_symlink(kSrc + "/" + d, dir / d);
-    for (const auto& e : fs::directory_iterator(kSrc + "/sim/training/examples"))
-      fs::copy_file(e.path(), designs / e.path().filename());
-    settings.port = 0;
-    settings.token = "tok-task";
-    settings.web_dir = (dir / "www").string();
-    settings.panel_file = kSrc + "/panels/definitions/rise_console.yaml";
     settings.designs_dir = designs.string();
   }
-  ~TaskFixture() { fs::remove_all(dir); }
-  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
 };
 
 std::string body(const Json::Value& task, const std::string& version) {

@@ -13,42 +13,18 @@
 #include "instructor/web_server.hpp"
 #include "instructor/world_builder.hpp"
 #include "sim/world_description.hpp"
+#include "builder_api_support.hpp"
 #include "web_peer.hpp"
 
 namespace fs = std::filesystem;
 using namespace rise::instructor_test;
 
 namespace {
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string json(const Json::Value& v) { return Json::writeString(Json::StreamWriterBuilder(), v); }
-
-struct WorldFixture {
-  fs::path dir;
-  rise::instructor::WebServerSettings settings;
-
-  WorldFixture() {
-    char tmpl[] = "/tmp/rise-world-builder-api-XXXXXX";
-    dir = ::mkdtemp(tmpl);
-    fs::create_directories(dir / "www");
-    std::ofstream(dir / "www" / "index.html") << "<!doctype html><title>console</title>";
-    fs::create_directories(dir / "worlds");
-    for (const auto& e : fs::directory_iterator(std::string(RISE_SOURCE_DIR) + "/sim/worlds"))
-      if (e.path().extension() == ".yaml") fs::copy_file(e.path(), dir / "worlds" / e.path().filename());
+struct WorldFixture : BuilderApiFixture {
+  WorldFixture() : BuilderApiFixture("world-builder-api", "tok-world") {
+    settings.worlds_dir = copy_shipped("sim/worlds", "worlds", ".yaml");
     std::ofstream(dir / "worlds" / "broken.yaml") << "world: x\nwalls: 3\n";
-    settings.port = 0;
-    settings.token = "tok-world";
-    settings.web_dir = (dir / "www").string();
-    settings.panel_file = std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml";
-    settings.worlds_dir = (dir / "worlds").string();
   }
-  ~WorldFixture() { fs::remove_all(dir); }
-  httplib::Headers auth() const { return {{"X-Rise-Token", settings.token}}; }
   fs::path building() const { return dir / "worlds" / "building.yaml"; }
 };
 
@@ -56,7 +32,7 @@ std::string body(const Json::Value& world, const std::string& version) {
   Json::Value b;
   b["world"] = world;
   b["version"] = version;
-  return json(b);
+  return text(b);
 }
 }  // namespace
 
@@ -83,7 +59,7 @@ TEST_CASE("the world builder lists, reads, checks and saves worlds through the l
   const std::string version = r["version"].asString();
   Json::Value world = r["world"];
   REQUIRE(world["doors"].size() == 1);
-  CHECK(json(world["doors"][0]["hinge"]) == json(parse_json("[3.0,-0.55]")));
+  CHECK(text(world["doors"][0]["hinge"]) == text(parse_json("[3.0,-0.55]")));
   CHECK(world["doors"][0]["yaw_deg"].asDouble() == 90.0);  // the file's degrees, not 89.99999999999999
   CHECK(world["ceiling"]["follows_walls"].asBool());
   CHECK(r["view"]["boxes"].size() > 10);

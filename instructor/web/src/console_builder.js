@@ -9,7 +9,7 @@
 // atomically, or says the file changed on disk (409) and offers the way out.
 import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el, token } from './common.js';
-import { ConflictBanner, saveDesign } from './design_file.js';
+import { ConflictBanner, errorText as fileErrorText, postCheck, saveDesign, edited, showCheck, showSaved } from './design_file.js';
 
 const $ = (id) => document.getElementById(id);
 const params = new URLSearchParams(location.search);
@@ -49,34 +49,21 @@ async function openFile(file) {
 }
 
 async function check() {
-  const seq = ++state.checkSeq;
-  $('check-state').textContent = 'checking…';
-  const r = await postJson(`/api/builder/console/${encodeURIComponent(state.file)}/check`, { controls: state.controls });
-  const body = await r.json();
-  if (seq !== state.checkSeq) return;
-  state.check = r.ok ? body : { ok: false, yaml: '', errors: [{ message: body.error, line: 0, key: '', control: -1 }] };
+  const answer = await postCheck(state, `/api/builder/console/${encodeURIComponent(state.file)}/check`,
+                                 { controls: state.controls }, { control: -1 });
+  if (!answer) return;
+  state.check = answer.check;
   render();
 }
 
-function changed() {
-  state.dirty = true;
-  $('save-state').textContent = 'edited, not saved';
-  $('save-state').className = 'warn';
-  render();
-  check();
-}
+const changed = () => edited(state, render, check);
 
-const errorText = (e) => [e.line ? `${e.file || state.file}:${e.line}:` : '', e.key ? e.key + ':' : '', e.message].filter(Boolean).join(' ');
+const errorText = (e) => fileErrorText(e, state.file, true);
 const show = (v) => Array.isArray(v) ? `[${v.map(show).join(', ')}]` : v === undefined ? '' : String(v);
 
 function render() {
-  const ok = state.check && state.check.ok;
+  const ok = showCheck(state.check, 'ok: rise-hild --panel would load it', errorText);
   const errors = (state.check && state.check.errors) || [];
-  $('check-state').textContent = !state.check ? 'not checked yet' : ok ? 'ok: rise-hild --panel would load it' :
-    `${errors.length} error${errors.length === 1 ? '' : 's'}: not saved until fixed`;
-  $('check-state').className = ok ? 'ok' : 'bad';
-  $('errors').replaceChildren(...errors.map((e) => el('li', { 'data-key': e.key || '', 'data-line': e.line || 0 }, errorText(e))));
-  $('yaml').textContent = (state.check && state.check.yaml) || '';
   $('save').disabled = !ok || !state.dirty;
   renderControls(errors);
 }
@@ -288,21 +275,8 @@ async function save(version) {
   $('save').disabled = true;
   const { status, body } = await saveDesign('/api/builder/console/' + encodeURIComponent(state.file), version,
                                             { controls: state.controls });
-  if (status === 200) {
-    Object.assign(state, { version: body.version, dirty: false });
-    $('version').textContent = 'version ' + body.version;
-    $('save-state').textContent = 'saved';
-    $('save-state').className = 'ok';
-    conflict.hide();
-  } else if (status === 409) {
-    conflict.show(body);
-    $('save-state').textContent = 'not saved: changed on disk';
-    $('save-state').className = 'bad';
-  } else {
-    if (body.errors) state.check = body;
-    $('save-state').textContent = 'not saved: ' + body.error;
-    $('save-state').className = 'bad';
-  }
+  if (showSaved(status, body, conflict)) Object.assign(state, { version: body.version, dirty: false });
+  else if (body.errors) state.check = body;
   render();
 }
 

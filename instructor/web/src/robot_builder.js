@@ -11,7 +11,7 @@
 import { drawBuilderNav } from './builder_nav.js';
 import * as THREE from 'three';
 import { getJson, postJson, stream, el, token } from './common.js';
-import { ConflictBanner, saveDesign } from './design_file.js';
+import { ConflictBanner, errorText as fileErrorText, postCheck, requestError, saveDesign } from './design_file.js';
 import { createView, camera, buildWorld, robotMesh, poseRobot, placeChase, canvasStats } from './scene3d.js';
 
 const $ = (id) => document.getElementById(id);
@@ -108,10 +108,7 @@ function inputFor(r) {
   return input;
 }
 
-function errorText(e) {
-  const where = e.line ? `${e.file && e.file !== state.file ? e.file + ':' : ''}${e.line}:` : '';
-  return [where, e.key ? e.key + ':' : '', e.message].filter(Boolean).join(' ');
-}
+const errorText = (e) => fileErrorText(e, state.file);
 
 function renderProps() {
   const errors = (state.check && state.check.errors) || [];
@@ -142,12 +139,10 @@ function renderCheck() {
 function render() { renderProps(); renderCheck(); }
 
 async function check() {
-  const seq = ++state.checkSeq;
-  $('check-state').textContent = 'checking…'; $('check-state').className = 'warn';
-  const r = await postJson(`/api/builder/robot/${encodeURIComponent(state.file)}/check`, { edits: editList() });
-  const body = await r.json();
-  if (seq !== state.checkSeq) return;
-  state.check = r.ok ? body : { ok: false, yaml: '', errors: [{ message: body.error, line: 0, key: '' }] };
+  const answer = await postCheck(state, `/api/builder/robot/${encodeURIComponent(state.file)}/check`, { edits: editList() });
+  if (!answer) return;
+  const body = answer.body;
+  state.check = answer.check;
   if (body.robot) showRobot(body.robot);
   render();
 }
@@ -349,7 +344,7 @@ async function save(version = state.version) {
   const { status, body } = await saveDesign(`/api/builder/robot/${encodeURIComponent(state.file)}`, version, { edits: editList() });
   if (status === 409) { conflict.show(body); $('save-state').textContent = 'not saved: changed on disk'; return false; }
   if (status !== 200) {
-    state.check = body.errors ? body : { ok: false, yaml: '', errors: [{ message: body.error, line: 0, key: '' }] };
+    state.check = body.errors ? body : requestError(body);
     render();
     $('save-state').textContent = 'not saved: ' + (body.error || status);
     return false;

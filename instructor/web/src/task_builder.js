@@ -12,7 +12,7 @@
 // of its own) for the user to drive, and shows the report when the task ends.
 import { drawBuilderNav } from './builder_nav.js';
 import { getJson, postJson, el, token, ROBOT_COLOUR } from './common.js';
-import { ConflictBanner, saveDesign } from './design_file.js';
+import { ConflictBanner, errorText, postCheck, saveDesign, edited, showCheck, showSaved } from './design_file.js';
 import { worldBounds, mapView, drawWorld, drawObjects, drawRobot, drawRegion } from './world_map.js';
 
 const $ = (id) => document.getElementById(id);
@@ -69,56 +69,34 @@ async function openFile(file) {
 
 // Live check: the newest answer wins (an older request may come back later).
 async function check() {
-  const seq = ++state.checkSeq;
-  $('check-state').textContent = 'checking…';
-  $('check-state').className = 'warn';
-  const r = await postJson(`/api/builder/task/${encodeURIComponent(state.file)}/check`, { task: state.task });
-  const body = await r.json();
-  if (seq !== state.checkSeq) return;
-  state.check = r.ok ? body : { ok: false, yaml: '', errors: [{ message: body.error, line: 0, key: '' }] };
+  const answer = await postCheck(state, `/api/builder/task/${encodeURIComponent(state.file)}/check`, { task: state.task });
+  if (!answer) return;
+  state.check = answer.check;
   render();
 }
 
-function changed() {
-  state.dirty = true;
-  $('save-state').textContent = 'edited, not saved';
-  $('save-state').className = 'warn';
-  render();
-  check();
-}
+const changed = () => edited(state, render, check);
 
 async function save(version, file = state.file) {
   $('save').disabled = true;
   const { status, body } = await saveDesign('/api/builder/task/' + encodeURIComponent(file), version, { task: state.task });
-  if (status === 200) {
+  if (status === 409 && file !== state.file) {
+    $('save-state').textContent = 'not saved: ' + file + ' exists';  // "save as" a name taken: no banner
+    $('save-state').className = 'bad';
+  } else if (showSaved(status, body, conflict)) {
     if (file !== state.file) {
       await loadListing();
       state.file = file;
       $('file').value = file;
     }
-    state.version = body.version;
-    state.dirty = false;
-    $('version').textContent = 'version ' + body.version;
-    $('save-state').textContent = 'saved';
-    $('save-state').className = 'ok';
-    conflict.hide();
-  } else if (status === 409) {
-    if (file === state.file) conflict.show(body);
-    $('save-state').textContent = 'not saved: ' + (file === state.file ? 'changed on disk' : file + ' exists');
-    $('save-state').className = 'bad';
-  } else {
-    if (body.errors) state.check = body;
-    $('save-state').textContent = 'not saved: ' + body.error;
-    $('save-state').className = 'bad';
+    Object.assign(state, { version: body.version, dirty: false });
+  } else if (body.errors) {
+    state.check = body;
   }
   render();
 }
 
 // ---- rendering --------------------------------------------------------------
-function errorText(e) {
-  const where = e.line ? `${e.file && e.file !== state.file ? e.file + ':' : ''}${e.line}:` : '';
-  return [where, e.key ? e.key + ':' : '', e.message].filter(Boolean).join(' ');
-}
 
 // "events[3].region" → "events[3]": what an error belongs to.
 function badEntries() {
@@ -131,13 +109,7 @@ function badEntries() {
 }
 
 function render() {
-  const ok = state.check && state.check.ok;
-  $('check-state').textContent = !state.check ? 'not checked yet' : ok ? 'ok: rise-trainer check would load it' :
-    `${state.check.errors.length} error${state.check.errors.length === 1 ? '' : 's'}: not saved until fixed`;
-  $('check-state').className = ok ? 'ok' : 'bad';
-  $('errors').replaceChildren(...((state.check && state.check.errors) || []).map((e) =>
-    el('li', { 'data-key': e.key || '', 'data-line': e.line || 0 }, errorText(e))));
-  $('yaml').textContent = (state.check && state.check.yaml) || '';
+  const ok = showCheck(state.check, 'ok: rise-trainer check would load it', (e) => errorText(e, state.file));
   $('save').disabled = !state.task || !ok || !state.dirty;
   $('try').disabled = !state.task || state.dirty;
   $('try').title = state.dirty ? 'save first: it runs the saved file' : '';

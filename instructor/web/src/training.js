@@ -5,8 +5,8 @@
 // their line and key; Save writes the YAML atomically, or says that the file
 // changed on disk since it was loaded (409) and offers to reload or overwrite.
 import { drawBuilderNav } from './builder_nav.js';
-import { getJson, postJson, el } from './common.js';
-import { ConflictBanner, saveDesign } from './design_file.js';
+import { getJson, el } from './common.js';
+import { ConflictBanner, errorText, postCheck, saveDesign, edited, showCheck, showSaved } from './design_file.js';
 import { draw } from './graph_draw.js';
 
 const $ = (id) => document.getElementById(id);
@@ -51,27 +51,13 @@ async function openFile(file) {
 
 // Live check: the newest answer wins (an older request may come back later).
 async function check() {
-  const seq = ++state.checkSeq;
-  $('check-state').textContent = 'checking…';
-  $('check-state').className = 'warn';
-  const r = await postJson(`/api/builder/training/${encodeURIComponent(state.file)}/check`, { graph: state.graph });
-  const body = await r.json();
-  if (seq !== state.checkSeq) return;
-  state.check = r.ok ? body : { ok: false, yaml: '', errors: [{ message: body.error, line: 0, key: '' }] };
+  const answer = await postCheck(state, `/api/builder/training/${encodeURIComponent(state.file)}/check`, { graph: state.graph });
+  if (!answer) return;
+  state.check = answer.check;
   render();
 }
 
-function changed() {
-  state.dirty = true;
-  $('save-state').textContent = 'edited, not saved';
-  render();
-  check();
-}
-
-function errorText(e) {
-  const where = e.line ? `${e.file && e.file !== state.file ? e.file + ':' : ''}${e.line}:` : '';
-  return [where, e.key ? e.key + ':' : '', e.message].filter(Boolean).join(' ');
-}
+const changed = () => edited(state, render, check);
 
 // "transitions[3].if" → "transitions[3]": what an error belongs to.
 function badEntries() {
@@ -86,13 +72,7 @@ function badEntries() {
 function render() {
   const g = state.graph;
   const bad = badEntries();
-  const ok = state.check && state.check.ok;
-  $('check-state').textContent = !state.check ? 'not checked yet' : ok ? 'ok: rise-trainer check would load it' :
-    `${state.check.errors.length} error${state.check.errors.length === 1 ? '' : 's'}: not saved until fixed`;
-  $('check-state').className = ok ? 'ok' : 'bad';
-  $('errors').replaceChildren(...((state.check && state.check.errors) || []).map((e) =>
-    el('li', { 'data-key': e.key || '', 'data-line': e.line || 0 }, errorText(e))));
-  $('yaml').textContent = (state.check && state.check.yaml) || '';
+  const ok = showCheck(state.check, 'ok: rise-trainer check would load it', (e) => errorText(e, state.file));
   $('save').disabled = !g || !ok || !state.dirty;
   if (!g) {
     $('graph').replaceChildren();
@@ -229,22 +209,8 @@ async function save(version) {
   $('save').disabled = true;
   const { status, body } = await saveDesign('/api/builder/training/' + encodeURIComponent(state.file), version,
                                             { graph: state.graph });
-  if (status === 200) {
-    state.version = body.version;
-    state.dirty = false;
-    $('version').textContent = 'version ' + body.version;
-    $('save-state').textContent = 'saved';
-    $('save-state').className = 'ok';
-    conflict.hide();
-  } else if (status === 409) {
-    conflict.show(body);
-    $('save-state').textContent = 'not saved: changed on disk';
-    $('save-state').className = 'bad';
-  } else {
-    if (body.errors) state.check = body;
-    $('save-state').textContent = 'not saved: ' + body.error;
-    $('save-state').className = 'bad';
-  }
+  if (showSaved(status, body, conflict)) Object.assign(state, { version: body.version, dirty: false });
+  else if (body.errors) state.check = body;
   render();
 }
 

@@ -10,7 +10,7 @@
 import { drawBuilderNav } from './builder_nav.js';
 import * as THREE from 'three';
 import { getJson, postJson, el, token } from './common.js';
-import { ConflictBanner, saveDesign } from './design_file.js';
+import { ConflictBanner, errorText, requestError, saveDesign, showCheck, showEdited, showSaved } from './design_file.js';
 import { drawWorld, mapView, worldBounds, BOX_FILLS } from './world_map.js';
 import { createView, camera, buildWorld, renderInto, canvasStats } from './scene3d.js';
 
@@ -161,7 +161,7 @@ async function check() {
   try {
     const r = await postJson(`/api/builder/world/${encodeURIComponent(state.file)}/check`, { world: state.world });
     const body = await r.json();
-    state.check = r.ok ? body : { ok: false, yaml: '', errors: [{ message: body.error, line: 0, key: '' }] };
+    state.check = r.ok ? body : requestError(body);
     if (r.ok && body.ok) { state.view = body.view; build3d(); }
   } finally {
     state.checking = false;
@@ -172,7 +172,7 @@ async function check() {
 
 function changed(renderPanel = true) {
   state.dirty = true;
-  $('save-state').textContent = 'edited, not saved';
+  showEdited();
   render(renderPanel);
   check();
 }
@@ -180,31 +180,12 @@ function changed(renderPanel = true) {
 async function save(version) {
   $('save-state').textContent = 'saving…';
   const { status, body } = await saveDesign('/api/builder/world/' + encodeURIComponent(state.file), version, { world: state.world });
-  if (status === 200) {
-    state.version = body.version;
-    state.dirty = false;
-    conflict.hide();
-    $('version').textContent = 'version ' + body.version;
-    $('save-state').textContent = 'saved';
-    $('save-state').className = 'ok';
-  } else if (status === 409) {
-    conflict.show(body);
-    $('save-state').textContent = 'not saved: changed on disk';
-    $('save-state').className = 'bad';
-  } else {
-    if (body.errors) state.check = body;
-    $('save-state').textContent = 'not saved: ' + (body.error || 'HTTP ' + status);
-    $('save-state').className = 'bad';
-  }
+  if (showSaved(status, body, conflict)) Object.assign(state, { version: body.version, dirty: false });
+  else if (body.errors) state.check = body;
   render();
 }
 
 // ---- rendering ------------------------------------------------------------
-function errorText(e) {
-  const where = e.line ? `${e.file || state.file}:${e.line}:` : '';
-  return [where, e.key ? e.key + ':' : '', e.message].filter(Boolean).join(' ');
-}
-
 // "doors[0].width" → {entity: "doors[0]", field: "width"}.
 function errorPlaces() {
   return ((state.check && state.check.errors) || []).map((e) => {
@@ -214,13 +195,7 @@ function errorPlaces() {
 }
 
 function render(renderPanel = true) {
-  const ok = state.check && state.check.ok;
-  $('check-state').textContent = !state.check ? 'not checked yet' : ok ? 'ok: rise-sim --world would load it' :
-    `${state.check.errors.length} error${state.check.errors.length === 1 ? '' : 's'}: not saved until fixed`;
-  $('check-state').className = ok ? 'ok' : 'bad';
-  $('errors').replaceChildren(...((state.check && state.check.errors) || []).map((e) =>
-    el('li', { 'data-key': e.key || '', 'data-line': e.line || 0 }, errorText(e))));
-  $('yaml').textContent = (state.check && state.check.yaml) || '';
+  const ok = showCheck(state.check, 'ok: rise-sim --world would load it', (e) => errorText(e, state.file, true));
   $('save').disabled = !state.world || !ok || !state.dirty || state.checking;
   $('delete').disabled = !state.selected;
   if (!state.world) return;

@@ -22,4 +22,20 @@ function run(main) {
               (e) => { console.log('RESULT ' + JSON.stringify({ error: String(e && e.stack || e) })); process.exit(1); });
 }
 
-module.exports = { launch, parsePos, run };
+// A page at `url` once it says it is ready (body data-ready="1"); `errors`
+// collects its uncaught errors, `status` is the HTTP status of its HTML.
+async function openReady(browser, url, viewport) {
+  const page = await browser.newPage({ viewport });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  const status = (await page.goto(url)).status();
+  await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
+  return { page, errors, status };
+}
+
+// A builder page's #check-state, and waiting until its live check has
+// answered with `cls` ("ok" or "bad").
+const checkState = (page) => page.$eval('#check-state', (e) => ({ text: e.textContent, cls: e.className }));
+const settled = (page, cls) => page.waitForFunction((c) => document.getElementById('check-state').className === c, cls, { timeout: 10000 });
+
+module.exports = { launch, parsePos, run, openReady, checkState, settled };

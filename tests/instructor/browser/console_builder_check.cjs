@@ -9,21 +9,16 @@
 // usage: node console_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR CONSOLES_DIR
 const fs = require('node:fs');
 const path = require('node:path');
-const { launch, run } = require('./browser.cjs');
+const { launch, run, openReady, checkState, settled } = require('./browser.cjs');
 const [base, token, outDir, webDir, consolesDir] = process.argv.slice(2);
 
-const checkState = (page) => page.$eval('#check-state', (e) => ({ text: e.textContent, cls: e.className }));
-const settled = (page, cls) => page.waitForFunction((c) => document.getElementById('check-state').className === c, cls, { timeout: 10000 });
 
 run(async () => {
   const browser = await launch(webDir);
   const result = {};
   try {
-    const page = await browser.newPage({ viewport: { width: 1400, height: 1300 } });
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(String(e)));
-    result.status = (await page.goto(`${base}/console_builder.html?token=${encodeURIComponent(token)}&file=rise_console.yaml`)).status();
-    await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
+    const { page, errors, status } = await openReady(browser, `${base}/console_builder.html?token=${encodeURIComponent(token)}&file=rise_console.yaml`, { width: 1400, height: 1300 });
+    result.status = status;
     result.opened = await checkState(page);
     result.controls = await page.$$eval('#controls tr[data-name]', (r) => r.map((tr) => tr.dataset.name));
     result.nav = await page.$$eval('#builders a', (a) => a.map((e) => e.getAttribute('href')));

@@ -11,12 +11,10 @@
 // usage: node robot_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR ROBOTS_DIR HOLD_S
 const fs = require('node:fs');
 const path = require('node:path');
-const { launch, run } = require('./browser.cjs');
+const { launch, run, openReady, checkState, settled } = require('./browser.cjs');
 const [base, token, outDir, webDir, robotsDir, holdS] = process.argv.slice(2);
 const file = path.join(robotsDir, 'skid4.yaml');
 
-const checkState = (page) => page.$eval('#check-state', (e) => ({ text: e.textContent, cls: e.className }));
-const settled = (page, cls) => page.waitForFunction((c) => document.getElementById('check-state').className === c, cls, { timeout: 10000 });
 const field = (p) => `[data-path="${p}"]`;
 
 async function type(page, p, value) {
@@ -29,11 +27,8 @@ run(async () => {
   const browser = await launch(webDir);
   const result = {};
   try {
-    const page = await browser.newPage({ viewport: { width: 1400, height: 1300 } });
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(String(e)));
-    result.status = (await page.goto(`${base}/robot_builder.html?token=${encodeURIComponent(token)}&file=skid4.yaml`)).status();
-    await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
+    const { page, errors, status } = await openReady(browser, `${base}/robot_builder.html?token=${encodeURIComponent(token)}&file=skid4.yaml`, { width: 1400, height: 1300 });
+    result.status = status;
     result.opened = await checkState(page);
     result.nav = await page.$$eval('#builders a', (a) => a.map((e) => e.getAttribute('href').split('?')[0]));
     result.parts = await page.evaluate(() => window.riseRobotBuilder.scene());

@@ -11,11 +11,10 @@
 // stops it from the page (the report: interrupted).
 // usage: node task_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR
 const path = require('node:path');
-const { launch, run } = require('./browser.cjs');
+const { launch, run, openReady, settled } = require('./browser.cjs');
 const [base, token, outDir, webDir] = process.argv.slice(2);
 
 const errorsShown = (page) => page.$$eval('#errors li', (l) => l.map((e) => ({ text: e.textContent, key: e.dataset.key, line: Number(e.dataset.line) })));
-const settled = (page, cls) => page.waitForFunction((c) => document.getElementById('check-state').className === c, cls, { timeout: 10000 });
 const at = (page, x, y) => page.evaluate(([a, b]) => window.riseTaskBuilder.pagePoint(a, b), [x, y]);
 
 async function drag(page, from, to) {
@@ -38,11 +37,8 @@ run(async () => {
   const browser = await launch(webDir);
   const result = {};
   try {
-    const page = await browser.newPage({ viewport: { width: 1500, height: 1300 } });
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(String(e)));
-    result.status = (await page.goto(`${base}/task_builder.html?token=${encodeURIComponent(token)}&file=approach_object.yaml`)).status();
-    await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
+    const { page, errors, status } = await openReady(browser, `${base}/task_builder.html?token=${encodeURIComponent(token)}&file=approach_object.yaml`, { width: 1500, height: 1300 });
+    result.status = status;
     result.opened = await page.$eval('#check-state', (e) => e.className);
     result.kinds = await page.$$eval('#event-kind option', (o) => o.map((e) => e.value));
     result.nav = await page.$$eval('#builders a', (a) => a.map((e) => e.getAttribute('href')));

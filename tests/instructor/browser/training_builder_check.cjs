@@ -9,14 +9,11 @@
 // usage: node training_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR DESIGNS_DIR
 const fs = require('node:fs');
 const path = require('node:path');
-const { launch, run } = require('./browser.cjs');
+const { launch, run, openReady, checkState, settled } = require('./browser.cjs');
 const [base, token, outDir, webDir, designsDir] = process.argv.slice(2);
 const file = path.join(designsDir, 'fig10_training.yaml');
 
 const errorsShown = (page) => page.$$eval('#errors li', (l) => l.map((e) => ({ text: e.textContent, key: e.dataset.key, line: Number(e.dataset.line) })));
-const checkState = (page) => page.$eval('#check-state', (e) => ({ text: e.textContent, cls: e.className }));
-// Waits until the page's live check has answered with `cls` ("ok" or "bad").
-const settled = (page, cls) => page.waitForFunction((c) => document.getElementById('check-state').className === c, cls, { timeout: 10000 });
 
 async function addEdgeByClicks(page, from, to, field, op, value) {
   await page.click(`#graph g.node[data-name="${from}"] rect`);
@@ -34,11 +31,8 @@ run(async () => {
   const browser = await launch(webDir);
   const result = {};
   try {
-    const page = await browser.newPage({ viewport: { width: 1400, height: 1100 } });
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(String(e)));
-    result.status = (await page.goto(`${base}/training.html?token=${encodeURIComponent(token)}&file=fig10_training.yaml`)).status();
-    await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
+    const { page, errors, status } = await openReady(browser, `${base}/training.html?token=${encodeURIComponent(token)}&file=fig10_training.yaml`, { width: 1400, height: 1100 });
+    result.status = status;
     result.opened = await checkState(page);
     result.nav = await page.$$eval('#builders a', (a) => a.map((e) => [e.getAttribute('href').split('?')[0], e.className]));
     result.boxes = await page.$$eval('#graph g.node', (g) => g.map((e) => e.dataset.name));

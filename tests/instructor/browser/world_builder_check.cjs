@@ -9,7 +9,7 @@
 // usage: node world_builder_check.cjs BASE_URL TOKEN OUT_DIR WEB_DIR WORLDS_DIR
 const fs = require('node:fs');
 const path = require('node:path');
-const { launch, run } = require('./browser.cjs');
+const { launch, run, openReady } = require('./browser.cjs');
 const [base, token, outDir, webDir, worldsDir] = process.argv.slice(2);
 const file = path.join(worldsDir, 'building.yaml');
 
@@ -60,11 +60,8 @@ run(async () => {
   const browser = await launch(webDir);
   const result = {};
   try {
-    const page = await browser.newPage({ viewport: { width: 1600, height: 1200 } });
-    const errors = [];
-    page.on('pageerror', (e) => errors.push(String(e)));
-    result.status = (await page.goto(`${base}/world_builder.html?token=${encodeURIComponent(token)}&file=building.yaml`)).status();
-    await page.waitForFunction(() => document.body.dataset.ready === '1', null, { timeout: 20000 });
+    const { page, errors, status } = await openReady(browser, `${base}/world_builder.html?token=${encodeURIComponent(token)}&file=building.yaml`, { width: 1600, height: 1200 });
+    result.status = status;
     result.opened = await page.$eval('#check-state', (e) => e.className);
     result.entities = await page.$$eval('#entities button', (b) => b.map((e) => e.dataset.entity));
     result.nav = await page.$$eval('#builders a', (a) => a.map((e) => e.getAttribute('href').split('?')[0]));
