@@ -157,6 +157,7 @@ sim::Wall wall_of(const Json::Value& j, const std::string& where) {
   if (!os.isNull() && !os.isArray()) throw Shape(where + ".openings: expected a list");
   for (Json::ArrayIndex i = 0; i < os.size() && i < 100; ++i) {
     const std::string w_at = where + ".openings[" + std::to_string(i) + "]";
+    if (!os[i].isObject()) throw Shape(w_at + ": expected an object");
     sim::WallOpening o;
     o.at_m = number(os[i], "at_m", w_at);
     o.width_m = number_or(os[i], "width_m", w_at, o.width_m);
@@ -257,6 +258,8 @@ sim::WorldDescription world_of(const Json::Value& body) {
   read_entries(body, "regions", w.regions, region_of);
   if (const Json::Value& c = body["ceiling"]; c.isObject()) {
     sim::Ceiling ceiling;
+    if (!c["follows_walls"].isNull() && !c["follows_walls"].isBool())
+      throw Shape("ceiling.follows_walls: expected true or false");
     ceiling.height_m = number(c, "height_m", "ceiling");
     ceiling.thickness_m = number_or(c, "thickness_m", "ceiling", ceiling.thickness_m);
     if (!c["follows_walls"].asBool()) {

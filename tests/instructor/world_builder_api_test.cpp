@@ -116,6 +116,18 @@ TEST_CASE("the world builder lists, reads, checks and saves worlds through the l
     CHECK(parse_json(c->body)["error"].asString() == "doors[0].hinge: expected 2 numbers");
   }
 
+  SECTION("an opening that is no object, a follows_walls that is no bool: 400, not jsoncpp's throw (fuzz_world_builder)") {
+    world["walls"][0]["openings"] = parse_json("[0, 0]");
+    auto c = http.Post("/api/builder/world/building.yaml/check", f.auth(), body(world, version), "application/json");
+    CHECK(c->status == 400);
+    CHECK(parse_json(c->body)["error"].asString() == "walls[0].openings[0]: expected an object");
+    world["walls"][0]["openings"] = Json::Value(Json::arrayValue);
+    world["ceiling"] = parse_json(R"({"height_m": 2.6, "follows_walls": "yes"})");
+    c = http.Post("/api/builder/world/building.yaml/check", f.auth(), body(world, version), "application/json");
+    CHECK(c->status == 400);
+    CHECK(parse_json(c->body)["error"].asString() == "ceiling.follows_walls: expected true or false");
+  }
+
   SECTION("a move saved: rise-sim's loader reads the door where it was put; 409 on a file changed since") {
     world["doors"][0]["hinge"] = parse_json("[6, 3]");
     world["doors"][0]["yaw_deg"] = 0;
