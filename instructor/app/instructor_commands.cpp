@@ -251,8 +251,12 @@ void add_list_command(CLI::App& app) {
     setup_logging();
     auto lcm = open_lcm();
     TraineeDirectory directory;
+    std::set<std::string> heard;
     RawHandler h{[&](const std::string& channel, const lcm::ReceiveBuffer* rbuf) {
       directory.on_message(channel, rbuf->data, static_cast<int>(rbuf->data_size), msgs::wall_us());
+      // Progress on stderr (the table is stdout's): who is heard, as they come.
+      const std::string id = channel.substr(5, channel.find('/', 5) - 5);  // rise/ID/...
+      if (heard.insert(id).second) std::fprintf(stderr, "hearing %s\n", id.c_str());
     }};
     lcm->subscribe("rise/[^/]+/(panel_state|robot_state|task_status)", &RawHandler::on, &h);
     handle_until(*lcm, *wait_s, [] { return false; });

@@ -48,6 +48,23 @@ PIDS=()
 skip() { echo "SKIPPED: $*"; exit 77; }
 now_ms() { date +%s%3N; }
 log() { echo "classroom $(date +%T.%3N): $*"; }
+# The lines of a log as its program writes them: follow FILE LIMIT_S opens fd
+# FOLLOW_FD on FILE from its first line, woken by each write (tail -F, inotify),
+# for at most LIMIT_S; unfollow closes it and ends the tail.
+follow() {
+  exec {FOLLOW_FD}< <(exec timeout "$2" tail -n +1 -F "$1" 2>/dev/null)
+  FOLLOW_PID=$!
+}
+unfollow() { kill "$FOLLOW_PID" 2>/dev/null; exec {FOLLOW_FD}<&-; }
+# FILE ERE LIMIT_S [N]: prints the Nth line of FILE matching ERE once it is
+# written; false when it is not within LIMIT_S.
+wait_line() {
+  local out
+  follow "$1" "$3"
+  out=$(grep -m "${4:-1}" -E "$2" <&"$FOLLOW_FD" | tail -n 1)
+  unfollow
+  [ -n "$out" ] && printf '%s\n' "$out"
+}
 
 [ "$(id -u)" -eq 0 ] || skip "needs root to create network namespaces (ip netns add)"
 for tool in ip curl jq; do command -v "$tool" >/dev/null || skip "$tool is not installed (run.sh's packages)"; done
@@ -63,14 +80,13 @@ WORK=$(mktemp -d /tmp/rise-classroom-XXXXXX)
 
 cleanup() {
   local code=$?
+  # Each child waited for as it exits on SIGTERM; a watchdog kills what is
+  # left after 3 s.
   for pid in "${PIDS[@]}"; do kill -TERM "$pid" 2>/dev/null; done
-  for _ in $(seq 30); do
-    local alive=0
-    for pid in "${PIDS[@]}"; do kill -0 "$pid" 2>/dev/null && alive=1; done
-    [ $alive -eq 0 ] && break
-    sleep 0.1
-  done
-  for pid in "${PIDS[@]}"; do kill -KILL "$pid" 2>/dev/null; done
+  (sleep 3; kill -KILL "${PIDS[@]}") >/dev/null 2>&1 &
+  local watchdog=$!
+  for pid in "${PIDS[@]}"; do wait "$pid" 2>/dev/null; done
+  kill "$watchdog" 2>/dev/null
   for ns in "$LAN" "$INS" "${HOSTS[@]}"; do ip netns del "$ns" 2>/dev/null; done
   if [ $code -ne 0 ] && [ $code -ne 77 ] && [ -n "$WORK" ]; then
     for f in "$WORK"/*.log; do echo "---- $(basename "$f") (last 15 lines)"; tail -15 "$f"; done
@@ -157,14 +173,18 @@ api() {  # PATH [curl args...]: the instructor's API, from its namespace
   ip netns exec "$INS" curl -s -m 2 -H "X-Rise-Token: $TOKEN" "$@" "http://127.0.0.1:$PORT$path"
 }
 trainees() { api /api/trainees; }
-# jq over /api/trainees until it is true, for at most $1 ms; false when it never was.
+# jq over /api/trainees until it is true, for at most $1 ms; false when it
+# never was. Asked again at each push of the console's stream (/api/stream,
+# --push-hz 20: when the server has news, at least once a second).
 wait_for() {
-  local limit_ms=$1 filter=$2 until=$(($(now_ms) + $1))
-  while [ "$(now_ms)" -lt "$until" ]; do
+  local limit_ms=$1 filter=$2 line
+  trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
+  while read -r line; do
+    [[ $line == data:* ]] || continue
     trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
-    sleep 0.02
-  done
-  return 1
+  done < <(ip netns exec "$INS" curl -sN -m "$((limit_ms / 1000)).$(printf %03d $((limit_ms % 1000)))" \
+             -H "X-Rise-Token: $TOKEN" "http://127.0.0.1:$PORT/api/stream")
+  trainees | jq -e "$filter" >/dev/null 2>&1
 }
 link_of() { trainees | jq -c --arg id "$1" '.[] | select(.id == $id) | .link'; }
 
@@ -195,7 +215,7 @@ done
 
 if [ $PAGE -eq 1 ]; then
   # Software WebGL on a busy machine: the page may take a while to load.
-  for _ in $(seq 1200); do grep -q '^READY' "$WORK/page.log" && break; grep -q '^RESULT' "$WORK/page.log" && break; sleep 0.05; done
+  wait_line "$WORK/page.log" '^(READY|RESULT)' 60 >/dev/null
   grep -q '^READY' "$WORK/page.log" || fail "the console page did not show ${IDS[2]} live: $(cat "$WORK/page.log")"
   log "the console page shows ${IDS[2]} live"
 fi
@@ -234,7 +254,7 @@ C=${IDS[2]}
 ip netns exec "$INS" "$BIN/rise-instructor" list --lcm "$LCM" --wait 1.5 >"$WORK/list.log" 2>&1 &
 LIST=$!
 PIDS+=($LIST)
-sleep 0.2
+wait_line "$WORK/list.log" "hearing $C\$" 5 >/dev/null || fail "rise-instructor list did not hear $C: $(cat "$WORK/list.log")"
 CUT=$(now_ms)
 ip -n "${HOSTS[2]}" link set eth0 down
 wait_for 3000 ".[] | select(.id == \"$C\") | .link.state == \"lost\"" || fail "$C not lost 3 s after its link was cut"
@@ -247,16 +267,16 @@ for id in "${IDS[0]}" "${IDS[1]}"; do
     fail "$id not live while $C is cut: $(jq -c --arg id "$id" '.[] | select(.id == $id) | .link' <<<"$T")"
 done
 # rise-sim's view: its PanelState stopped coming (spdlog stamps the line, ms).
-stopped_at() {  # LOG: the ms epoch of the first "motors stopped: no panel state" line after CUT
-  local t
-  for _ in $(seq 100); do
-    while read -r line; do
-      t=$(date -d "$(sed -E 's/^\[([^]]+)\].*/\1/' <<<"$line")" +%s%3N)
-      [ "$t" -ge "$CUT" ] && { echo "$t"; return 0; }
-    done < <(grep 'motors stopped: no panel state' "$1")
-    sleep 0.05
-  done
-  return 1
+stopped_at() {  # LOG: the ms epoch of the first "motors stopped: no panel state" line after CUT (within 5 s)
+  local t line code=1
+  follow "$1" 5
+  while read -r line; do
+    [[ $line == *"motors stopped: no panel state"* ]] || continue
+    t=$(date -d "$(sed -E 's/^\[([^]]+)\].*/\1/' <<<"$line")" +%s%3N)
+    [ "$t" -ge "$CUT" ] && { echo "$t"; code=0; break; }
+  done <&"$FOLLOW_FD"
+  unfollow
+  return $code
 }
 STOP_AT=$(stopped_at "$WORK/$C.sim.log") || fail "$C's rise-sim did not stop its robot for lack of PanelState"
 STOP_MS=$((STOP_AT - CUT))
@@ -271,8 +291,9 @@ for id in "${IDS[0]}" "${IDS[1]}"; do
   ! grep -q "LOST: nothing from rise/$id/" "$WORK/list.log" || fail "rise-instructor list shows $id lost: $(cat "$WORK/list.log")"
 done
 log "rise-instructor list: $(grep LOST "$WORK/list.log")"
-# C stays lost while its link is down (2 s in all).
-while [ "$(now_ms)" -lt $((CUT + 2000)) ]; do sleep 0.05; done
+# C stays lost while its link is down (2 s in all: a hold, no peer to wait on).
+LEFT_MS=$((CUT + 2000 - $(now_ms)))
+[ $LEFT_MS -gt 0 ] && sleep "$((LEFT_MS / 1000)).$(printf %03d $((LEFT_MS % 1000)))"
 link_of "$C" | jq -e '.state == "lost"' >/dev/null || fail "$C not lost 2 s into the cut: $(link_of "$C")"
 
 # ---- 4. C's link back -------------------------------------------------------------
@@ -282,14 +303,10 @@ ip -n "${HOSTS[2]}" route replace 224.0.0.0/4 dev eth0
 wait_for 5000 ".[] | select(.id == \"$C\") | .link.state == \"live\" and (.panel_state.failsafe == false or .panel_state.failsafe == 0)" ||
   fail "$C not live again 5 s after its link came back: $(trainees | jq -c ".[] | select(.id == \"$C\") | {link, failsafe: .panel_state.failsafe, reason: .panel_state.failsafe_reason}")"
 log "$C live again $(($(now_ms) - BACK)) ms after its link came back"
-for _ in $(seq 100); do
-  [ "$(grep -c 'motors enabled' "$WORK/$C.sim.log")" -ge 2 ] && break
-  sleep 0.05
-done
-[ "$(grep -c 'motors enabled' "$WORK/$C.sim.log")" -ge 2 ] || fail "$C's rise-sim did not enable its motors again"
+wait_line "$WORK/$C.sim.log" 'motors enabled' 5 2 >/dev/null || fail "$C's rise-sim did not enable its motors again"
 
 if [ $PAGE -eq 1 ]; then
-  for _ in $(seq 600); do grep -q '^RESULT' "$WORK/page.log" && break; sleep 0.05; done
+  wait_line "$WORK/page.log" '^RESULT' 30 >/dev/null
   RES=$(sed -n 's/^RESULT //p' "$WORK/page.log")
   [ -n "$RES" ] || fail "the page check gave no result: $(cat "$WORK/page.log")"
   jq -e '.error | not' <<<"$RES" >/dev/null || fail "the page check: $(jq -r .error <<<"$RES")"
