@@ -56,6 +56,9 @@ std::string read_token(const std::string& file) {
   return token;
 }
 
+// A builder folder in the start-up line ("off" when there is none).
+std::string off_or(const std::string& dir) { return dir.empty() ? "off" : dir; }
+
 int serve(const ServeOptions& o) {
   WebServerSettings s;
   std::string error;
@@ -98,9 +101,10 @@ int serve(const ServeOptions& o) {
   WebServer server(s);
   server.start();
   spdlog::info("rise-instructor serve: http://{}/?token=… (console), /panel.html?id=ID&token=… (virtual panel), "
-               "/training.html?token=…, /task_builder.html?token=… (Training and Task Builders, {}); LCM {}",
-               hil::io::format_host_port(s.host, static_cast<uint16_t>(server.port())),
-               s.designs_dir.empty() ? "off" : s.designs_dir, s.lcm_url);
+               "/console_builder.html, /robot_builder.html, /world_builder.html, /task_builder.html, /training.html "
+               "?token=… (the builders: consoles {}, robots {}, worlds {}, tasks and trainings {}); LCM {}",
+               hil::io::format_host_port(s.host, static_cast<uint16_t>(server.port())), off_or(s.consoles_dir),
+               off_or(s.robots_dir), off_or(s.worlds_dir), off_or(s.designs_dir), s.lcm_url);
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   g_stop.acquire();

@@ -20,6 +20,7 @@
 
 #include "msgs/clock.hpp"
 #include "process/child_process.hpp"
+#include "tests/process_support.hpp"
 #include "web_peer.hpp"
 
 namespace rise::instructor_test {
@@ -51,12 +52,7 @@ inline Json::Value read_result(const std::string& log) {
   return result;
 }
 
-inline std::string read_file(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using rise::test::read_file;
 
 /// How many non-black pixels a PNG screenshot has is not checked here: the
 /// page measures its canvases itself (variance, robot colour); the file must
@@ -86,8 +82,8 @@ inline std::pair<int, std::string> trainer_check(const fs::path& dir, const std:
 }
 
 /// `rise-instructor serve --designs DESIGNS` (and `extra` flags) on a free
-/// port of loopback, its log in `dir`; waits until it answers
-/// /api/builder/trainings with the token. `up` false: it did not.
+/// port of loopback, its log in `dir`; waits for its start-up line, then
+/// asks /api/builder/trainings with the token. `up` false: no line or no 200.
 struct BuilderServer {
   std::string token = "builder-" + std::to_string(::getpid());
   int port = free_port();
@@ -99,13 +95,11 @@ struct BuilderServer {
                                   "--token", token, "--lcm", kLcm, "--designs", designs.string()};
     argv.insert(argv.end(), extra.begin(), extra.end());
     process = rise::process::ChildProcess(argv, (dir / "server.log").string());
+    // Its start-up line comes once it listens; then it must answer.
+    if (!rise::test::wait_for_text((dir / "server.log").string(), "rise-instructor serve: http://", 20000)) return;
     httplib::Client http("127.0.0.1", port);
-    http.set_connection_timeout(0, 200'000);
-    for (int i = 0; i < 200 && !up && process.running(); ++i) {
-      auto r = http.Get("/api/builder/trainings", {{"X-Rise-Token", token}});
-      up = r && r->status == 200;
-      if (!up) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
+    auto r = http.Get("/api/builder/trainings", {{"X-Rise-Token", token}});
+    up = r && r->status == 200;
   }
   std::string base() const { return "http://127.0.0.1:" + std::to_string(port); }
 };

@@ -59,11 +59,15 @@ run(async () => {
 
     // The preview runs the edited definition: horn follows the press.
     await page.waitForSelector('#preview tr[data-control="horn"]', { timeout: 15000 });
-    const seen = new Set();
-    for (let i = 0; i < 40 && seen.size < 2; ++i) {
-      seen.add(await page.$eval('#preview tr[data-control="horn"] td.value', (e) => e.textContent));
-      await page.waitForTimeout(100);
-    }
+    // Every value the horn's cell shows until it has shown two (the page redraws it on each poll).
+    const cell = '#preview tr[data-control="horn"] td.value';
+    await page.waitForFunction((sel) => {
+      const seen = (window.__hornSeen ||= new Set());
+      const e = document.querySelector(sel);
+      if (e) seen.add(e.textContent);
+      return seen.size >= 2;
+    }, cell, { polling: 'raf', timeout: 4000 }).catch((e) => console.log('horn wait: ' + e.message));
+    const seen = new Set(await page.evaluate(() => [...(window.__hornSeen || [])]));
     result.preview_horn = [...seen].sort();
     await page.screenshot({ path: path.join(outDir, 'console_builder.png'), fullPage: true });
 
