@@ -37,14 +37,24 @@ bool folder_on(const DesignFolder& folder, const DesignKind& kind, Res& res) {
   return !folder.dir().empty();
 }
 
-// The body's check; nullopt after replying 400.
+// The file on disk now: its text and version ("" and "" when there is none).
+DesignText on_disk(const DesignFolder& folder, const std::string& name) {
+  try {
+    return folder.read(name);
+  } catch (const std::exception&) {
+    return {};
+  }
+}
+
+// The body's check against `disk` (the file it would replace); nullopt
+// after replying 400.
 std::optional<DesignCheck> body_check(const DesignFolder& folder, const DesignKind& kind, const std::string& name,
-                                      const Req& req, Res& res, Json::Value* body) {
+                                      const DesignText& disk, const Req& req, Res& res, Json::Value* body) {
   std::string error;
   auto parsed = parse_json_object(req.body, &error);
   if (!parsed) return reply_json_error(res, 400, error), std::nullopt;
   *body = *parsed;
-  auto check = kind.check(*body, folder.path(name), disk_text(folder, name), &error);
+  auto check = kind.check(*body, folder.path(name), disk.text, &error);
   if (!check) reply_json_error(res, 400, error);
   return check;
 }
@@ -75,7 +85,7 @@ void handle_check(const DesignFolder& folder, const DesignKind& kind, const Req&
   const std::string name = design_name(folder, kind, req, res);
   if (name.empty()) return;
   Json::Value body;
-  const auto check = body_check(folder, kind, name, req, res, &body);
+  const auto check = body_check(folder, kind, name, on_disk(folder, name), req, res, &body);
   if (check) reply_json(res, design_check_json(*check));
 }
 
@@ -92,19 +102,20 @@ Json::Value conflict_json(const std::string& name, const std::string& loaded, co
 void handle_save(DesignFolder& folder, const DesignKind& kind, const Req& req, Res& res) {
   const std::string name = design_name(folder, kind, req, res);
   if (name.empty()) return;
+  // Read once: the check is of the text whose version is compared below.
+  const DesignText disk = on_disk(folder, name);
   Json::Value body;
-  const auto check = body_check(folder, kind, name, req, res, &body);
+  const auto check = body_check(folder, kind, name, disk, req, res, &body);
   if (!check) return;
   if (!body["version"].isString()) return reply_json_error(res, 400, "version: expected the version the page loaded");
   const std::string loaded = body["version"].asString();
   // Changed on disk since the page loaded it: a conflict, whatever the check
   // says (a builder that edits the disk's text checked edits on another text).
-  SaveOutcome on_disk;
-  try {
-    on_disk.version = folder.read(name).version;
-  } catch (const std::exception&) {
+  if (disk.version != loaded) {
+    SaveOutcome now;
+    now.version = disk.version;
+    return reply_json(res, conflict_json(name, loaded, now), 409);
   }
-  if (on_disk.version != loaded) return reply_json(res, conflict_json(name, loaded, on_disk), 409);
   // A file its program would refuse is not written over one it loads.
   if (!check->errors.empty()) {
     Json::Value v = design_check_json(*check);
@@ -137,14 +148,6 @@ std::string design_name(const DesignFolder& folder, const DesignKind& kind, cons
     return "";
   }
   return name;
-}
-
-std::string disk_text(const DesignFolder& folder, const std::string& name) {
-  try {
-    return folder.read(name).text;
-  } catch (const std::exception&) {
-    return "";
-  }
 }
 
 Json::Value design_check_json(const DesignCheck& check) {

@@ -68,8 +68,6 @@ void reply_json_error(httplib::Response& res, int status, const std::string& mes
 /// .yaml of the folder, replying 503 or 400 else (then "").
 std::string design_name(const DesignFolder& folder, const DesignKind& kind, const httplib::Request& req,
                         httplib::Response& res);
-/// The file's text on disk now, "" when there is none.
-std::string disk_text(const DesignFolder& folder, const std::string& name);
 /// check_json's {yaml, ok, errors}, then the check's extra fields.
 Json::Value design_check_json(const DesignCheck& check);
 
