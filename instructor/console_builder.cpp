@@ -207,7 +207,15 @@ class LiveView {
       for (double x : values_) values.append(x);
       v["values"] = values;
       Json::Value sources(Json::arrayValue);
-      for (const auto& s : source_status_) sources.append(s);
+      for (const auto& s : source_status_) {
+        Json::Value j;
+        j["name"] = s.name;
+        j["connected"] = s.connected;
+        j["stale"] = s.stale;
+        j["frames_ok"] = static_cast<Json::Int64>(s.frames_ok);
+        j["down_reason"] = s.down_reason;
+        sources.append(j);
+      }
       v["sources"] = sources;
       if (learning_ && msgs::monotonic_us() >= learn_until_us_) finish_learning();
       v["learning"] = learning_;
@@ -261,16 +269,7 @@ class LiveView {
   // From the raw bridge's publisher thread, at the definition's rate and on change.
   void on_raw(const hil::PanelSnapshot& snap) {
     std::lock_guard lock(mutex_);
-    source_status_.clear();
-    for (const auto& s : snap.sources) {
-      Json::Value j;
-      j["name"] = s.name;
-      j["connected"] = s.connected;
-      j["stale"] = s.stale;
-      j["frames_ok"] = static_cast<Json::Int64>(s.frames_ok);
-      j["down_reason"] = s.down_reason;
-      source_status_.push_back(j);
-    }
+    source_status_ = snap.sources;  // as JSON when the page asks (state_json), not at 100 Hz
     for (std::size_t i = 0; i < signals_.size() && i < snap.controls.size(); ++i) {
       if (snap.controls[i].forced_safe) continue;  // stale: not what the control does
       const double x = raw_value(signals_[i], snap.controls[i], wide_definition_.sources[signals_[i].source].is_dbc());
@@ -347,7 +346,7 @@ class LiveView {
   panels::PanelDefinition wide_definition_;
   std::mutex mutex_;  // guards what follows
   std::vector<double> values_;
-  std::vector<Json::Value> source_status_;
+  std::vector<hil::SourceStatus> source_status_;
   std::vector<LearnStats> stats_;
   bool learning_ = false;
   int64_t learn_until_us_ = 0;
