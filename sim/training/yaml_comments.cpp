@@ -66,6 +66,9 @@ std::string leading_comment(const std::string& text) {
     if (!body.empty() && body[0] == ' ') body.erase(0, 1);
     out += (out.empty() ? "" : "\n") + body;
   }
+  // A blank last line (`#` alone, or one of control characters only) says
+  // nothing, and a writer cannot give it back: it is not kept.
+  while (!out.empty() && out.back() == '\n') out.pop_back();
   return out;
 }
 

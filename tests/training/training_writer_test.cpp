@@ -143,6 +143,18 @@ TEST_CASE("names, titles and comments that need quoting read back as written", "
   CHECK(yaml_scalar("a\nb") == "\"a\\nb\"");
 }
 
+TEST_CASE("a file's opening comment whose last line is blank reads as the writer gives it back (fuzz_training_graph)",
+          "[training]") {
+  const std::string text = std::string("# head\n# \x01\x04\n#\ntraining: t\nnodes:\n  - {name: a, task: x.yaml}\n") +
+                           "transitions:\n  - {from: START, to: a}\n  - {from: a, to: END}\n";
+  const TrainingGraph g = parse_training_graph(text, src("sim/training/examples/blank.yaml"), false);
+  CHECK(g.comment == "head");
+  const std::string written = write_training_graph(g);
+  INFO(written);
+  CHECK(parse_training_graph(written, src("sim/training/examples/blank.yaml"), false).comment == "head");
+  CHECK(write_training_graph(parse_training_graph(written, src("sim/training/examples/blank.yaml"), false)) == written);
+}
+
 TEST_CASE("a condition that does not parse is written as it is, for the loader to name with line and key", "[training]") {
   auto g = load_training_graph(src("sim/training/examples/fig10_training.yaml"), false);
   Condition bad;
