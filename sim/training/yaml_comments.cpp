@@ -1,6 +1,7 @@
 #include "sim/training/yaml_comments.hpp"
 
 #include <sstream>
+#include <vector>
 
 #include "panels/yaml_writer.hpp"
 
@@ -84,12 +85,14 @@ int CommentedLines::add(const std::string& entry, const std::string& comment) {
 }
 
 void CommentedLines::comment_block(const std::string& comment) {
+  std::vector<std::string> lines;
   std::istringstream in(comment);
-  std::string l;
-  while (std::getline(in, l)) {
-    l = comment_text(l, true);
-    add(l.empty() ? "#" : "# " + l, "");
-  }
+  for (std::string l; std::getline(in, l);) lines.push_back(comment_text(l, true));
+  // Blank lines first or last are not written: leading_comment would not read them back.
+  auto first = lines.begin(), last = lines.end();
+  while (first != last && first->empty()) ++first;
+  while (last != first && (last - 1)->empty()) --last;
+  for (auto l = first; l != last; ++l) add(l->empty() ? "#" : "# " + *l, "");
 }
 
 }  // namespace rise::sim::training

@@ -153,6 +153,13 @@ TEST_CASE("a file's opening comment whose last line is blank reads as the writer
   INFO(written);
   CHECK(parse_training_graph(written, src("sim/training/examples/blank.yaml"), false).comment == "head");
   CHECK(write_training_graph(parse_training_graph(written, src("sim/training/examples/blank.yaml"), false)) == written);
+  // Blank lines first or last in a comment the page sent (fuzz_task_builder): written without them.
+  TrainingGraph h = g;
+  h.comment = "\n\nhead\n\nbody\n\n";
+  const std::string blank_ends = write_training_graph(h);
+  INFO(blank_ends);
+  CHECK(blank_ends.rfind("# head\n#\n# body\ntraining: t\n", 0) == 0);
+  CHECK(parse_training_graph(blank_ends, src("sim/training/examples/blank.yaml"), false).comment == "head\n\nbody");
 }
 
 TEST_CASE("a condition that does not parse is written as it is, for the loader to name with line and key", "[training]") {
