@@ -356,6 +356,46 @@ void add_clear_command(CLI::App& app) {
   });
 }
 
+// A scenario's injects until their receiver shows them (as send_fault
+// confirms one): a UDP datagram can be lost, and a scenario's fault that
+// never arrived would be a lesson that never happened. One not shown within
+// half a second goes again, signed afresh, until it shows, is cleared, or
+// its time is over.
+class PendingInjects {
+ public:
+  void sent(const rise_msgs::FaultCommand& c, double now_s) {
+    forget(c.fault_id);  // a clear, or a new inject of the same id, ends the wait for the earlier one
+    if (c.action != "inject") return;
+    pending_.push_back({c, now_s + kResendS, now_s + std::max(c.duration_s, 3.0)});
+  }
+  /// A PanelState's or RobotState's active faults ("ID: ..."), a SimEvent fault_injected's ID.
+  void shown(const std::vector<std::string>& active_faults) {
+    for (const auto& f : active_faults) forget(f.substr(0, f.find(':')));
+  }
+  void forget(const std::string& id) {
+    std::erase_if(pending_, [&](const Pending& p) { return p.command.fault_id == id; });
+  }
+  /// The injects to send again now (their `next` moved on); drops those whose time is over.
+  std::vector<rise_msgs::FaultCommand> due(double now_s) {
+    std::erase_if(pending_, [&](const Pending& p) { return now_s >= p.until_s; });
+    std::vector<rise_msgs::FaultCommand> out;
+    for (auto& p : pending_)
+      if (now_s >= p.next_s) {
+        out.push_back(p.command);
+        p.next_s = now_s + kResendS;
+      }
+    return out;
+  }
+
+ private:
+  static constexpr double kResendS = 0.5;
+  struct Pending {
+    rise_msgs::FaultCommand command;
+    double next_s, until_s;
+  };
+  std::vector<Pending> pending_;
+};
+
 void add_scenario_command(CLI::App& app) {
   struct Options {
     std::string file, task, trainee;
@@ -402,23 +442,38 @@ void add_scenario_command(CLI::App& app) {
     const auto start = Clock::now();
     const auto now_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
     int sent = 0;
+    PendingInjects pending;
+    const auto publish = [&](rise_msgs::FaultCommand& c) {
+      c.utime = msgs::wall_us() + offset_us;
+      msgs::sign(c, key);
+      lcm->publish(msgs::fault_command_channel(o->trainee), &c);
+    };
     const auto send = [&](const std::vector<ScenarioAction>& actions) {
       for (const auto& a : actions) {
         auto c = to_command(a, o->trainee, common_options().issuer);
-        c.utime = msgs::wall_us() + offset_us;
-        msgs::sign(c, key);
-        lcm->publish(msgs::fault_command_channel(o->trainee), &c);
+        publish(c);
+        pending.sent(c, now_s());
         ++sent;
         spdlog::info("{:.3f} s: {} {} {} {} value {:.3f} for {} s", now_s(), c.action, c.fault_id, c.kind, c.target,
                      c.value, c.duration_s);
       }
     };
+    const auto send_again = [&] {
+      for (auto& c : pending.due(now_s())) {
+        publish(c);
+        spdlog::info("{:.3f} s: inject {} not shown yet, sent again", now_s(), c.fault_id);
+      }
+    };
     Observation seen;
     RawHandler h{[&](const std::string& channel, const lcm::ReceiveBuffer* rbuf) {
       if (channel == msgs::sim_event_channel(o->trainee)) {
-        if (const auto e = decode<rise_msgs::SimEvent>(rbuf)) send(runner.on_event(now_s(), e->kind, e->a, e->b));
+        if (const auto e = decode<rise_msgs::SimEvent>(rbuf)) {
+          if (e->kind == "fault_injected" || e->kind == "fault_refused") pending.forget(e->b);  // shown, or never will be
+          send(runner.on_event(now_s(), e->kind, e->a, e->b));
+        }
       } else if (channel == msgs::robot_state_channel(o->trainee)) {
         if (const auto r = decode<rise_msgs::RobotState>(rbuf)) {
+          pending.shown(r->active_faults);
           seen["speed_mps"] = std::hypot(r->linear_velocity_mps[0], r->linear_velocity_mps[1]);
           seen["x_m"] = r->position_m[0];
           seen["y_m"] = r->position_m[1];
@@ -428,6 +483,7 @@ void add_scenario_command(CLI::App& app) {
         }
       } else if (channel == msgs::panel_state_channel(o->trainee)) {
         if (const auto p = decode<rise_msgs::PanelState>(rbuf)) {
+          pending.shown(p->active_faults);
           seen["failsafe"] = p->failsafe ? 1.0 : 0.0;
           send(runner.on_observation(now_s(), seen));
         }
@@ -442,6 +498,7 @@ void add_scenario_command(CLI::App& app) {
                  scenario.faults.size(), o->trainee);
     while (!g_stop && !runner.finished(now_s()) && (o->duration_s <= 0 || now_s() < o->duration_s)) {
       send(runner.advance(now_s()));
+      send_again();
       pollfd pfd{lcm->getFileno(), POLLIN, 0};
       if (::poll(&pfd, 1, 5) > 0) lcm->handle();
     }

@@ -20,6 +20,7 @@
 #include "msgs/command_auth.hpp"
 #include "msgs/failsafe.hpp"
 #include "process/child_process.hpp"
+#include "tests/process_support.hpp"
 #include "rise_msgs/FaultCommand.hpp"
 #include "rise_msgs/PanelState.hpp"
 #include "rise_msgs/RobotState.hpp"
@@ -162,6 +163,32 @@ TEST_CASE("rise-instructor inject goes again, signed afresh, until the daemon co
   CHECK_THAT(said, Catch::Contains("inject late on " + id + ": confirmed"));
   CHECK(station.panel_shows("late: offset drive_x"));
   CHECK_THAT(read_file((keys.dir / "rise-hild.log").string()), !Catch::Contains("replayed"));
+}
+
+TEST_CASE("rise-instructor scenario sends an inject again, signed afresh, until the daemon shows it", "[instructor]") {
+  // The scenario's inject goes out before rise-hild listens: lost like a
+  // datagram dropped under load; a later copy applies, not as a replay.
+  const std::string id = "fq" + std::to_string(::getpid());
+  KeyDir keys("rise-scenario-resend-");
+  INFO("logs in " << keys.dir);
+  Station station(id);
+  REQUIRE(station.good());
+  const std::string file = (keys.dir / "s.yaml").string();
+  std::ofstream(file) << "scenario: s\nseed: 2\nfaults:\n"
+                         "  - {id: sq, kind: stuck_at, target: drive_x, value: 0.3, at: 0.1, duration: 8.0}\n";
+  const std::string out = (keys.dir / "scenario.out").string();
+  rise::process::ChildProcess run({std::string(RISE_BINARY_DIR) + "/bin/rise-instructor", "scenario", file, "--lcm",
+                                   kLcm, "--instructor-key", keys.key_file, "--trainee", id},
+                                  out);
+  REQUIRE(rise::test::wait_for_text(out, "inject sq stuck_at", 20000));
+  rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
+                                    "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",
+                                    "--source", "mem://" + id, "--instructor-key", keys.key_file},
+                                   (keys.dir / "rise-hild.log").string());
+  CHECK(station.panel_shows("sq: stuck_at drive_x"));
+  CHECK_THAT(read_file(out), Catch::Contains("inject sq not shown yet, sent again"));
+  CHECK_THAT(read_file((keys.dir / "rise-hild.log").string()), !Catch::Contains("replayed"));
+  run.stop();
 }
 
 TEST_CASE("rise-hild applies a signed fault and rejects and reports unsigned, wrongly signed and replayed ones",
