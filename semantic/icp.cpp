@@ -9,6 +9,8 @@
 #include <bit>
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <string>
 #include <stdexcept>
 
 #include "semantic/voxel_grid.hpp"
@@ -91,6 +93,10 @@ Eigen::Isometry3d gauss_newton(const Sums& s) {
   T.translation() = delta.tail<3>();
   return T;
 }
+
+}  // namespace
+
+namespace detail {
 
 // Nearest neighbours at any radius up to the first iteration's: grids whose
 // cells are twice a radius that halves level by level, down to about the
@@ -197,8 +203,50 @@ class GridPyramid {
   bool exact_ = false;
 };
 
-void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
-  if (source.empty()) throw std::invalid_argument("icp: source cloud is empty");
+}  // namespace detail
+
+namespace {
+
+using detail::GridPyramid;
+
+// A cell size that puts about k / 2 points in a cell of a surface, so that
+// the k nearest usually lie within the 3x3x3 block around a point's cell
+// (k_nearest then reads no second ring): start from the bounding box, then
+// correct for the mean occupancy (a surface's points per cell grow with
+// the square of the size). 0 when no point is finite.
+float normals_cell_m(const std::vector<Eigen::Vector3f>& points, int k) {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  Eigen::Vector3f hi = -lo;
+  size_t finite = 0;
+  for (const auto& p : points)
+    if (p.allFinite()) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      ++finite;
+    }
+  if (finite == 0) return 0.0f;
+  const Eigen::Vector3f extent = (hi - lo).cwiseMax(1e-3f);
+  float cell = std::cbrt(extent.prod() / static_cast<float>(finite)) * 2.0f;
+  if (!(cell > 1e-4f) || !std::isfinite(cell)) cell = 1e-2f;
+  const float per_cell = static_cast<float>(finite) / static_cast<float>(VoxelGrid::count_cells(points, cell));
+  const float wanted = static_cast<float>(k) / 2.0f;
+  if (per_cell > wanted) cell *= std::sqrt(wanted / per_cell);
+  return cell;
+}
+
+// Both normal estimators' start: every normal +z, k checked, and the grid
+// of cells of about k / 2 points (none when no point is finite).
+std::optional<VoxelGrid> normals_grid(Cloud& cloud, int k, const char* who) {
+  cloud.normals.assign(cloud.points.size(), Eigen::Vector3f::UnitZ());
+  if (cloud.points.empty()) return std::nullopt;
+  if (k < 3) throw std::invalid_argument(std::string(who) + ": k must be at least 3");
+  const float cell = normals_cell_m(cloud.points, k);
+  if (cell == 0.0f) return std::nullopt;
+  return VoxelGrid(cloud.points, cell);
+}
+
+// The target and the settings; validate() adds the source.
+void validate_target(const Cloud& target, const IcpSettings& s) {
   if (target.empty()) throw std::invalid_argument("icp: target cloud is empty");
   if (s.metric == IcpMetric::PointToPlane && target.normals.size() != target.points.size())
     throw std::invalid_argument("icp: point-to-plane needs one normal per target point (estimate_normals)");
@@ -210,6 +258,11 @@ void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
   if (s.threads < 0) throw std::invalid_argument("icp: threads must be >= 0");
   if (s.max_points_per_cell < 0) throw std::invalid_argument("icp: max_points_per_cell must be >= 0");
   if (s.coarse_stride < 1) throw std::invalid_argument("icp: coarse_stride must be at least 1");
+}
+
+void validate(const Cloud& source, const Cloud& target, const IcpSettings& s) {
+  if (source.empty()) throw std::invalid_argument("icp: source cloud is empty");
+  validate_target(target, s);
 }
 
 // The stride of iteration `it`: coarse_stride over the first half, then
@@ -362,8 +415,24 @@ std::vector<double> correspondence_schedule(const IcpSettings& s) {
   return r;
 }
 
+IcpTarget::IcpTarget(const Cloud& target, const IcpSettings& settings) : cloud_(target), settings_(settings) {
+  validate_target(target, settings);
+  pyramid_ = std::make_unique<GridPyramid>(target.points, correspondence_schedule(settings).front(),
+                                           settings.min_correspondence_m, settings.exact_neighbours,
+                                           settings.max_points_per_cell);
+}
+
+IcpTarget::~IcpTarget() = default;
+
 IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
               const IcpSettings& settings) {
+  validate(source, target, settings);
+  return icp(source, IcpTarget(target, settings), T_initial);
+}
+
+IcpResult icp(const Cloud& source, const IcpTarget& prepared, const Eigen::Isometry3d& T_initial) {
+  const IcpSettings& settings = prepared.settings();
+  const Cloud& target = prepared.cloud();
   validate(source, target, settings);
   const auto schedule = correspondence_schedule(settings);
   const bool plane = settings.metric == IcpMetric::PointToPlane;
@@ -371,8 +440,7 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
   const int useful = static_cast<int>(std::min<size_t>(1024, source.points.size() / 2048 + 1));
   const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
 
-  const GridPyramid pyramid(target.points, schedule.front(), settings.min_correspondence_m,
-                            settings.exact_neighbours, settings.max_points_per_cell);
+  const GridPyramid& pyramid = *prepared.pyramid_;
   PairPass pass(source, target, settings, threads);
 
   IcpResult result;
@@ -405,36 +473,10 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
 }
 
 void estimate_normals(Cloud& cloud, int k, const Eigen::Vector3f& viewpoint, int threads) {
+  const std::optional<VoxelGrid> made = normals_grid(cloud, k, "estimate_normals");
+  if (!made) return;
+  const VoxelGrid& grid = *made;
   const size_t n = cloud.points.size();
-  cloud.normals.assign(n, Eigen::Vector3f::UnitZ());
-  if (n == 0) return;
-  if (k < 3) throw std::invalid_argument("estimate_normals: k must be at least 3");
-
-  // A cell size that puts about k / 2 points in a cell of a surface, so that
-  // the k nearest usually lie within the 3x3x3 block around a point's cell
-  // (k_nearest then reads no second ring): start from the bounding box, then
-  // correct for the mean occupancy (a surface's points per cell grow with
-  // the square of the size).
-  Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-  Eigen::Vector3f hi = -lo;
-  size_t finite = 0;
-  for (const auto& p : cloud.points)
-    if (p.allFinite()) {
-      lo = lo.cwiseMin(p);
-      hi = hi.cwiseMax(p);
-      ++finite;
-    }
-  if (finite == 0) return;
-  const Eigen::Vector3f extent = (hi - lo).cwiseMax(1e-3f);
-  float cell = std::cbrt(extent.prod() / static_cast<float>(finite)) * 2.0f;
-  if (!(cell > 1e-4f) || !std::isfinite(cell)) cell = 1e-2f;
-  {
-    const VoxelGrid probe(cloud.points, cell);
-    const float per_cell = static_cast<float>(probe.size()) / static_cast<float>(probe.occupied_cells());
-    const float wanted = static_cast<float>(k) / 2.0f;
-    if (per_cell > wanted) cell *= std::sqrt(wanted / per_cell);
-  }
-  const VoxelGrid grid(cloud.points, cell);
 
 #pragma omp parallel num_threads(threads > 0 ? threads : omp_get_max_threads())
   {
@@ -457,6 +499,69 @@ void estimate_normals(Cloud& cloud, int k, const Eigen::Vector3f& viewpoint, int
       Eigen::Vector3f normal = es.eigenvectors().col(0).cast<float>();  // smallest eigenvalue
       if (normal.dot(viewpoint - p) < 0.0f) normal = -normal;
       cloud.normals[static_cast<size_t>(i)] = normal;
+    }
+  }
+}
+
+void estimate_normals_cells(Cloud& cloud, int k, const Eigen::Vector3f& viewpoint, int threads) {
+  const std::optional<VoxelGrid> made = normals_grid(cloud, k, "estimate_normals_cells");
+  if (!made) return;
+  const VoxelGrid& grid = *made;
+  // Each cell's count, sum and sum of outer products (xx xy xz yy yz zz),
+  // about one origin: doubles then keep a centimetre's spread exact in a
+  // scene of a hundred metres.
+  struct Moments {
+    double n = 0.0;
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    Eigen::Matrix<double, 6, 1> m = Eigen::Matrix<double, 6, 1>::Zero();
+  };
+  const auto& pts = grid.grid_points();
+  const auto& idx = grid.grid_index();
+  const auto& offsets = grid.cell_offsets();
+  const size_t cells = offsets.size() - 1;
+  const Eigen::Vector3d origin = pts.front().head<3>().cast<double>();
+  std::vector<Moments> moments(cells);
+  std::vector<uint32_t> cell_at(pts.size(), 0);  // a cell's first point -> the cell
+  for (size_t c = 0; c < cells; ++c) {
+    cell_at[offsets[c]] = static_cast<uint32_t>(c);
+    Moments& mo = moments[c];
+    for (uint32_t j = offsets[c]; j < offsets[c + 1]; ++j) {
+      const Eigen::Vector3d d = pts[j].head<3>().cast<double>() - origin;
+      mo.n += 1.0;
+      mo.s += d;
+      mo.m += (Eigen::Matrix<double, 6, 1>() << d.x() * d.x(), d.x() * d.y(), d.x() * d.z(), d.y() * d.y(),
+               d.y() * d.z(), d.z() * d.z()).finished();
+    }
+  }
+  // One normal per cell, from its 3x3x3 block's summed moments, for all its points.
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads > 0 ? threads : omp_get_max_threads())
+  for (std::ptrdiff_t ci = 0; ci < static_cast<std::ptrdiff_t>(cells); ++ci) {
+    const size_t c = static_cast<size_t>(ci);
+    const Eigen::Vector3f first = pts[offsets[c]].head<3>();
+    const Eigen::Vector3i at = grid.cell_coords(first);
+    Moments sum;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const VoxelGrid::Run run = grid.run_at(at + Eigen::Vector3i(dx, dy, dz));
+          if (run.count == 0) continue;
+          const Moments& mo = moments[cell_at[run.begin]];
+          sum.n += mo.n;
+          sum.s += mo.s;
+          sum.m += mo.m;
+        }
+    if (sum.n < 3.0) continue;
+    const Eigen::Vector3d mean = sum.s / sum.n;
+    Eigen::Matrix3d C;
+    C << sum.m[0], sum.m[1], sum.m[2], sum.m[1], sum.m[3], sum.m[4], sum.m[2], sum.m[4], sum.m[5];
+    C = C / sum.n - mean * mean.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+    es.computeDirect(C);
+    const Eigen::Vector3f normal = es.eigenvectors().col(0).cast<float>();
+    if (!normal.allFinite()) continue;
+    for (uint32_t j = offsets[c]; j < offsets[c + 1]; ++j) {
+      const Eigen::Vector3f p = pts[j].head<3>();
+      cloud.normals[idx[j]] = normal.dot(viewpoint - p) < 0.0f ? Eigen::Vector3f(-normal) : normal;
     }
   }
 }

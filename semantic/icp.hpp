@@ -7,6 +7,7 @@
 
 #include "semantic/cloud.hpp"
 
+#include <memory>
 #include <vector>
 
 namespace rise::semantic {
@@ -62,6 +63,33 @@ struct IcpResult {
 IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
               const IcpSettings& settings = {});
 
+namespace detail {
+class GridPyramid;
+}
+
+/// A target made ready for icp() with these settings: its nearest-neighbour
+/// grids, built once for any number of sources and starts (and, for
+/// different targets, in parallel). Keeps a reference to `target`, which
+/// must outlive it. Throws as icp() does.
+class IcpTarget {
+ public:
+  IcpTarget(const Cloud& target, const IcpSettings& settings);
+  ~IcpTarget();
+  IcpTarget(const IcpTarget&) = delete;
+  IcpTarget& operator=(const IcpTarget&) = delete;
+  const Cloud& cloud() const { return cloud_; }
+  const IcpSettings& settings() const { return settings_; }
+
+ private:
+  friend IcpResult icp(const Cloud& source, const IcpTarget& target, const Eigen::Isometry3d& T_initial);
+  const Cloud& cloud_;
+  IcpSettings settings_;
+  std::unique_ptr<detail::GridPyramid> pyramid_;
+};
+
+/// icp() onto a prepared target, with the settings it was prepared for.
+IcpResult icp(const Cloud& source, const IcpTarget& target, const Eigen::Isometry3d& T_initial);
+
 /// The pairing distance of each iteration: geometric from
 /// max_correspondence_m down to min_correspondence_m over the first half of
 /// max_iterations, then min_correspondence_m. ICP converges only once it
@@ -72,6 +100,16 @@ std::vector<double> correspondence_schedule(const IcpSettings& settings);
 /// towards `viewpoint`; fills cloud.normals. `threads` 0: OpenMP's default.
 void estimate_normals(Cloud& cloud, int k = 10, const Eigen::Vector3f& viewpoint = Eigen::Vector3f::Zero(),
                       int threads = 0);
+
+/// estimate_normals at a fraction of the cost, for large clouds: cells of
+/// about k / 2 points of a surface (as estimate_normals sizes them), each
+/// cell's moments summed once, and one normal per cell from the moments of
+/// its 3x3x3 block (about 13 k / 2 points of a surface, within one to two
+/// cells) instead of a k-nearest search per point. Smoother than the k
+/// nearest: on an object of a few hundred points the block spans much of it
+/// (PCL's bunny: registration no longer converges), so keep it for scenes.
+void estimate_normals_cells(Cloud& cloud, int k = 10, const Eigen::Vector3f& viewpoint = Eigen::Vector3f::Zero(),
+                            int threads = 0);
 
 /// One point per occupied cube of `leaf_m` (the centroid of its points).
 Cloud voxel_filter(const Cloud& cloud, double leaf_m);

@@ -6,8 +6,9 @@
 // bunny at 2 mm) needs no tuning, and a verdict that says when the answer
 // cannot be trusted instead of returning it as if it could.
 //
-// Each level voxel-filters both clouds at its voxel (the target's normals,
-// estimated once at the finest level, averaged per voxel), pairs within `pairing_voxels` voxels with a
+// Each level voxel-filters both clouds at its voxel (the target's normals
+// estimated once at the finest level, averaged per voxel), pairs at most
+// `source_points` of the source within `pairing_voxels` voxels with a
 // Huber kernel one voxel wide, and hands its pose to the next, finer level.
 // The coarsest level sees the whole scene in a few hundred points and
 // pairs within metres: it brings 20° and a metre of initial error into the
@@ -37,6 +38,11 @@ struct RegistrationSettings {
   double coarse_voxel_m = 0.0;
   size_t fine_points = 40000;
   size_t coarse_points = 1500;
+  /// Each level pairs at most this many source points, evenly spread over
+  /// its voxel-filtered source (0: all). The target's resolution decides
+  /// the accuracy, not the number of pairs: on the real pairs 5000 points
+  /// land within 0.02° and 3 mm of all 43k, at a fraction of the cost.
+  size_t source_points = 5000;
   double pairing_voxels = 3.0;         ///< a level pairs points within this many of its voxels ...
   double coarse_pairing_voxels = 3.0;  ///< ... the coarsest within this many
   int iterations_per_level = 50;

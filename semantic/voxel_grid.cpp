@@ -78,23 +78,25 @@ VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, i
   }
 }
 
-size_t VoxelGrid::count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m) {
+size_t VoxelGrid::count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m, size_t limit, size_t* read) {
   const VoxelGrid empty({}, cell_m);  // validates cell_m; its coord() and pack() map a point to its key
-  const size_t capacity = std::bit_ceil(std::max<size_t>(16, points.size() * 2));
+  const size_t capacity = std::bit_ceil(std::max<size_t>(16, std::min(points.size(), limit + 1) * 2));
   const size_t mask = capacity - 1;
   const int shift = 64 - std::countr_zero(capacity);
   std::vector<uint64_t> keys(capacity, kEmpty);
-  size_t cells = 0;
+  size_t cells = 0, n = 0;
   for (const auto& p : points) {
+    ++n;
     if (!p.allFinite()) continue;
     const uint64_t key = pack(empty.coord(p.x()), empty.coord(p.y()), empty.coord(p.z()));
     size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift);
     while (keys[i] != key && keys[i] != kEmpty) i = (i + 1) & mask;
     if (keys[i] == kEmpty) {
       keys[i] = key;
-      ++cells;
+      if (++cells > limit) break;
     }
   }
+  if (read != nullptr) *read = n;
   return cells;
 }
 

@@ -36,8 +36,12 @@ class VoxelGrid {
 
   /// How many cubes of `cell_m` > 0 the finite points occupy: what
   /// VoxelGrid(points, cell_m).occupied_cells() says, without building the
-  /// grid (a hash set of the cells' keys; a fraction of the cost).
-  static size_t count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m);
+  /// grid (a hash set of the cells' keys; a fraction of the cost). Counting
+  /// stops past `limit` (returning limit + 1, and in `read` how many
+  /// points it had read then): a search that only asks "more than this
+  /// many, and about how many?" keeps a table of its own size, in cache.
+  static size_t count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m,
+                            size_t limit = std::numeric_limits<size_t>::max() - 1, size_t* read = nullptr);
 
   float cell_m() const { return cell_m_; }
   size_t occupied_cells() const { return cell_count_; }
@@ -72,6 +76,20 @@ class VoxelGrid {
   /// q's distance to the nearest face of its own cell (a little less, for
   /// float rounding; 0 outside the grid's range).
   float face_gap(const Eigen::Vector3f& q) const;
+
+  /// The integer coordinates of the cell holding q, and the points of the
+  /// cell at such coordinates: grid_points()[begin, begin + count), count 0
+  /// where no point lies.
+  Eigen::Vector3i cell_coords(const Eigen::Vector3f& q) const { return {coord(q.x()), coord(q.y()), coord(q.z())}; }
+  struct Run {
+    uint32_t begin = 0, count = 0;
+  };
+  Run run_at(const Eigen::Vector3i& cell) const {
+    for (int a = 0; a < 3; ++a)
+      if (cell[a] > kCoordLimit || cell[a] < -kCoordLimit) return {};
+    const Slot* s = find(pack(cell.x(), cell.y(), cell.z()));
+    return s == nullptr ? Run{} : Run{s->begin, s->count};
+  }
 
   /// Points in grid order (x y z), and the index of each into the input.
   const std::vector<Eigen::Vector4f>& grid_points() const { return sorted_; }

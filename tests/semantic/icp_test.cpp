@@ -67,6 +67,26 @@ TEST_CASE("icp gives the same answer on one thread and on two", "[semantic]") {
   CHECK(one.rmse_m == two.rmse_m);
 }
 
+TEST_CASE("icp onto a prepared target gives icp's answer, from any number of starts", "[semantic]") {
+  sem::Cloud target = sem::test::synthetic_room(20000, 3);
+  sem::estimate_normals(target, 10, Eigen::Vector3f(3, 2, 1.5));
+  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
+  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  sem::IcpSettings s;
+  s.metric = GENERATE(sem::IcpMetric::PointToPoint, sem::IcpMetric::PointToPlane);
+  const sem::IcpTarget prepared(target, s);
+  for (const Eigen::Isometry3d& start : {Eigen::Isometry3d::Identity(), sem::test::pose(3.0, 0.0, 0.0, {0.1, 0, 0})}) {
+    const auto plain = sem::icp(source, target, start, s);
+    const auto again = sem::icp(source, prepared, start);
+    CHECK(plain.iterations == again.iterations);
+    CHECK(plain.T_target_source.matrix() == again.T_target_source.matrix());
+    CHECK(plain.rmse_m == again.rmse_m);
+  }
+  CHECK(rotation_error_deg(sem::icp(source, prepared, Eigen::Isometry3d::Identity()).T_target_source, T_true) < 0.1);
+  CHECK_THROWS_AS(sem::IcpTarget(sem::Cloud{}, s), std::invalid_argument);
+  CHECK_THROWS_AS(sem::icp(sem::Cloud{}, prepared, Eigen::Isometry3d::Identity()), std::invalid_argument);
+}
+
 TEST_CASE("icp reusing pairs gives the pairs and transform a search would, to the bit", "[semantic]") {
   sem::Cloud target = sem::test::synthetic_room(20000, 3);
   sem::estimate_normals(target, 10, Eigen::Vector3f(3, 2, 1.5));
@@ -187,6 +207,14 @@ TEST_CASE("voxel grid counts the cells a grid of the points occupies without bui
   for (const float cell : {0.01f, 0.05f, 0.3f, 2.0f, 50.0f})
     CHECK(sem::VoxelGrid::count_cells(room.points, cell) == sem::VoxelGrid(room.points, cell).occupied_cells());
   CHECK(sem::VoxelGrid::count_cells({}, 0.1f) == 0);
+  // With a limit: the count up to it, then limit + 1 and how far it read.
+  const size_t all = sem::VoxelGrid::count_cells(room.points, 0.2f);
+  size_t read = 0;
+  CHECK(sem::VoxelGrid::count_cells(room.points, 0.2f, all, &read) == all);
+  CHECK(read == room.size());
+  CHECK(sem::VoxelGrid::count_cells(room.points, 0.2f, all / 2, &read) == all / 2 + 1);
+  CHECK(read < room.size());
+  CHECK(sem::VoxelGrid::count_cells(std::vector<Eigen::Vector3f>(room.points.begin(), room.points.begin() + static_cast<std::ptrdiff_t>(read)), 0.2f) == all / 2 + 1);
   CHECK_THROWS_AS(sem::VoxelGrid::count_cells(room.points, 0.0f), std::invalid_argument);
 }
 
@@ -216,4 +244,34 @@ TEST_CASE("estimate_normals finds the room's wall normals facing the viewpoint",
   }
   REQUIRE(floor_points > 100);
   CHECK(floor_up == floor_points);
+}
+
+TEST_CASE("estimate_normals_cells gives the room's floor and walls their normals, facing the viewpoint", "[semantic]") {
+  sem::Cloud room = sem::test::synthetic_room(20000, 9);
+  sem::estimate_normals_cells(room, 10, Eigen::Vector3f(3, 2, 1.5), 2);
+  REQUIRE(room.normals.size() == room.points.size());
+  // Away from edges by more than a cell's block (cells of ~5 points of a
+  // surface here are ~17 cm): the floor's up, the wall at x = 0 along +x.
+  size_t floor_points = 0, floor_up = 0, wall_points = 0, wall_in = 0;
+  for (size_t i = 0; i < room.size(); ++i) {
+    const auto& p = room.points[i];
+    const bool clear_y = p.y() > 0.5f && p.y() < 3.5f;
+    if (p.z() == 0.0f && p.x() > 0.5f && p.x() < 1.0f && clear_y) {
+      ++floor_points;
+      if (room.normals[i].z() > 0.99f) ++floor_up;
+    }
+    if (p.x() == 0.0f && p.z() > 0.5f && p.z() < 2.5f && clear_y) {
+      ++wall_points;
+      if (room.normals[i].x() > 0.99f) ++wall_in;
+    }
+  }
+  REQUIRE(floor_points > 50);
+  REQUIRE(wall_points > 100);
+  CHECK(floor_up == floor_points);
+  CHECK(wall_in == wall_points);
+  // The same normals on one thread, and a bad k refused.
+  sem::Cloud again = sem::test::synthetic_room(20000, 9);
+  sem::estimate_normals_cells(again, 10, Eigen::Vector3f(3, 2, 1.5), 1);
+  CHECK(again.normals == room.normals);
+  CHECK_THROWS_AS(sem::estimate_normals_cells(again, 2), std::invalid_argument);
 }
