@@ -178,37 +178,43 @@ std::vector<double> registration_voxels(const Cloud& source, const Cloud& target
   return voxels;
 }
 
-RegistrationResult register_clouds(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
-                                   const RegistrationSettings& s) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto seconds_since = [](std::chrono::steady_clock::time_point t) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-  };
-  const std::vector<double> voxels = registration_voxels(source, target, s);
-  struct Level {
-    Cloud source, target;
-    IcpSettings icp;
-  };
-  std::vector<Level> levels(voxels.size());
-  double radius = 0.0;  // how far a rotation carries the source's points: their spread about the centroid
-  // Source and target side by side where there are two threads; what one
-  // throws is thrown here, after the parallel region.
-  const int pair_threads = s.threads == 1 ? 1 : 2;
-  const auto side_by_side = [pair_threads](const std::function<void()>& a, const std::function<void()>& b) {
-    std::exception_ptr errors[2];
-#pragma omp parallel for num_threads(pair_threads)
-    for (int i = 0; i < 2; ++i) {
-      try {
-        (i == 0 ? a : b)();
-      } catch (...) {
-        errors[i] = std::current_exception();
-      }
+namespace {
+
+// Source and target side by side where there are two threads; what one
+// throws is thrown here, after the parallel region.
+void side_by_side(int threads, const std::function<void()>& a, const std::function<void()>& b) {
+  std::exception_ptr errors[2];
+#pragma omp parallel for num_threads(threads)
+  for (int i = 0; i < 2; ++i) {
+    try {
+      (i == 0 ? a : b)();
+    } catch (...) {
+      errors[i] = std::current_exception();
     }
-    for (const auto& e : errors)
-      if (e) std::rethrow_exception(e);
-  };
-  Cloud fine_source, fine_target;
-  side_by_side([&] { fine_source = voxel_filter(source, voxels.back()); },
+  }
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+// One level of the pyramid: its clouds, its ICP settings and, once
+// prepared, its target's grids.
+struct Level {
+  double voxel_m = 0.0;
+  Cloud source, target;
+  IcpSettings icp;
+  std::unique_ptr<IcpTarget> prepared;
+};
+
+// The finest level's clouds, filtered, with the target's normals; each
+// coarser level filters the next finer one's points, a fraction of the
+// input (centroids of centroids: within a finer voxel of the same).
+std::vector<Level> filter_levels(const Cloud& source, const Cloud& target, const std::vector<double>& voxels,
+                                 const RegistrationSettings& s, int pair_threads) {
+  std::vector<Level> levels(voxels.size());
+  for (size_t l = 0; l < voxels.size(); ++l) levels[l].voxel_m = voxels[l];
+  Cloud& fine_source = levels.back().source;
+  Cloud& fine_target = levels.back().target;
+  side_by_side(pair_threads, [&] { fine_source = voxel_filter(source, voxels.back()); },
                [&] { fine_target = voxel_filter(target, voxels.back()); });
   // The target's normals once, at the finest level; a coarser level's are
   // the mean of the fine ones in each of its voxels (voxel_filter), not a
@@ -226,30 +232,37 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
     else
       estimate_normals(fine_target, s.normals_k, Eigen::Vector3f::Zero(), s.threads);
   }
-  // Each coarser level filters the next finer one's points, a fraction of
-  // the input (centroids of centroids: within a finer voxel of the same).
-  levels.back().source = std::move(fine_source);
-  levels.back().target = std::move(fine_target);
   side_by_side(
+      pair_threads,
       [&] {
         for (size_t l = voxels.size() - 1; l-- > 0;) levels[l].source = voxel_filter(levels[l + 1].source, voxels[l]);
       },
       [&] {
         for (size_t l = voxels.size() - 1; l-- > 0;) levels[l].target = voxel_filter(levels[l + 1].target, voxels[l]);
       });
-  for (size_t l = 0; l < voxels.size(); ++l) {
-    const double v = voxels[l];
-    const bool finest = l + 1 == voxels.size();
+  return levels;
+}
+
+// How far a rotation carries the cloud's points: their spread about the
+// centroid.
+double spread_m(const Cloud& cloud) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : cloud.points) centroid += p.cast<double>();
+  centroid /= static_cast<double>(cloud.size());
+  double sum = 0.0;
+  for (const auto& p : cloud.points) sum += (p.cast<double>() - centroid).squaredNorm();
+  return std::sqrt(sum / static_cast<double>(cloud.size()));
+}
+
+// Each level's ICP settings, and its source thinned to s.source_points.
+void configure_levels(std::vector<Level>& levels, const RegistrationSettings& s) {
+  const double radius = spread_m(levels.front().source);
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const double v = levels[l].voxel_m;
+    const bool finest = l + 1 == levels.size();
     Level& level = levels[l];
     IcpSettings& icp_settings = level.icp;
     icp_settings.metric = finest ? s.fine_metric : s.coarse_metric;
-    if (l == 0) {
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      for (const auto& p : level.source.points) centroid += p.cast<double>();
-      centroid /= static_cast<double>(level.source.size());
-      for (const auto& p : level.source.points) radius += (p.cast<double>() - centroid).squaredNorm();
-      radius = std::sqrt(radius / static_cast<double>(level.source.size()));
-    }
     level.source = evenly_spread(std::move(level.source), s.source_points);
     icp_settings.max_iterations = finest ? s.fine_iterations : s.iterations_per_level;
     icp_settings.max_correspondence_m = icp_settings.min_correspondence_m =
@@ -262,49 +275,67 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
     icp_settings.translation_epsilon_m = s.convergence_voxels * v;
     icp_settings.rotation_epsilon_rad = s.convergence_voxels * v / std::max(radius, v);
   }
+}
 
-  // Each level's target grids, once for both runs below, side by side
-  // (the finest, largest first). An error is thrown here, not inside the
-  // parallel loop.
-  std::vector<std::unique_ptr<IcpTarget>> prepared(levels.size());
+// Each level's target grids, once for both runs of register_clouds, side
+// by side (the finest, largest first). An error is thrown here, not inside
+// the parallel loop.
+void prepare_targets(std::vector<Level>& levels, int pair_threads) {
   std::vector<std::exception_ptr> errors(levels.size());
   const auto n_levels = static_cast<std::ptrdiff_t>(levels.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(pair_threads)
   for (std::ptrdiff_t k = 0; k < n_levels; ++k) {
     const auto l = static_cast<size_t>(n_levels - 1 - k);
     try {
-      prepared[l] = std::make_unique<IcpTarget>(levels[l].target, levels[l].icp);
+      levels[l].prepared = std::make_unique<IcpTarget>(levels[l].target, levels[l].icp);
     } catch (...) {
       errors[l] = std::current_exception();
     }
   }
   for (const auto& e : errors)
     if (e) std::rethrow_exception(e);
+}
 
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Levels [first, end) from T, appended to r.
+void run_levels(const std::vector<Level>& levels, size_t first, size_t end, Eigen::Isometry3d T,
+                RegistrationResult& r) {
+  for (size_t l = first; l < end; ++l) {
+    const Level& level = levels[l];
+    RegistrationLevel done;
+    done.voxel_m = level.voxel_m;
+    done.pairing_m = level.icp.max_correspondence_m;
+    done.source_points = level.source.size();
+    done.target_points = level.target.size();
+    const auto t = std::chrono::steady_clock::now();
+    done.icp = icp(level.source, *level.prepared, T);
+    done.seconds = seconds_since(t);
+    T = done.icp.T_target_source;
+    r.iterations += done.icp.iterations;
+    r.levels.push_back(done);
+  }
+  r.T_target_source = T;
+  r.rmse_m = r.levels.back().icp.rmse_m;
+  r.inlier_ratio = r.levels.back().icp.inlier_ratio;
+}
+
+}  // namespace
+
+RegistrationResult register_clouds(const Cloud& source, const Cloud& target, const Eigen::Isometry3d& T_initial,
+                                   const RegistrationSettings& s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<double> voxels = registration_voxels(source, target, s);
+  const int pair_threads = s.threads == 1 ? 1 : 2;
+  std::vector<Level> levels = filter_levels(source, target, voxels, s, pair_threads);
+  configure_levels(levels, s);
+  prepare_targets(levels, pair_threads);
   const double prepare_s = seconds_since(t0);
 
-  // Levels [first, end) from T, appended to r.
-  const auto run = [&](size_t first, size_t end, Eigen::Isometry3d T, RegistrationResult& r) {
-    for (size_t l = first; l < end; ++l) {
-      const Level& level = levels[l];
-      RegistrationLevel done;
-      done.voxel_m = voxels[l];
-      done.pairing_m = level.icp.max_correspondence_m;
-      done.source_points = level.source.size();
-      done.target_points = level.target.size();
-      const auto t = std::chrono::steady_clock::now();
-      done.icp = icp(level.source, *prepared[l], T);
-      done.seconds = seconds_since(t);
-      T = done.icp.T_target_source;
-      r.iterations += done.icp.iterations;
-      r.levels.push_back(done);
-    }
-    r.T_target_source = T;
-    r.rmse_m = r.levels.back().icp.rmse_m;
-    r.inlier_ratio = r.levels.back().icp.inlier_ratio;
-  };
   RegistrationResult result;
-  run(0, levels.size(), T_initial, result);
+  run_levels(levels, 0, levels.size(), T_initial, result);
   // A coarse level sees a street or a corridor as a few slabs and may slide
   // along it, out of a start that was already right (the 3DTK scans from
   // their odometry: 1.7 m along the street). So the finer half of the
@@ -316,9 +347,9 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
   if (levels.size() > 2) {
     const size_t mid = levels.size() / 2;
     RegistrationResult refined;
-    run(mid, mid + 1, T_initial, refined);
+    run_levels(levels, mid, mid + 1, T_initial, refined);
     if (apart(refined.T_target_source, result.levels[mid].icp.T_target_source, levels[mid].icp)) {
-      run(mid + 1, levels.size(), refined.T_target_source, refined);
+      run_levels(levels, mid + 1, levels.size(), refined.T_target_source, refined);
       if (refined.inlier_ratio > result.inlier_ratio) {
         refined.iterations += result.iterations;
         refined.from_start = true;
