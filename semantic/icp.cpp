@@ -568,24 +568,27 @@ void estimate_normals_cells(Cloud& cloud, int k, const Eigen::Vector3f& viewpoin
 
 Cloud voxel_filter(const Cloud& cloud, double leaf_m) {
   if (!(leaf_m > 0.0) || !std::isfinite(leaf_m)) throw std::invalid_argument("voxel_filter: leaf_m must be > 0");
-  const VoxelGrid grid(cloud.points, static_cast<float>(leaf_m));
+  // Each cell's points summed in their order, the cells in the order the
+  // points first reach them (a VoxelGrid's order, without building one).
+  size_t cells = 0;
+  const std::vector<uint32_t> cell = VoxelGrid::cell_numbers(cloud.points, static_cast<float>(leaf_m), cells);
   const bool normals = cloud.normals.size() == cloud.points.size();
+  std::vector<Eigen::Vector3d> sum(cells, Eigen::Vector3d::Zero()), nsum(normals ? cells : 0, Eigen::Vector3d::Zero());
+  std::vector<uint32_t> count(cells, 0);
+  for (size_t i = 0; i < cell.size(); ++i) {
+    const uint32_t c = cell[i];
+    if (c == VoxelGrid::kNone) continue;
+    sum[c] += cloud.points[i].cast<double>();
+    ++count[c];
+    if (normals) nsum[c] += cloud.normals[i].cast<double>();
+  }
   Cloud out;
-  out.points.reserve(grid.occupied_cells());
-  const auto& pts = grid.grid_points();
-  const auto& idx = grid.grid_index();
-  const auto& offsets = grid.cell_offsets();
-  for (size_t c = 0; c + 1 < offsets.size(); ++c) {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    Eigen::Vector3d nsum = Eigen::Vector3d::Zero();
-    for (uint32_t j = offsets[c]; j < offsets[c + 1]; ++j) {
-      sum += pts[j].head<3>().cast<double>();
-      if (normals) nsum += cloud.normals[idx[j]].cast<double>();
-    }
-    out.points.push_back((sum / static_cast<double>(offsets[c + 1] - offsets[c])).cast<float>());
+  out.points.reserve(cells);
+  for (size_t c = 0; c < cells; ++c) {
+    out.points.push_back((sum[c] / static_cast<double>(count[c])).cast<float>());
     if (normals) {
-      const double len = nsum.norm();
-      out.normals.push_back(len > 0.0 ? Eigen::Vector3f((nsum / len).cast<float>()) : Eigen::Vector3f::UnitZ());
+      const double len = nsum[c].norm();
+      out.normals.push_back(len > 0.0 ? Eigen::Vector3f((nsum[c] / len).cast<float>()) : Eigen::Vector3f::UnitZ());
     }
   }
   return out;

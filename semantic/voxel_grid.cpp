@@ -100,6 +100,31 @@ size_t VoxelGrid::count_cells(const std::vector<Eigen::Vector3f>& points, float 
   return cells;
 }
 
+std::vector<uint32_t> VoxelGrid::cell_numbers(const std::vector<Eigen::Vector3f>& points, float cell_m, size_t& cells) {
+  const VoxelGrid empty({}, cell_m);  // validates cell_m; its coord() and pack() map a point to its key
+  const size_t capacity = std::bit_ceil(std::max<size_t>(16, points.size() * 2));
+  const size_t mask = capacity - 1;
+  const int shift = 64 - std::countr_zero(capacity);
+  struct Entry {
+    uint64_t key = kEmpty;
+    uint32_t number = kNone;
+  };
+  std::vector<Entry> table(capacity);
+  std::vector<uint32_t> numbers(points.size(), kNone);
+  uint32_t next = 0;
+  for (size_t k = 0; k < points.size(); ++k) {
+    const auto& p = points[k];
+    if (!p.allFinite()) continue;
+    const uint64_t key = pack(empty.coord(p.x()), empty.coord(p.y()), empty.coord(p.z()));
+    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift);
+    while (table[i].key != key && table[i].key != kEmpty) i = (i + 1) & mask;
+    if (table[i].key == kEmpty) table[i] = {key, next++};
+    numbers[k] = table[i].number;
+  }
+  cells = next;
+  return numbers;
+}
+
 float VoxelGrid::face_gap(const Eigen::Vector3f& q) const {
   float face = cell_m_;
   for (int a = 0; a < 3; ++a) {

@@ -43,6 +43,13 @@ class VoxelGrid {
   static size_t count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m,
                             size_t limit = std::numeric_limits<size_t>::max() - 1, size_t* read = nullptr);
 
+  /// Each point's cube of `cell_m` > 0 as a number in the order the points
+  /// first reach the cubes (kNone for a point that is not finite), and in
+  /// `cells` how many: the cells of VoxelGrid(points, cell_m), in its
+  /// order, without its runs (one pass over a hash table; for what only
+  /// sums over each cell's points, voxel_filter).
+  static std::vector<uint32_t> cell_numbers(const std::vector<Eigen::Vector3f>& points, float cell_m, size_t& cells);
+
   float cell_m() const { return cell_m_; }
   size_t occupied_cells() const { return cell_count_; }
   size_t size() const { return index_.size(); }  ///< points kept

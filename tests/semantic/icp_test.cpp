@@ -218,6 +218,31 @@ TEST_CASE("voxel grid counts the cells a grid of the points occupies without bui
   CHECK_THROWS_AS(sem::VoxelGrid::count_cells(room.points, 0.0f), std::invalid_argument);
 }
 
+TEST_CASE("voxel grid numbers each point's cell in the grid's own order without building it", "[semantic]") {
+  sem::Cloud room = sem::test::synthetic_room(4000, 12, 0.02);
+  room.points.insert(room.points.begin() + 7, Eigen::Vector3f::Constant(std::nanf("")));  // no cell
+  for (const float cell : {0.01f, 0.07f, 0.5f, 50.0f}) {
+    INFO("cell " << cell);
+    const sem::VoxelGrid grid(room.points, cell);
+    size_t cells = 0;
+    const std::vector<uint32_t> number = sem::VoxelGrid::cell_numbers(room.points, cell, cells);
+    REQUIRE(number.size() == room.size());
+    CHECK(cells == grid.occupied_cells());
+    CHECK(number[7] == sem::VoxelGrid::kNone);
+    // Cell k of the numbering is the grid's k-th run: the same points.
+    const auto& offsets = grid.cell_offsets();
+    const auto& index = grid.grid_index();
+    bool same = true;
+    for (size_t k = 0; k + 1 < offsets.size(); ++k)
+      for (uint32_t j = offsets[k]; j < offsets[k + 1]; ++j) same = same && number[index[j]] == k;
+    CHECK(same);
+  }
+  size_t cells = 0;
+  CHECK(sem::VoxelGrid::cell_numbers({}, 0.1f, cells).empty());
+  CHECK(cells == 0);
+  CHECK_THROWS_AS(sem::VoxelGrid::cell_numbers(room.points, -1.0f, cells), std::invalid_argument);
+}
+
 TEST_CASE("voxel filter keeps one centroid per occupied cube", "[semantic]") {
   sem::Cloud c;
   c.points = {{0.01f, 0.01f, 0.01f}, {0.03f, 0.05f, 0.07f}, {0.15f, 0.0f, 0.0f}, {-0.05f, 0.0f, 0.0f}};
