@@ -436,8 +436,8 @@ IcpResult icp(const Cloud& source, const IcpTarget& prepared, const Eigen::Isome
   validate(source, target, settings);
   const auto schedule = correspondence_schedule(settings);
   const bool plane = settings.metric == IcpMetric::PointToPlane;
-  // A thread per 2048 source points at most: below that, waking threads costs more than it saves.
-  const int useful = static_cast<int>(std::min<size_t>(1024, source.points.size() / 2048 + 1));
+  // A thread per 512 source points at most: below that, waking threads costs more than it saves.
+  const int useful = static_cast<int>(std::min<size_t>(1024, source.points.size() / 512 + 1));
   const int threads = std::min(useful, settings.threads > 0 ? settings.threads : omp_get_max_threads());
 
   const GridPyramid& pyramid = *prepared.pyramid_;
