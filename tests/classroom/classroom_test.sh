@@ -155,6 +155,9 @@ for i in 0 1 2; do
 done
 start "$INS" instructor instructor "$BIN/rise-instructor" serve --listen "127.0.0.1:$PORT" --token "$TOKEN" --lcm "$LCM" \
   --instructor-key "$KEY" --world "$SRC/sim/worlds/yard.yaml" --lost-after-ms "$LOST_AFTER_MS" --push-hz 20
+# Its first log line comes once it listens: the page and the API are asked after it.
+wait_line "$WORK/instructor.log" 'rise-instructor serve: http' 20 >/dev/null ||
+  fail "rise-instructor serve did not start listening: $(tail -n 5 "$WORK/instructor.log")"
 
 # ---- the console page, watching station C's row (loaded while the stations start)
 WEB=$SRC/instructor/web
@@ -175,16 +178,23 @@ api() {  # PATH [curl args...]: the instructor's API, from its namespace
 trainees() { api /api/trainees; }
 # jq over /api/trainees until it is true, for at most $1 ms; false when it
 # never was. Asked again at each push of the console's stream (/api/stream,
-# --push-hz 20: when the server has news, at least once a second).
+# --push-hz 20: when the server has news, at least once a second). A stream
+# that ends early (the server not listening yet: curl is refused at once)
+# is opened again, a tenth of a second later, while time is left.
 wait_for() {
-  local limit_ms=$1 filter=$2 line
+  local limit_ms=$1 filter=$2 line left
+  local end=$(($(now_ms) + limit_ms))
   trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
-  while read -r line; do
-    [[ $line == data:* ]] || continue
+  while left=$((end - $(now_ms))); [ "$left" -gt 0 ]; do
+    while read -r line; do
+      [[ $line == data:* ]] || continue
+      trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
+    done < <(ip netns exec "$INS" curl -sN -m "$((left / 1000)).$(printf %03d $((left % 1000)))" \
+               -H "X-Rise-Token: $TOKEN" "http://127.0.0.1:$PORT/api/stream")
     trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
-  done < <(ip netns exec "$INS" curl -sN -m "$((limit_ms / 1000)).$(printf %03d $((limit_ms % 1000)))" \
-             -H "X-Rise-Token: $TOKEN" "http://127.0.0.1:$PORT/api/stream")
-  trainees | jq -e "$filter" >/dev/null 2>&1
+    [ $((end - $(now_ms))) -gt 100 ] && sleep 0.1
+  done
+  return 1
 }
 link_of() { trainees | jq -c --arg id "$1" '.[] | select(.id == $id) | .link'; }
 
