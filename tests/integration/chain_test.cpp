@@ -29,12 +29,6 @@ using rise::test::kSource;
 namespace {
 const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
-uint16_t free_port() {
-  // The emulator could bind port 0 itself, but the daemon must know the port
-  // before either starts; a just-released ephemeral port is good enough here.
-  static uint16_t next = static_cast<uint16_t>(30000 + (::getpid() % 20000));
-  return next++;
-}
 }  // namespace
 
 TEST_CASE("the robot stops within two publish periods plus its own stop time after a dead-man release and "
@@ -47,7 +41,7 @@ TEST_CASE("the robot stops within two publish periods plus its own stop time aft
   const std::string id = "itest" + std::to_string(::getpid());
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-chain-" + id);
   std::filesystem::create_directories(dir);
-  const std::string bus = "127.0.0.1:" + std::to_string(free_port()) + "/can0";
+  const std::string bus = "127.0.0.1:" + std::to_string(rise::test::free_tcp_port()) + "/can0";
 
   rise::process::ChainMonitor monitor(kLcm, id);
   REQUIRE(monitor.good());

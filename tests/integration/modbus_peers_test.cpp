@@ -44,11 +44,6 @@ using rise::test::wait_until;
 
 const std::string kLcm = rise::msgs::kDefaultLcmUrl;
 
-uint16_t free_port() {
-  static uint16_t next = static_cast<uint16_t>(36000 + (::getpid() % 20000));
-  return next++;
-}
-
 // mbpoll's "[address]: value" lines → value by address (unsigned column).
 std::map<int, long> parse_mbpoll(const std::string& text) {
   std::map<int, long> values;
@@ -157,7 +152,7 @@ TEST_CASE("mbpoll reads the emulator's register map and lights an LED through a 
   }
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-mbpoll-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const std::string port = std::to_string(free_port());
+  const std::string port = std::to_string(rise::test::free_tcp_port());
   ChildProcess panel({kBin + "/rise-panel", "emulate", "--modbus", "modbus+tcp-listen://127.0.0.1:" + port + "?unit=1",
                       "--script", kSource + "/tests/integration/modbus_script.txt", "--hold"},
                      dir + "/rise-panel.log");
@@ -213,7 +208,7 @@ TEST_CASE("rise-hild polls a pymodbus console, fails safe when it is killed and 
   const std::string id = "mbtest" + std::to_string(::getpid());
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-pymodbus-" + id);
   std::filesystem::create_directories(dir);
-  const std::string port = std::to_string(free_port());
+  const std::string port = std::to_string(rise::test::free_tcp_port());
   const std::string panel_file = modbus_definition(dir);
   const std::vector<std::string> console_argv = {
       "/usr/bin/python3", kSource + "/tests/integration/modbus_pymodbus_panel.py", port, "16384", "-8192", "0x1"};
@@ -289,7 +284,7 @@ TEST_CASE("rise-hild reads a pymodbus PLC through the points of its definition, 
   const std::string dir = std::filesystem::temp_directory_path() / ("rise-plc-" + id);
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const std::string port = std::to_string(free_port());
+  const std::string port = std::to_string(rise::test::free_tcp_port());
   const std::string panel_file = kSource + "/panels/definitions/modbus_plc_panel.yaml";
   const std::string state = dir + "/plc_state.txt";
   // drive_x -500 of ±1000 (int16), drive_y 250, lift 4095 of 0..4095; the dead-man held; speed "medium".

@@ -30,7 +30,7 @@ TEST_CASE("python-can receives the emulator's frames over socketcand and our DBC
   const std::string dir =
       std::filesystem::temp_directory_path() / ("rise-pycan-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const std::string port = std::to_string(31000 + ::getpid() % 20000);
+  const std::string port = std::to_string(rise::test::free_tcp_port());
 
   ChildProcess panel({kBin + "/rise-panel", "emulate", "--can", "socketcand+listen://127.0.0.1:" + port + "/can0",
                       "--script", kSource + "/tests/integration/python_can_script.txt", "--hold"},

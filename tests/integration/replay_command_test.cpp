@@ -41,7 +41,7 @@ TEST_CASE("rise-panel replay plays a capture onto socketcand and python-can rece
       sent.push_back(f);
     }
   }
-  const std::string port = std::to_string(33000 + ::getpid() % 20000);
+  const std::string port = std::to_string(rise::test::free_tcp_port());
   ChildProcess replay({kBin + "/rise-panel", "replay", dir + "/capture.log", "--to",
                        "socketcand+listen://127.0.0.1:" + port + "/can0", "--wait-peer"},
                       dir + "/rise-panel.log");
