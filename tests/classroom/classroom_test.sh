@@ -178,23 +178,16 @@ api() {  # PATH [curl args...]: the instructor's API, from its namespace
 trainees() { api /api/trainees; }
 # jq over /api/trainees until it is true, for at most $1 ms; false when it
 # never was. Asked again at each push of the console's stream (/api/stream,
-# --push-hz 20: when the server has news, at least once a second). A stream
-# that ends early (the server not listening yet: curl is refused at once)
-# is opened again, a tenth of a second later, while time is left.
+# --push-hz 20: when the server has news, at least once a second).
 wait_for() {
-  local limit_ms=$1 filter=$2 line left
-  local end=$(($(now_ms) + limit_ms))
+  local limit_ms=$1 filter=$2 line
   trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
-  while left=$((end - $(now_ms))); [ "$left" -gt 0 ]; do
-    while read -r line; do
-      [[ $line == data:* ]] || continue
-      trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
-    done < <(ip netns exec "$INS" curl -sN -m "$((left / 1000)).$(printf %03d $((left % 1000)))" \
-               -H "X-Rise-Token: $TOKEN" "http://127.0.0.1:$PORT/api/stream")
+  while read -r line; do
+    [[ $line == data:* ]] || continue
     trainees | jq -e "$filter" >/dev/null 2>&1 && return 0
-    [ $((end - $(now_ms))) -gt 100 ] && sleep 0.1
-  done
-  return 1
+  done < <(ip netns exec "$INS" curl -sN -m "$((limit_ms / 1000)).$(printf %03d $((limit_ms % 1000)))" \
+             -H "X-Rise-Token: $TOKEN" "http://127.0.0.1:$PORT/api/stream")
+  trainees | jq -e "$filter" >/dev/null 2>&1
 }
 link_of() { trainees | jq -c --arg id "$1" '.[] | select(.id == $id) | .link'; }
 
