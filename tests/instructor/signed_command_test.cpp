@@ -388,7 +388,7 @@ TEST_CASE("a signed CAN drop over LCM makes the live daemon fail safe on the sta
   INFO("logs in " << keys.dir);
   const std::string script = (keys.dir / "hold.txt").string();
   std::ofstream(script) << "0.0 mode drive\n0.0 speed fast\n0.1 deadman pressed\n0.2 drive_y 0.5\n";
-  const std::string bus = "127.0.0.1:" + std::to_string(31000 + ::getpid() % 20000) + "/can0";
+  const std::string bus = "127.0.0.1:" + std::to_string(rise::test::free_tcp_port()) + "/can0";
   Station station(id);
   REQUIRE(station.good());
   rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id, "--source",
