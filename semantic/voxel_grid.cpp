@@ -10,72 +10,66 @@ VoxelGrid::VoxelGrid(const std::vector<Eigen::Vector3f>& points, float cell_m, i
     : cell_m_(cell_m), inv_cell_(1.0f / cell_m) {
   if (!(cell_m > 0.0f) || !std::isfinite(cell_m) || !std::isfinite(inv_cell_))
     throw std::invalid_argument("VoxelGrid: cell_m must be positive and finite");
-  // Keys of the finite points, then a counting sort by cell through the
-  // hash table: pass 1 counts per cell, pass 2 places each point.
-  std::vector<uint64_t> keys(points.size(), kEmpty);
-  size_t finite = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    const auto& p = points[i];
-    if (!p.allFinite()) continue;
-    keys[i] = pack(coord(p.x()), coord(p.y()), coord(p.z()));
-    ++finite;
-  }
-  const size_t capacity = std::bit_ceil(std::max<size_t>(16, finite * 2));
-  slots_.assign(capacity, Slot{});
-  mask_ = capacity - 1;
-  shift_ = 64 - std::countr_zero(capacity);
-  const auto slot_of = [&](uint64_t key) -> Slot& {
-    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
-    while (slots_[i].key != key && slots_[i].key != kEmpty) i = (i + 1) & mask_;
-    return slots_[i];
-  };
+  // Each point's cell number (one pass over a hash table), then a counting
+  // sort by it. Runs in first-seen order: a scan's points arrive sweep by
+  // sweep, so neighbouring cells, and the queries of neighbouring source
+  // points, stay close in memory.
+  std::vector<uint64_t> keys;
+  const std::vector<uint32_t> numbers = number_cells(points, &keys, cell_count_);
   const uint32_t cap = max_points_per_cell > 0 ? static_cast<uint32_t>(max_points_per_cell) : kNone;
-  std::vector<uint64_t> first_seen;  // cells in the order the input first reaches them
-  for (const uint64_t key : keys) {
-    if (key == kEmpty) continue;
-    Slot& s = slot_of(key);
-    if (s.key == kEmpty) {
-      s.key = key;
-      first_seen.push_back(key);
-    }
-    if (s.count < cap) ++s.count;
-  }
-  cell_count_ = first_seen.size();
-  // Queries probe this table at random: re-hash it to fit the cells (load
-  // 0.4 .. 0.8; not twice the points) so that it stays in cache.
-  {
-    std::vector<Slot> counted;
-    counted.swap(slots_);
-    const size_t compact = std::bit_ceil(std::max<size_t>(16, cell_count_ + cell_count_ / 4));
-    slots_.assign(compact, Slot{});
-    mask_ = compact - 1;
-    shift_ = 64 - std::countr_zero(compact);
-    for (const Slot& c : counted)
-      if (c.key != kEmpty) slot_of(c.key) = c;
-  }
-  // Runs in first-seen order: a scan's points arrive sweep by sweep, so
-  // neighbouring cells, and the queries of neighbouring source points, stay
-  // close in memory.
-  uint32_t offset = 0;
-  offsets_.reserve(cell_count_ + 1);
-  for (const uint64_t key : first_seen) {
-    Slot& s = slot_of(key);
-    offsets_.push_back(offset);
-    s.begin = offset;
-    offset += s.count;
-    s.count = 0;
-  }
-  offsets_.push_back(offset);
-  sorted_.resize(offset);
-  index_.resize(offset);
+  offsets_.assign(cell_count_ + 1, 0);
+  for (const uint32_t n : numbers)
+    if (n != kNone && offsets_[n + 1] < cap) ++offsets_[n + 1];
+  for (size_t c = 0; c < cell_count_; ++c) offsets_[c + 1] += offsets_[c];
+  sorted_.resize(offsets_.back());
+  index_.resize(offsets_.back());
+  std::vector<uint32_t> fill(offsets_.begin(), offsets_.end() - 1);
   for (size_t i = 0; i < points.size(); ++i) {
-    if (keys[i] == kEmpty) continue;
-    Slot& s = slot_of(keys[i]);
-    if (s.count >= cap) continue;
-    const uint32_t at = s.begin + s.count++;
+    const uint32_t n = numbers[i];
+    if (n == kNone || fill[n] == offsets_[n + 1]) continue;
+    const uint32_t at = fill[n]++;
     sorted_[at] = Eigen::Vector4f(points[i].x(), points[i].y(), points[i].z(), 0.0f);
     index_[at] = static_cast<uint32_t>(i);
   }
+  // Queries probe this table at random: sized to the cells (load 0.4 ..
+  // 0.8; not twice the points) so that it stays in cache.
+  const size_t capacity = std::bit_ceil(std::max<size_t>(16, cell_count_ + cell_count_ / 4));
+  slots_.assign(capacity, Slot{});
+  mask_ = capacity - 1;
+  shift_ = 64 - std::countr_zero(capacity);
+  for (size_t c = 0; c < cell_count_; ++c) {
+    size_t i = static_cast<size_t>((keys[c] * 0x9E3779B97F4A7C15ull) >> shift_);
+    while (slots_[i].key != kEmpty) i = (i + 1) & mask_;
+    slots_[i] = {keys[c], offsets_[c], offsets_[c + 1] - offsets_[c]};
+  }
+}
+
+std::vector<uint32_t> VoxelGrid::number_cells(const std::vector<Eigen::Vector3f>& points, std::vector<uint64_t>* keys,
+                                              size_t& cells) const {
+  const size_t capacity = std::bit_ceil(std::max<size_t>(16, points.size() * 2));
+  const size_t mask = capacity - 1;
+  const int shift = 64 - std::countr_zero(capacity);
+  struct Entry {
+    uint64_t key = kEmpty;
+    uint32_t number = kNone;
+  };
+  std::vector<Entry> table(capacity);
+  std::vector<uint32_t> numbers(points.size(), kNone);
+  uint32_t next = 0;
+  for (size_t k = 0; k < points.size(); ++k) {
+    const auto& p = points[k];
+    if (!p.allFinite()) continue;
+    const uint64_t key = pack(coord(p.x()), coord(p.y()), coord(p.z()));
+    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift);
+    while (table[i].key != key && table[i].key != kEmpty) i = (i + 1) & mask;
+    if (table[i].key == kEmpty) {
+      table[i] = {key, next++};
+      if (keys != nullptr) keys->push_back(key);
+    }
+    numbers[k] = table[i].number;
+  }
+  cells = next;
+  return numbers;
 }
 
 size_t VoxelGrid::count_cells(const std::vector<Eigen::Vector3f>& points, float cell_m, size_t limit, size_t* read) {
@@ -102,27 +96,7 @@ size_t VoxelGrid::count_cells(const std::vector<Eigen::Vector3f>& points, float 
 
 std::vector<uint32_t> VoxelGrid::cell_numbers(const std::vector<Eigen::Vector3f>& points, float cell_m, size_t& cells) {
   const VoxelGrid empty({}, cell_m);  // validates cell_m; its coord() and pack() map a point to its key
-  const size_t capacity = std::bit_ceil(std::max<size_t>(16, points.size() * 2));
-  const size_t mask = capacity - 1;
-  const int shift = 64 - std::countr_zero(capacity);
-  struct Entry {
-    uint64_t key = kEmpty;
-    uint32_t number = kNone;
-  };
-  std::vector<Entry> table(capacity);
-  std::vector<uint32_t> numbers(points.size(), kNone);
-  uint32_t next = 0;
-  for (size_t k = 0; k < points.size(); ++k) {
-    const auto& p = points[k];
-    if (!p.allFinite()) continue;
-    const uint64_t key = pack(empty.coord(p.x()), empty.coord(p.y()), empty.coord(p.z()));
-    size_t i = static_cast<size_t>((key * 0x9E3779B97F4A7C15ull) >> shift);
-    while (table[i].key != key && table[i].key != kEmpty) i = (i + 1) & mask;
-    if (table[i].key == kEmpty) table[i] = {key, next++};
-    numbers[k] = table[i].number;
-  }
-  cells = next;
-  return numbers;
+  return empty.number_cells(points, nullptr, cells);
 }
 
 float VoxelGrid::face_gap(const Eigen::Vector3f& q) const {

@@ -46,8 +46,8 @@ class VoxelGrid {
   /// Each point's cube of `cell_m` > 0 as a number in the order the points
   /// first reach the cubes (kNone for a point that is not finite), and in
   /// `cells` how many: the cells of VoxelGrid(points, cell_m), in its
-  /// order, without its runs (one pass over a hash table; for what only
-  /// sums over each cell's points, voxel_filter).
+  /// order, without its runs (the constructor's one pass over a hash
+  /// table; for what only sums over each cell's points, voxel_filter).
   static std::vector<uint32_t> cell_numbers(const std::vector<Eigen::Vector3f>& points, float cell_m, size_t& cells);
 
   float cell_m() const { return cell_m_; }
@@ -105,6 +105,11 @@ class VoxelGrid {
   const std::vector<uint32_t>& cell_offsets() const { return offsets_; }
 
  private:
+  // Each point's cell number in first-seen order (kNone: not finite), in
+  // `cells` how many, and into `keys` (when given) each cell's key, by number.
+  std::vector<uint32_t> number_cells(const std::vector<Eigen::Vector3f>& points, std::vector<uint64_t>* keys,
+                                     size_t& cells) const;
+
   template <bool kClearance>
   Neighbour search(const Eigen::Vector3f& q, float radius_m, uint32_t stride_cap, float* clear2) const;
 
