@@ -431,6 +431,11 @@ IcpResult icp(const Cloud& source, const Cloud& target, const Eigen::Isometry3d&
 }
 
 IcpResult icp(const Cloud& source, const IcpTarget& prepared, const Eigen::Isometry3d& T_initial) {
+  return icp(source, prepared, T_initial, {});
+}
+
+IcpResult icp(const Cloud& source, const IcpTarget& prepared, const Eigen::Isometry3d& T_initial,
+              const std::function<bool(const Eigen::Isometry3d&, const IcpResult&)>& stop) {
   const IcpSettings& settings = prepared.settings();
   const Cloud& target = prepared.cloud();
   validate(source, target, settings);
@@ -464,6 +469,10 @@ IcpResult icp(const Cloud& source, const IcpTarget& prepared, const Eigen::Isome
     if (moved < settings.translation_epsilon_m && turned < settings.rotation_epsilon_rad &&
         radius <= settings.min_correspondence_m * (1.0 + 1e-9) && stride == 1) {
       result.converged = true;
+      break;
+    }
+    if (stop && stop(T, result)) {
+      result.stopped = true;
       break;
     }
   }

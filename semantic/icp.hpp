@@ -7,6 +7,7 @@
 
 #include "semantic/cloud.hpp"
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -51,6 +52,7 @@ struct IcpResult {
   double rmse_m = 0.0;         ///< over the inlier pairs of the last iteration
   double inlier_ratio = 0.0;   ///< paired source points / all source points
   bool converged = false;
+  bool stopped = false;  ///< ended by the caller's stop condition (see icp() below)
   /// The last update's translation and rotation: how far from settled a
   /// match that ran out of iterations still was.
   double last_step_m = 0.0;
@@ -81,7 +83,8 @@ class IcpTarget {
   const IcpSettings& settings() const { return settings_; }
 
  private:
-  friend IcpResult icp(const Cloud& source, const IcpTarget& target, const Eigen::Isometry3d& T_initial);
+  friend IcpResult icp(const Cloud& source, const IcpTarget& target, const Eigen::Isometry3d& T_initial,
+                       const std::function<bool(const Eigen::Isometry3d&, const IcpResult&)>& stop);
   const Cloud& cloud_;
   IcpSettings settings_;
   std::unique_ptr<detail::GridPyramid> pyramid_;
@@ -89,6 +92,14 @@ class IcpTarget {
 
 /// icp() onto a prepared target, with the settings it was prepared for.
 IcpResult icp(const Cloud& source, const IcpTarget& target, const Eigen::Isometry3d& T_initial);
+
+/// The same, stopping early (stopped = true, converged false) once
+/// `stop` holds for the pose after an update and the result so far (its
+/// iterations, and the rmse and inlier ratio of the pairs that update
+/// came from): for a run that only has to show whether it reaches a known
+/// answer, or pairs as much as one.
+IcpResult icp(const Cloud& source, const IcpTarget& target, const Eigen::Isometry3d& T_initial,
+              const std::function<bool(const Eigen::Isometry3d&, const IcpResult&)>& stop);
 
 /// The pairing distance of each iteration: geometric from
 /// max_correspondence_m down to min_correspondence_m over the first half of

@@ -126,6 +126,8 @@ void validate(const Cloud& source, const Cloud& target, const RegistrationSettin
   if (s.iterations_per_level < 1) throw std::invalid_argument("register: iterations_per_level must be at least 1");
   if (!(s.min_inlier_ratio >= 0.0 && s.min_inlier_ratio <= 1.0))
     throw std::invalid_argument("register: min_inlier_ratio must be in 0..1");
+  if (!(s.restart_min_share >= 0.0 && s.restart_min_share <= 1.0))
+    throw std::invalid_argument("register: restart_min_share must be in 0..1");
 }
 
 // Two answers of one level differ by more than ten times its convergence
@@ -308,9 +310,9 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 
-// Levels [first, end) from T, appended to r.
+// Levels [first, end) from T, appended to r; each stops early where `stop` holds (icp()).
 void run_levels(const std::vector<Level>& levels, size_t first, size_t end, Eigen::Isometry3d T,
-                RegistrationResult& r) {
+                RegistrationResult& r, const std::function<bool(const Eigen::Isometry3d&, const IcpResult&)>& stop = {}) {
   for (size_t l = first; l < end; ++l) {
     const Level& level = levels[l];
     RegistrationLevel done;
@@ -319,7 +321,7 @@ void run_levels(const std::vector<Level>& levels, size_t first, size_t end, Eige
     done.source_points = level.source.size();
     done.target_points = level.target.size();
     const auto t = std::chrono::steady_clock::now();
-    done.icp = icp(level.source, *level.prepared, T);
+    done.icp = icp(level.source, *level.prepared, T, stop);
     done.seconds = seconds_since(t);
     T = done.icp.T_target_source;
     r.iterations += done.icp.iterations;
@@ -348,15 +350,22 @@ RegistrationResult register_clouds(const Cloud& source, const Cloud& target, con
   // along it, out of a start that was already right (the 3DTK scans from
   // their odometry: 1.7 m along the street). So the finer half of the
   // pyramid also runs from the start itself, and the answer that pairs more
-  // of the source at the finest level wins. Where the start's run settles
-  // at the middle level where the whole pyramid's did (within a tenth of
-  // that level's voxel), the finer levels would only repeat the same steps:
-  // they run once.
+  // of the source at the finest level wins. It stops early (icp()'s stop):
+  // at once where the start pairs clearly fewer of the source at the
+  // middle level than the whole pyramid's answer there (restart_min_share:
+  // it was not already right; the room's scans from the tutorial's guess,
+  // 53 % against 81 %, 9.5 ms of 16 iterations saved), and as soon as it
+  // comes within a tenth of that level's voxel of that answer (the finer
+  // levels would only repeat the same steps: they run once).
   if (levels.size() > 2) {
     const size_t mid = levels.size() / 2;
     RegistrationResult refined;
-    run_levels(levels, mid, mid + 1, T_initial, refined);
-    if (apart(refined.T_target_source, result.levels[mid].icp.T_target_source, levels[mid].icp)) {
+    const Eigen::Isometry3d& settled = result.levels[mid].icp.T_target_source;
+    const double enough = s.restart_min_share * result.levels[mid].icp.inlier_ratio;
+    run_levels(levels, mid, mid + 1, T_initial, refined, [&](const Eigen::Isometry3d& T, const IcpResult& so_far) {
+      return (so_far.iterations == 1 && so_far.inlier_ratio < enough) || !apart(T, settled, levels[mid].icp);
+    });
+    if (apart(refined.T_target_source, settled, levels[mid].icp) && refined.inlier_ratio >= enough) {
       run_levels(levels, mid + 1, levels.size(), refined.T_target_source, refined);
       if (refined.inlier_ratio > result.inlier_ratio) {
         refined.iterations += result.iterations;

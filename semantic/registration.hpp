@@ -23,11 +23,9 @@
 namespace rise::semantic {
 
 struct RegistrationSettings {
-  /// The coarse levels pair point to plane: it slides along walls and
-  /// ground into place in a few iterations. The finest level decides the
-  /// answer point to point, which rests on the points alone, not on normals
-  /// estimated from a few neighbours (on the 3DTK scans point-to-plane
-  /// settles up to 0.4° from slam6d's pose, point-to-point 0.12°).
+  /// Every level pairs point to plane by default: it slides along walls
+  /// and ground into place in a few iterations, where point to point
+  /// creeps along a scene's weak direction (a street's length).
   IcpMetric coarse_metric = IcpMetric::PointToPlane;
   IcpMetric fine_metric = IcpMetric::PointToPlane;
   /// The finest level's voxel; 0: the one that keeps fine_points of the
@@ -53,6 +51,12 @@ struct RegistrationSettings {
   /// than this many of its voxels.
   double convergence_voxels = 0.01;
   int normals_k = 12;              ///< point-to-plane: neighbours per target normal
+  /// The start's own run (see register_clouds) runs only where the start
+  /// pairs at least this share of the source that the whole pyramid's
+  /// answer pairs at the middle level (a start that was already right
+  /// pairs about as many), and goes on past that level only where it
+  /// still does there. 0: always.
+  double restart_min_share = 0.9;
   /// Below this share of the source paired at the finest level, the clouds
   /// did not meet: not converged.
   double min_inlier_ratio = 0.3;

@@ -87,6 +87,48 @@ TEST_CASE("icp onto a prepared target gives icp's answer, from any number of sta
   CHECK_THROWS_AS(sem::icp(sem::Cloud{}, prepared, Eigen::Isometry3d::Identity()), std::invalid_argument);
 }
 
+TEST_CASE("icp stops where its caller's condition holds, with the iterations and pairs up to there", "[semantic]") {
+  const sem::Cloud target = sem::test::synthetic_room(20000, 3);
+  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
+  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  sem::IcpSettings s;
+  s.max_iterations = 50;
+  s.min_correspondence_m = 0.1;  // the points are ~8 cm apart: all pair once aligned
+  s.translation_epsilon_m = 1e-4;
+  s.rotation_epsilon_rad = 1e-4;
+  const sem::IcpTarget prepared(target, s);
+  const auto full = sem::icp(source, prepared, Eigen::Isometry3d::Identity());
+  INFO(full.iterations << " iterations, last step " << full.last_step_m);
+  REQUIRE(full.converged);
+  REQUIRE(full.iterations > 4);
+  CHECK_FALSE(full.stopped);
+  // Stopped after the third update: the same first three steps, not converged.
+  int seen = 0;
+  const auto third = sem::icp(source, prepared, Eigen::Isometry3d::Identity(),
+                              [&](const Eigen::Isometry3d&, const sem::IcpResult& so_far) {
+                                CHECK(so_far.iterations == ++seen);
+                                return so_far.iterations == 3;
+                              });
+  CHECK(third.stopped);
+  CHECK_FALSE(third.converged);
+  CHECK(third.iterations == 3);
+  // Its answer is the pose the condition saw.
+  Eigen::Isometry3d at_stop = Eigen::Isometry3d::Identity();
+  sem::icp(source, prepared, Eigen::Isometry3d::Identity(), [&](const Eigen::Isometry3d& T, const sem::IcpResult& r) {
+    if (r.iterations == 3) at_stop = T;
+    return r.iterations == 3;
+  });
+  CHECK(third.T_target_source.isApprox(at_stop, 1e-9));
+  // Stopped once within 1 cm of the converged answer: fewer iterations, close to it.
+  const auto near = sem::icp(source, prepared, Eigen::Isometry3d::Identity(),
+                             [&](const Eigen::Isometry3d& T, const sem::IcpResult&) {
+                               return (T.translation() - full.T_target_source.translation()).norm() < 0.01;
+                             });
+  CHECK(near.stopped);
+  CHECK(near.iterations < full.iterations);
+  CHECK(translation_error_m(near.T_target_source, full.T_target_source) < 0.01);
+}
+
 TEST_CASE("icp reusing pairs gives the pairs and transform a search would, to the bit", "[semantic]") {
   sem::Cloud target = sem::test::synthetic_room(20000, 3);
   sem::estimate_normals(target, 10, Eigen::Vector3f(3, 2, 1.5));
