@@ -278,9 +278,10 @@ bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, co
 // gaps along it that are neither narrower than a door nor a doorway (free
 // space in the gap's middle and on both sides of it). False, adding nothing,
 // when the cells spread wider than a wall's thickness across the line
-// (unless they are a single face: a face is straight by construction).
+// (unless they are a single face and `refuse_thick` is false: a face is
+// straight by construction).
 bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& xy, bool both_faces, bool single_face,
-                const FloorPlanSettings& s, std::vector<Piece>& out) {
+                const FloorPlanSettings& s, std::vector<Piece>& out, bool refuse_thick = false) {
   const detail::Line2 line = detail::fit_line(xy);
   std::vector<double> along, across;
   for (const auto& p : xy) along.push_back(line.along(p)), across.push_back(line.offset(p));
@@ -290,6 +291,7 @@ bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
   proto.offset = line.normal.dot(line.point) + (lo + hi) / 2;
   proto.thickness = std::max(s.min_wall_thickness_m, hi - lo + grid.resolution_m);
   const auto [shortest, longest] = std::minmax_element(along.begin(), along.end());
+  if (proto.thickness > s.max_wall_thickness_m && refuse_thick) return false;
   if (proto.thickness > s.max_wall_thickness_m && (!single_face || *longest - *shortest >= 2 * s.min_wall_length_m)) {
     if (!single_face) return false;
     // A curved face (a drifting map's long wall): two straighter halves.
@@ -353,8 +355,39 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
   std::vector<std::vector<int>> groups(faces.size());
   for (std::size_t i = 0; i < faces.size(); ++i)
     groups[static_cast<std::size_t>(find_root(parent, static_cast<int>(i)))].push_back(static_cast<int>(i));
-  const auto cells_of = [&](const Face& face, std::vector<Eigen::Vector2d>& xy) {
-    for (const auto& c : face.cells) xy.push_back(f.world(f.along_of_col(c.x + 0.5), f.offset_of_row(c.y + 0.5)));
+  const auto cells_of = [&](const Face& face, std::vector<Eigen::Vector2d>& xy, bool own_rows = false) {
+    for (const auto& c : face.cells)
+      if (!own_rows || (c.y >= face.r0 && c.y <= face.r1))
+        xy.push_back(f.world(f.along_of_col(c.x + 0.5), f.offset_of_row(c.y + 0.5)));
+  };
+  // A face alone. One spread wider than a wall is clutter, a wall with
+  // clutter standing against it, or a curved wall. Shorter than two
+  // walls' minimum: clutter, no wall. Else the cells of its own rows
+  // (those with a fair share of its cells), where they are a straight
+  // line (straight_share of them near their fitted line) whose pieces keep
+  // trim_keep of the face's length: the wall, without the clutter. Else
+  // two straighter halves (split_wall).
+  const auto alone = [&](const Face& face) {
+    std::vector<Eigen::Vector2d> xy;
+    cells_of(face, xy);
+    if (split_wall(grid, xy, false, true, s, out, true)) return;
+    const double length = (face.c1 - face.c0 + 1) * f.res;
+    if (length < 2 * s.min_wall_length_m) return;
+    std::vector<Eigen::Vector2d> own;
+    cells_of(face, own, true);
+    std::vector<Piece> trimmed;
+    split_wall(grid, own, false, true, s, trimmed);
+    double kept = 0.0;
+    for (const Piece& p : trimmed) kept += p.a1 - p.a0;
+    const detail::Line2 line = detail::fit_line(own);
+    const auto near = std::count_if(own.begin(), own.end(), [&](const Eigen::Vector2d& q) {
+      return std::abs(line.offset(q)) <= s.straight_within_m;
+    });
+    if (static_cast<double>(near) >= s.straight_share * static_cast<double>(own.size()) && kept >= s.trim_keep * length) {
+      out.insert(out.end(), trimmed.begin(), trimmed.end());
+      return;
+    }
+    split_wall(grid, xy, false, true, s, out);
   };
   for (const auto& group : groups) {
     if (group.empty()) continue;
@@ -365,13 +398,9 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
       cells_of(face, xy);
       for (const int j : group) both = both || face.r1 < faces[static_cast<std::size_t>(j)].r0;
     }
-    if (split_wall(grid, xy, both, group.size() == 1, s, out)) continue;
-    // Joined faces that do not make one straight slab: each on its own.
-    for (const int i : group) {
-      xy.clear();
-      cells_of(faces[static_cast<std::size_t>(i)], xy);
-      split_wall(grid, xy, false, true, s, out);
-    }
+    if (group.size() > 1 && split_wall(grid, xy, both, false, s, out)) continue;
+    // A single face, or joined faces that do not make one straight slab: each on its own.
+    for (const int i : group) alone(faces[static_cast<std::size_t>(i)]);
   }
 }
 

@@ -32,6 +32,12 @@ struct FloorPlanSettings {
   double min_wall_thickness_m = 0.1;   ///< a thinner measured slab is given this
   double max_wall_thickness_m = 0.5;   ///< faces up to this apart, nothing free between: one wall
   double noise_gap_m = 0.3;            ///< gaps up to this in a face are noise
+  /// A face spread wider than a wall (clutter against it) is the wall of
+  /// its own rows where this share of their cells lies within
+  /// straight_within_m of their fitted line (a curved wall's do not) ...
+  double straight_share = 0.4;
+  double straight_within_m = 0.1;
+  double trim_keep = 0.5;              ///< ... and that wall keeps this share of the face's length
   double collinear_offset_m = 0.15;    ///< collinear faces: centre lines at most this apart ...
   double angle_tolerance_rad = 6.0 * 3.14159265358979 / 180.0;  ///< directions closer than this are one
   double min_direction_share = 0.3;    ///< a direction holds this share of the strongest one's edges ...
