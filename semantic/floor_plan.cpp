@@ -375,22 +375,28 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
     if (length < 2 * s.min_wall_length_m) return;
     std::vector<Eigen::Vector2d> own;
     cells_of(face, own, true);
-    std::vector<Piece> trimmed;
-    split_wall(grid, own, false, true, s, trimmed);
-    double kept = 0.0;
-    for (const Piece& p : trimmed) kept += p.a1 - p.a0;
     const detail::Line2 line = detail::fit_line(own);
     const auto near = std::count_if(own.begin(), own.end(), [&](const Eigen::Vector2d& q) {
       return std::abs(line.offset(q)) <= s.straight_within_m;
     });
-    if (static_cast<double>(near) >= s.straight_share * static_cast<double>(own.size()) && kept >= s.trim_keep * length) {
-      out.insert(out.end(), trimmed.begin(), trimmed.end());
-      return;
+    if (static_cast<double>(near) >= s.straight_share * static_cast<double>(own.size())) {
+      std::vector<Piece> trimmed;
+      split_wall(grid, own, false, true, s, trimmed);
+      double kept = 0.0;
+      for (const Piece& p : trimmed) kept += p.a1 - p.a0;
+      if (kept >= s.trim_keep * length) {
+        out.insert(out.end(), trimmed.begin(), trimmed.end());
+        return;
+      }
     }
     split_wall(grid, xy, false, true, s, out);
   };
   for (const auto& group : groups) {
     if (group.empty()) continue;
+    if (group.size() == 1) {
+      alone(faces[static_cast<std::size_t>(group.front())]);
+      continue;
+    }
     std::vector<Eigen::Vector2d> xy;
     bool both = false;
     for (const int i : group) {
@@ -398,8 +404,8 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
       cells_of(face, xy);
       for (const int j : group) both = both || face.r1 < faces[static_cast<std::size_t>(j)].r0;
     }
-    if (group.size() > 1 && split_wall(grid, xy, both, false, s, out)) continue;
-    // A single face, or joined faces that do not make one straight slab: each on its own.
+    if (split_wall(grid, xy, both, false, s, out)) continue;
+    // Joined faces that do not make one straight slab: each on its own.
     for (const int i : group) alone(faces[static_cast<std::size_t>(i)]);
   }
 }

@@ -12,6 +12,17 @@ namespace sem = rise::semantic;
 using sem::test::rotation_error_deg;
 using sem::test::translation_error_m;
 
+namespace {
+
+// Two samplings of the synthetic room, the second seen 6° and 0.18 m away.
+struct MovedRoom {
+  sem::Cloud target = sem::test::synthetic_room(20000, 3);
+  Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
+  sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+};
+
+}  // namespace
+
 TEST_CASE("icp recovers a known 10 degree, 0.2 m motion of a synthetic room", "[semantic]") {
   const sem::Cloud target = sem::test::synthetic_room(40000, 1);
   const Eigen::Isometry3d T_true = sem::test::pose(10.0, 2.0, -1.5, {0.2, -0.1, 0.05});
@@ -53,9 +64,8 @@ TEST_CASE("icp recovers a known 10 degree, 0.2 m motion of a synthetic room", "[
 }
 
 TEST_CASE("icp gives the same answer on one thread and on two", "[semantic]") {
-  const sem::Cloud target = sem::test::synthetic_room(20000, 3);
-  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
-  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  const MovedRoom room;
+  const sem::Cloud &target = room.target, &source = room.source;
   sem::IcpSettings s;
   s.threads = 1;
   const auto one = sem::icp(source, target, Eigen::Isometry3d::Identity(), s);
@@ -68,10 +78,10 @@ TEST_CASE("icp gives the same answer on one thread and on two", "[semantic]") {
 }
 
 TEST_CASE("icp onto a prepared target gives icp's answer, from any number of starts", "[semantic]") {
-  sem::Cloud target = sem::test::synthetic_room(20000, 3);
-  sem::estimate_normals(target, 10, Eigen::Vector3f(3, 2, 1.5));
-  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
-  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  MovedRoom room;
+  sem::estimate_normals(room.target, 10, Eigen::Vector3f(3, 2, 1.5));
+  const sem::Cloud &target = room.target, &source = room.source;
+  const Eigen::Isometry3d& T_true = room.T_true;
   sem::IcpSettings s;
   s.metric = GENERATE(sem::IcpMetric::PointToPoint, sem::IcpMetric::PointToPlane);
   const sem::IcpTarget prepared(target, s);
@@ -88,9 +98,8 @@ TEST_CASE("icp onto a prepared target gives icp's answer, from any number of sta
 }
 
 TEST_CASE("icp stops where its caller's condition holds, with the iterations and pairs up to there", "[semantic]") {
-  const sem::Cloud target = sem::test::synthetic_room(20000, 3);
-  const Eigen::Isometry3d T_true = sem::test::pose(-6.0, 0.0, 1.0, {-0.15, 0.1, 0.0});
-  const sem::Cloud source = sem::transformed(sem::test::synthetic_room(20000, 4), T_true.inverse());
+  const MovedRoom room;
+  const sem::Cloud &target = room.target, &source = room.source;
   sem::IcpSettings s;
   s.max_iterations = 50;
   s.min_correspondence_m = 0.1;  // the points are ~8 cm apart: all pair once aligned
