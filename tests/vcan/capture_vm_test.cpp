@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -42,10 +43,19 @@ struct Background {
     REQUIRE(std::system((cmd + " </dev/null & echo $! > " + pidfile).c_str()) == 0);
     pids.push_back(static_cast<pid_t>(std::stol(slurp(pidfile))));
   }
+  // Until each has exited (its files complete), at most 20 s.
   void stop() {
     for (const pid_t pid : pids) ::kill(pid, SIGINT);
+    for (int i = 0; i < 200 && std::any_of(pids.begin(), pids.end(), running); ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
     pids.clear();
-    std::this_thread::sleep_for(std::chrono::seconds(2));
+  }
+  // Not yet exited: a zombie (not reaped yet by the VM's init) has.
+  static bool running(pid_t pid) {
+    if (::kill(pid, 0) != 0) return false;
+    const std::string stat = slurp("/proc/" + std::to_string(pid) + "/stat");
+    const auto name_end = stat.rfind(')');
+    return name_end == std::string::npos || name_end + 2 >= stat.size() || stat[name_end + 2] != 'Z';
   }
   ~Background() {
     for (const pid_t pid : pids) ::kill(pid, SIGKILL);
