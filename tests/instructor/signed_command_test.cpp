@@ -40,6 +40,7 @@ class Station {
     lcm_.subscribe(rise::msgs::panel_state_channel(id_), &Station::on_panel, this)->setQueueCapacity(1000);
     lcm_.subscribe(rise::msgs::robot_state_channel(id_), &Station::on_robot, this)->setQueueCapacity(1000);
     lcm_.subscribe(rise::msgs::sim_event_channel(id_), &Station::on_event, this)->setQueueCapacity(1000);
+    lcm_.subscribe(rise::msgs::fault_command_channel(id_), &Station::on_command, this)->setQueueCapacity(1000);
   }
   bool good() { return lcm_.good(); }
   bool wait_until(const std::function<bool()>& done, int timeout_ms) {
@@ -77,6 +78,7 @@ class Station {
   std::optional<rise_msgs::PanelState> panel_;
   std::optional<rise_msgs::RobotState> robot_;
   std::vector<rise_msgs::SimEvent> events_;
+  int commands_seen_ = 0;  // FaultCommands on the trainee's channel, the station's own included
 
  private:
   static bool has(const std::vector<std::string>& v, const std::string& prefix) {
@@ -87,6 +89,7 @@ class Station {
   void on_panel(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::PanelState* m) { panel_ = *m; }
   void on_robot(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::RobotState* m) { robot_ = *m; }
   void on_event(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::SimEvent* m) { events_.push_back(*m); }
+  void on_command(const lcm::ReceiveBuffer*, const std::string&, const rise_msgs::FaultCommand*) { ++commands_seen_; }
   std::string id_;
   lcm::LCM lcm_;
 };
@@ -140,7 +143,7 @@ rise::msgs::InstructorKey other_key() {
 }  // namespace
 
 TEST_CASE("rise-instructor inject goes again, signed afresh, until the daemon confirms it", "[instructor]") {
-  // The first copy goes to nobody (rise-hild starts a second later): lost
+  // The first copy goes to nobody (rise-hild starts once it is out): lost
   // like a datagram dropped under load; a later copy is taken, not as a replay.
   const std::string id = "fr" + std::to_string(::getpid());
   KeyDir keys("rise-fault-resend-");
@@ -152,7 +155,8 @@ TEST_CASE("rise-instructor inject goes again, signed afresh, until the daemon co
                                    "--instructor-key", keys.key_file, "--trainee", id, "offset", "drive_x", "--value",
                                    "0.2", "--id", "late", "--confirm", "20"},
                                   out);
-  REQUIRE(station.wait_until([] { return false; }, 1500) == false);
+  // Its first copy is on the network before rise-hild listens.
+  REQUIRE(station.wait_until([&] { return station.commands_seen_ >= 1; }, 20000));
   rise::process::ChildProcess hild({std::string(RISE_BINARY_DIR) + "/bin/rise-hild", "--lcm", kLcm, "--id", id,
                                     "--panel", std::string(RISE_SOURCE_DIR) + "/panels/definitions/rise_console.yaml",
                                     "--source", "mem://" + id, "--instructor-key", keys.key_file},
