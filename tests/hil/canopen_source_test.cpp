@@ -6,6 +6,10 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
 #include <string>
 
 #include "firmware_protocol/canopen.hpp"
@@ -59,6 +63,12 @@ class CanopenNodeThread {
     std::lock_guard lock(mutex_);
     return emulator_.state();
   }
+  // Until `done` holds for the node, checked as each frame it takes is
+  // handled; false after timeout_ms.
+  bool wait_until(const std::function<bool(rise::panels::CanopenEmulator&)>& done, int timeout_ms) {
+    std::unique_lock lock(mutex_);
+    return handled_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] { return done(emulator_); });
+  }
 
  private:
   void run() {
@@ -69,12 +79,16 @@ class CanopenNodeThread {
         emulator_.tick(*bus_, rise::msgs::monotonic_us());
       }
       while (bus_->receive(f, 1) == rise::hil::io::IoStatus::Ok) {
-        std::lock_guard lock(mutex_);
-        emulator_.on_frame(*bus_, f, rise::msgs::monotonic_us());
+        {
+          std::lock_guard lock(mutex_);
+          emulator_.on_frame(*bus_, f, rise::msgs::monotonic_us());
+        }
+        handled_.notify_all();
       }
     }
   }
   std::mutex mutex_;
+  std::condition_variable handled_;
   rise::panels::CanopenEmulator emulator_;
   std::unique_ptr<rise::hil::io::CanBus> bus_;
   std::atomic<bool> running_{true};
@@ -150,9 +164,7 @@ TEST_CASE("a canopen console is reset, started, read from its PDOs and shown its
     request.displays.push_back({"speed", 0.42f});
     request.leds.push_back({"deadman", true});
     bridge.set_feedback(request);
-    const int64_t end = rise::msgs::monotonic_us() + 2'000'000;
-    while (rise::msgs::monotonic_us() < end && node.feedback("speed") != 0.42)
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));  // polling the emulator's copy, bounded
+    node.wait_until([](rise::panels::CanopenEmulator& e) { return e.feedback("speed") == 0.42; }, 2000);
     CHECK(node.feedback("speed") == Approx(0.42).margin(1e-9));
     CHECK(node.feedback("power") == 1.0);
     CHECK(node.feedback("fault") == 0.0);

@@ -36,23 +36,6 @@ void require_vm() {
   if (::stat("/sys/class/net/vcan0", &st) != 0) FAIL("no vcan0: run this program with tests/vcan/run_in_vcan_vm.sh");
 }
 
-// Whether a CAN_RAW socket with filters is bound to vcan0 (candump, once it
-// runs: an id:mask filter of 0x7FF lands in the kernel's single-id list).
-bool vcan0_has_receiver() {
-  bool found = false;
-  for (const char* list : {"/proc/net/can/rcvlist_sff", "/proc/net/can/rcvlist_fil"}) {
-    std::FILE* f = std::fopen(list, "r");
-    if (!f) continue;
-    char line[256];
-    while (std::fgets(line, sizeof line, f)) {
-      const std::string l(line);
-      if (l.find("vcan0") != std::string::npos && l.find("no entry") == std::string::npos) found = true;
-    }
-    std::fclose(f);
-  }
-  return found;
-}
-
 // candump -L on vcan0 with `filters`, its output collected until `wanted`
 // are all in it or the deadline passes.
 class Candump {
@@ -60,9 +43,8 @@ class Candump {
   explicit Candump(const std::string& filters) : child_({"candump", "-L", "vcan0," + filters}, out_.write_fd) {
     REQUIRE(child_.started());
     out_.close_write();
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(kPeerTimeoutMs);
-    while (!vcan0_has_receiver() && std::chrono::steady_clock::now() < deadline) std::this_thread::yield();
-    REQUIRE(vcan0_has_receiver());
+    // Bound once it runs: an id:mask filter of 0x7FF lands in the kernel's single-id list.
+    REQUIRE(rise::test::vm::wait_for_can_receiver("vcan0", {"sff", "fil"}, kPeerTimeoutMs));
   }
   bool saw_all(const std::vector<std::string>& wanted, int timeout_ms) {
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);

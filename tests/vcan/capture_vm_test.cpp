@@ -7,11 +7,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
@@ -21,8 +21,10 @@
 #include <vector>
 
 #include "hil/io/can_log.hpp"
+#include "tests/vcan/vm_children.hpp"
 
 using namespace rise::hil::io;
+using rise::test::vm::Child;
 
 namespace {
 
@@ -33,34 +35,29 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
-// Commands in the background, stopped with SIGINT (tcpdump and candump
-// write out everything they hold on SIGINT), also when a check fails: the VM
-// ends only when nothing holds its output pipe.
-struct Background {
-  std::vector<pid_t> pids;
-  void start(const std::string& cmd, const std::string& name) {
-    const std::string pidfile = "/tmp/" + name + ".pid";
-    REQUIRE(std::system((cmd + " </dev/null & echo $! > " + pidfile).c_str()) == 0);
-    pids.push_back(static_cast<pid_t>(std::stol(slurp(pidfile))));
+// A file a child writes to (its stdout or stderr), truncated.
+struct OutFile {
+  int fd;
+  explicit OutFile(const std::string& path) : fd(::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)) {
+    REQUIRE(fd >= 0);
   }
-  // Until each has exited (its files complete), at most 20 s.
-  void stop() {
-    for (const pid_t pid : pids) ::kill(pid, SIGINT);
-    for (int i = 0; i < 200 && std::any_of(pids.begin(), pids.end(), running); ++i)
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    pids.clear();
-  }
-  // Not yet exited: a zombie (not reaped yet by the VM's init) has.
-  static bool running(pid_t pid) {
-    if (::kill(pid, 0) != 0) return false;
-    const std::string stat = slurp("/proc/" + std::to_string(pid) + "/stat");
-    const auto name_end = stat.rfind(')');
-    return name_end == std::string::npos || name_end + 2 >= stat.size() || stat[name_end + 2] != 'Z';
-  }
-  ~Background() {
-    for (const pid_t pid : pids) ::kill(pid, SIGKILL);
-  }
+  ~OutFile() { ::close(fd); }
+  OutFile(const OutFile&) = delete;
+  OutFile& operator=(const OutFile&) = delete;
 };
+
+// The frames a log or capture holds so far (a record being written is not counted).
+size_t records_in(const std::string& path) {
+  try {
+    CanLogReader reader(path);
+    CanLogRecord r;
+    size_t n = 0;
+    while (reader.next(r)) ++n;
+    return n;
+  } catch (const std::exception&) {
+    return 0;  // not written yet
+  }
+}
 
 bool wait_for(const std::string& file, const std::string& text, int seconds) {
   for (int i = 0; i < seconds * 10; ++i) {
@@ -95,18 +92,25 @@ TEST_CASE("tcpdump's captures of vcan0 hold the frames candump logged", "[vcan][
   if (::stat("/sys/class/net/vcan0", &st) != 0) FAIL("no vcan0: run this program with tests/vcan/run_in_vcan_vm.sh");
   // tcpdump looks its user up (to drop privileges); the VM has no /etc/passwd.
   if (::stat("/etc/passwd", &st) != 0) std::ofstream("/etc/passwd") << "root:x:0:0:root:/tmp:/bin/sh\n";
-  Background background;
-  background.start("tcpdump -Z root -U -i vcan0 -w /tmp/vcan0.pcap >/dev/null 2>/tmp/vcan0.err", "vcan0");
-  background.start("tcpdump -Z root -U -i any -y LINUX_SLL2 -w /tmp/any.pcap >/dev/null 2>/tmp/any.err", "any");
-  background.start("candump -L vcan0 >/tmp/candump.log 2>&1", "candump");
+  // Each stopped with SIGINT (tcpdump and candump write out everything they
+  // hold on it), or killed when a check fails: the VM ends only when nothing
+  // holds its output pipe.
+  const OutFile vcan0_err("/tmp/vcan0.err"), any_err("/tmp/any.err"), candump_log("/tmp/candump.log");
+  Child vcan0({"tcpdump", "-Z", "root", "-U", "-i", "vcan0", "-w", "/tmp/vcan0.pcap"}, -1, vcan0_err.fd);
+  Child any({"tcpdump", "-Z", "root", "-U", "-i", "any", "-y", "LINUX_SLL2", "-w", "/tmp/any.pcap"}, -1, any_err.fd);
+  Child candump({"candump", "-L", "vcan0"}, candump_log.fd, candump_log.fd);
+  REQUIRE((vcan0.started() && any.started() && candump.started()));
   for (const char* err : {"/tmp/vcan0.err", "/tmp/any.err"}) {
     if (!wait_for(err, "listening on", 30)) FAIL("tcpdump did not start: " << slurp(err));
   }
-  std::this_thread::sleep_for(std::chrono::seconds(1));  // candump binds a while after it starts
+  REQUIRE(rise::test::vm::wait_for_can_receiver("vcan0", {"all"}));  // candump's socket, bound
   // -m: random classic, extended, remote, CAN FD and BRS frames.
-  REQUIRE(std::system("cangen vcan0 -m -n 300 -g 2") == 0);
-  std::this_thread::sleep_for(std::chrono::seconds(1));
-  background.stop();
+  REQUIRE(rise::test::vm::run({"cangen", "vcan0", "-m", "-n", "300", "-g", "2"}) == 0);
+  // Until all three hold the frames (at most 10 s each), then their ends.
+  for (const char* path : {"/tmp/candump.log", "/tmp/vcan0.pcap", "/tmp/any.pcap"})
+    for (int i = 0; i < 100 && records_in(path) < 300; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  for (Child* child : {&vcan0, &any, &candump}) child->signal(SIGINT);
+  for (Child* child : {&vcan0, &any, &candump}) CHECK(child->wait_exit(rise::test::vm::kChildTimeoutMs) != -1);
 
   const auto logged = read_all("/tmp/candump.log", CanLogFormat::Candump);
   REQUIRE(logged.size() == 300);

@@ -15,7 +15,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
 #include <string>
+#include <thread>
 #include <vector>
 
 extern char** environ;
@@ -29,8 +32,8 @@ inline constexpr int kChildTimeoutMs = 10000;
 /// can-utils), waited on through a pidfd so that no test sleeps.
 class Child {
  public:
-  /// stdout_fd: the child's stdout (-1: inherit).
-  explicit Child(std::vector<std::string> args, int stdout_fd = -1) : args_(std::move(args)) {
+  /// stdout_fd, stderr_fd: the child's stdout and stderr (-1: inherit).
+  explicit Child(std::vector<std::string> args, int stdout_fd = -1, int stderr_fd = -1) : args_(std::move(args)) {
     std::vector<char*> argv;
     for (std::string& a : args_) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -38,6 +41,7 @@ class Child {
     ::posix_spawn_file_actions_init(&actions);
     ::posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
     if (stdout_fd >= 0) ::posix_spawn_file_actions_adddup2(&actions, stdout_fd, 1);
+    if (stderr_fd >= 0) ::posix_spawn_file_actions_adddup2(&actions, stderr_fd, 2);
     const int err = ::posix_spawnp(&pid_, argv[0], &actions, nullptr, argv.data(), environ);
     ::posix_spawn_file_actions_destroy(&actions);
     if (err != 0) pid_ = -1;
@@ -52,6 +56,10 @@ class Child {
   Child& operator=(const Child&) = delete;
 
   bool started() const { return pid_ > 0; }
+  /// Sends a signal (no-op once it was waited for).
+  void signal(int sig) {
+    if (pid_ > 0) ::kill(pid_, sig);
+  }
 
   /// Exit status once the child exited within timeout_ms; -1 if it did not
   /// (it is then killed), -2 if it died of a signal.
@@ -80,6 +88,34 @@ inline int run(std::vector<std::string> args, int timeout_ms = kChildTimeoutMs) 
   Child child(std::move(args));
   REQUIRE(child.started());
   return child.wait_exit(timeout_ms);
+}
+
+/// Whether a CAN_RAW socket is bound to `iface` in one of the kernel's
+/// receive lists (/proc/net/can/rcvlist_LIST: "all" holds sockets without
+/// filters, "sff" and "fil" those with an id:mask filter).
+inline bool can_receiver_on(const std::string& iface, const std::vector<std::string>& lists) {
+  bool found = false;
+  for (const std::string& list : lists) {
+    std::FILE* f = std::fopen(("/proc/net/can/rcvlist_" + list).c_str(), "r");
+    if (!f) continue;
+    char line[256];
+    while (std::fgets(line, sizeof line, f)) {
+      const std::string l(line);
+      if (l.find(iface) != std::string::npos && l.find("no entry") == std::string::npos) found = true;
+    }
+    std::fclose(f);
+  }
+  return found;
+}
+
+/// Until a CAN_RAW socket is bound to `iface` (can_receiver_on), at most timeout_ms.
+inline bool wait_for_can_receiver(const std::string& iface, const std::vector<std::string>& lists,
+                                  int timeout_ms = kChildTimeoutMs) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (!can_receiver_on(iface, lists))
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    else std::this_thread::yield();
+  return true;
 }
 
 /// Brings an interface back up when a test that took it down ends early.
