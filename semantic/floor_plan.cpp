@@ -9,11 +9,16 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 namespace rise::semantic {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+// A length in cells of `res` (at least one).
+int cell_count(double m, double res) { return std::max(1, static_cast<int>(std::lround(m / res))); }
 
 // The grid as 0/255 masks, image row = grid row.
 struct Masks {
@@ -131,7 +136,7 @@ struct Face {
 };
 
 std::vector<Face> faces_of(const Frame& f, const FloorPlanSettings& s) {
-  const auto cells = [&](double m) { return std::max(1, static_cast<int>(std::lround(m / f.res))); };
+  const auto cells = [&](double m) { return cell_count(m, f.res); };
   // Rows wobble by a cell on a real map: a face may step between neighbouring rows.
   cv::Mat strips;
   cv::dilate(f.occupied, strips, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(1, 3)));
@@ -410,6 +415,154 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
   }
 }
 
+// The occupied cells within half_m of `line`, along a0..a1 of it.
+std::vector<cv::Point> cells_near(const OccupancyGrid& grid, const cv::Mat& occupied, const detail::Line2& line,
+                                  double a0, double a1, double half_m) {
+  const Eigen::Vector2d e0 = line.point + a0 * line.direction, e1 = line.point + a1 * line.direction;
+  const Eigen::Vector2i lo = grid.cell_of(e0.cwiseMin(e1) - Eigen::Vector2d::Constant(half_m));
+  const Eigen::Vector2i hi = grid.cell_of(e0.cwiseMax(e1) + Eigen::Vector2d::Constant(half_m));
+  std::vector<cv::Point> out;
+  for (int r = std::max(lo.y(), 0); r <= std::min(hi.y(), occupied.rows - 1); ++r)
+    for (int c = std::max(lo.x(), 0); c <= std::min(hi.x(), occupied.cols - 1); ++c) {
+      if (occupied.at<uint8_t>(r, c) == 0) continue;
+      const Eigen::Vector2d q = grid.center(c, r);
+      const double a = line.along(q);
+      if (std::abs(line.offset(q)) <= half_m && a >= a0 && a <= a1) out.emplace_back(c, r);
+    }
+  return out;
+}
+
+// The longest stretch of `along` (sorted) with no gap of gap_m or more: its first and last values.
+std::pair<double, double> longest_run(const std::vector<double>& along, double gap_m) {
+  std::size_t best0 = 0, best1 = 0;
+  for (std::size_t k0 = 0, k = 1; k <= along.size(); ++k)
+    if (k == along.size() || along[k] - along[k - 1] >= gap_m) {
+      if (along[k - 1] - along[k0] > along[best1] - along[best0]) best0 = k0, best1 = k - 1;
+      k0 = k;
+    }
+  return {along[best0], along[best1]};
+}
+
+// Whether direction d lies more than twice the angle tolerance off every one of `thetas`.
+bool off_directions(const Eigen::Vector2d& d, const std::vector<double>& thetas, const FloorPlanSettings& s) {
+  const double a = std::atan2(d.y(), d.x());
+  return std::all_of(thetas.begin(), thetas.end(),
+                     [&](double t) { return std::abs(std::remainder(a - t, kPi)) > 2 * s.angle_tolerance_rad; });
+}
+
+// The slanted wall along `line` (a0..a1 of it), or false: the line refitted
+// to the cells within slant_within_m of it, a few times, over the longest
+// stretch of them with no gap a door wide; a wall where that stretch is
+// minor_wall_min_length_m long, still off every direction, no thicker than
+// a wall, solid along slant_min_solid of it (a line drawn across clutter or
+// across two walls is not) and with free space on one side at least.
+bool slanted_wall(const OccupancyGrid& grid, const cv::Mat& occupied, detail::Line2 line, double a0, double a1,
+                  const std::vector<double>& thetas, const FloorPlanSettings& s, Piece& out,
+                  std::vector<cv::Point>& cells) {
+  const double res = grid.resolution_m;
+  std::vector<double> along;
+  for (int pass = 0; pass < 3; ++pass) {
+    cells = cells_near(grid, occupied, line, a0 - s.door_min_width_m, a1 + s.door_min_width_m, s.slant_within_m);
+    if (cells.size() < 2) return false;
+    std::vector<Eigen::Vector2d> xy;
+    for (const cv::Point& c : cells) xy.push_back(grid.center(c.x, c.y));
+    line = detail::fit_line(xy);
+    along.clear();
+    for (const auto& q : xy) along.push_back(line.along(q));
+    std::sort(along.begin(), along.end());
+    std::tie(a0, a1) = longest_run(along, s.door_min_width_m);
+  }
+  if (a1 - a0 < s.minor_wall_min_length_m || !off_directions(line.direction, thetas, s)) return false;
+  cells = cells_near(grid, occupied, line, a0 - res / 2, a1 + res / 2, s.slant_within_m);
+  std::vector<double> across;
+  std::vector<char> seen(static_cast<std::size_t>((a1 - a0) / res) + 1, 0);
+  for (const cv::Point& c : cells) {
+    const Eigen::Vector2d q = grid.center(c.x, c.y);
+    across.push_back(line.offset(q));
+    seen[std::min(seen.size() - 1, static_cast<std::size_t>(std::max(0.0, (line.along(q) - a0) / res)))] = 1;
+  }
+  const double solid = static_cast<double>(std::count(seen.begin(), seen.end(), 1)) / static_cast<double>(seen.size());
+  const double lo = detail::quantile(across, 0.03), hi = detail::quantile(across, 0.97);
+  Piece p;
+  p.d = line.direction, p.n = line.normal;
+  p.offset = line.normal.dot(line.point) + (lo + hi) / 2;
+  p.thickness = std::max(s.min_wall_thickness_m, hi - lo + res);
+  const double base = line.direction.dot(line.point), t = p.thickness / 2;
+  p.a0 = base + a0 - res / 2, p.a1 = base + a1 + res / 2;
+  p.cells = static_cast<int>(cells.size());
+  if (p.thickness > s.max_wall_thickness_m || solid < s.slant_min_solid) return false;
+  if (std::max(free_share(grid, p.d, p.n, p.a0, p.a1, p.offset - t - s.door_clearance_m, p.offset - t - res),
+               free_share(grid, p.d, p.n, p.a0, p.a1, p.offset + t + res, p.offset + t + s.door_clearance_m)) <
+      s.door_min_free)
+    return false;
+  out = p;
+  return true;
+}
+
+// Walls in no direction of their own. A building's one slanted wall holds
+// too few of the occupancy's edges to make a peak of their histogram
+// (PWR's 3.9 m, 16° off its main walls, lies on the main peak's flank),
+// and a direction's frame sees it as a staircase of short faces, each
+// found as a wall of the frame's direction. Candidates: the straight lines
+// of occupied cells (probabilistic Hough on the cells grown by one, as a
+// face's rows wobble by a cell), minor_wall_min_length_m long across gaps
+// narrower than a door, off every found direction by over twice the angle
+// tolerance; each one checked by slanted_wall. The cells of each wall
+// found are set in `taken`, for the frames to leave out.
+void slanted_walls(const OccupancyGrid& grid, const cv::Mat& occupied, const std::vector<double>& thetas,
+                   const FloorPlanSettings& s, std::vector<Piece>& out, cv::Mat& taken) {
+  const auto cells = [&](double m) { return cell_count(m, grid.resolution_m); };
+  cv::Mat grown;
+  cv::dilate(occupied, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
+  std::vector<cv::Vec4i> segs;
+  cv::HoughLinesP(grown, segs, 1, kPi / 360, cells(s.minor_wall_min_length_m) / 2, cells(s.minor_wall_min_length_m),
+                  cells(s.door_min_width_m));
+  const auto length = [](const cv::Vec4i& v) { return std::hypot(v[2] - v[0], v[3] - v[1]); };
+  std::sort(segs.begin(), segs.end(), [&](const cv::Vec4i& a, const cv::Vec4i& b) { return length(a) > length(b); });
+  taken = cv::Mat::zeros(occupied.size(), CV_8U);
+  cv::Mat left = occupied.clone();
+  for (const cv::Vec4i& seg : segs) {
+    detail::Line2 line;
+    line.point = grid.center(seg[0], seg[1]);
+    line.direction = (grid.center(seg[2], seg[3]) - line.point).normalized();
+    line.normal = {-line.direction.y(), line.direction.x()};
+    if (!off_directions(line.direction, thetas, s)) continue;
+    Piece p;
+    std::vector<cv::Point> wall_cells;
+    if (!slanted_wall(grid, left, line, 0.0, line.along(grid.center(seg[2], seg[3])), thetas, s, p, wall_cells))
+      continue;
+    for (const cv::Point& c : wall_cells) left.at<uint8_t>(c) = 0, taken.at<uint8_t>(c) = 255;
+    out.push_back(p);
+  }
+}
+
+// Frame f without the slanted walls' cells (`taken`, turned as f is),
+// but for those on a run of a row a wall long that goes on a face's length
+// past them: a straight wall of f's direction that a slanted one meets or
+// crosses keeps its cells (a slanted wall's own rows are its staircase).
+void without_slanted(Frame& f, const Frame& taken, const FloorPlanSettings& s) {
+  const auto cells = [&](double m) { return cell_count(m, f.res); };
+  cv::Mat runs;
+  cv::morphologyEx(f.occupied, runs, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.noise_gap_m) + 1, 1)));
+  cv::morphologyEx(runs, runs, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(cells(s.min_wall_length_m), 1)));
+  for (int r = 0; r < f.occupied.rows; ++r) {
+    const uint8_t *run = runs.ptr<uint8_t>(r), *mine = taken.occupied.ptr<uint8_t>(r);
+    uint8_t* occ = f.occupied.ptr<uint8_t>(r);
+    for (int c0 = 0; c0 < f.occupied.cols;) {
+      int c1 = c0;
+      while (c1 < f.occupied.cols && (run[c1] != 0) == (run[c0] != 0)) ++c1;
+      int own = 0;
+      if (run[c0] != 0)
+        for (int c = c0; c < c1; ++c) own += occ[c] != 0 && mine[c] == 0 ? 1 : 0;
+      if (own < cells(s.min_face_length_m))
+        for (int c = c0; c < c1; ++c) occ[c] = mine[c] != 0 ? 0 : occ[c];
+      c0 = c1;
+    }
+  }
+}
+
 // Collinear pieces of one wall line that walls_of kept apart (a drifting
 // map's wall, its faces a little more than collinear_offset_m apart
 // across), joined across a door-wide gap with free space through it: the
@@ -637,11 +790,19 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
   seg.floor.max_m = grid.origin_m + grid.resolution_m * Eigen::Vector2d(box.x + box.width, box.y + box.height);
 
   std::vector<Piece> pieces;
-  for (const auto& [theta, share] : wall_directions(masks.occupied, s)) {
+  const auto directions = wall_directions(masks.occupied, s);
+  std::vector<double> thetas;
+  for (const auto& direction : directions) thetas.push_back(direction.first);
+  Masks slanted{cv::Mat(), masks.free, masks.unknown};
+  slanted_walls(grid, masks.occupied, thetas, s, pieces, slanted.occupied);
+  const bool any_slanted = !pieces.empty();
+  for (const auto& [theta, share] : directions) {
     // A minor direction (a building's one slanted wall) holds long walls only: its short runs are clutter.
     FloorPlanSettings in_direction = s;
     if (share < s.min_direction_share) in_direction.min_wall_length_m = s.minor_wall_min_length_m;
-    walls_of(grid, turned(grid, masks, theta), in_direction, pieces);
+    Frame f = turned(grid, masks, theta);
+    if (any_slanted) without_slanted(f, turned(grid, slanted, theta), s);
+    walls_of(grid, f, in_direction, pieces);
   }
 
   join_across_doorways(grid, pieces, s);

@@ -12,7 +12,9 @@
 // are wall faces (perpendicular walls, thin diagonal clutter and specks are
 // shorter along the rows and drop out); faces a wall's thickness apart with
 // no free cell between them are one wall (seen from both sides), collinear
-// faces join across door-wide gaps; a gap of door width with free space
+// faces join across door-wide gaps; a slanted wall in no direction of its
+// own (too few edges for a peak) is a long, solid Hough line of occupied
+// cells off every direction; a gap of door width with free space
 // through it on both sides is a doorway, kept as an opening with a lintel
 // at the door height, so the world file has wall above it.
 
@@ -42,7 +44,9 @@ struct FloorPlanSettings {
   double angle_tolerance_rad = 6.0 * 3.14159265358979 / 180.0;  ///< directions closer than this are one
   double min_direction_share = 0.3;    ///< a direction holds this share of the strongest one's edges ...
   double minor_direction_share = 0.03; ///< ... or this share, and then only walls this long:
-  double minor_wall_min_length_m = 3.0;
+  double minor_wall_min_length_m = 3.0; ///< ... and so a slanted wall in no direction of its own:
+  double slant_within_m = 0.15;        ///< its cells within this of its line ...
+  double slant_min_solid = 0.85;       ///< ... along this share of its length at least
   double corner_gap_m = 0.4;           ///< a wall end this close to another wall's line meets it
   double door_clearance_m = 0.4;       ///< free space checked this deep either side of a doorway
   double door_min_free = 0.5;          ///< ... at least this share of it free

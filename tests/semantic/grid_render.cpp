@@ -3,7 +3,7 @@
 //
 //   grid_render IN OUT.png [--image PGM] [--res M] [--region X0 Y0 X1 Y1]
 //               [--px N] [--truth FILE.json] [--dump GRID.pgm] [--detect]
-//               [--set SETTING=VALUE]...
+//               [--walls] [--set SETTING=VALUE]...
 //
 // IN is a map_server .yaml or a CARMEN log. Free cells white, occupied
 // black, unknown grey; a thin line every metre, a darker one with its
@@ -13,7 +13,8 @@
 // its origin, for scripts that measure on it. --detect runs
 // segment_floor_plan on the grid and draws its walls over it, blue where
 // they match a truth wall and magenta where not, its doors as orange bars,
-// and prints the score against --truth and the unmatched pieces over 0.3 m.
+// and prints the score against --truth and the unmatched pieces over 0.3 m;
+// --walls lists every wall it found.
 
 #include <json/json.h>
 
@@ -40,7 +41,7 @@ namespace {
 
 template <class ToPx>
 void draw_detections(cv::Mat& img, const OccupancyGrid& g, const std::string& truth_file,
-                     const rise::semantic::FloorPlanSettings& settings, const ToPx& to_px) {
+                     const rise::semantic::FloorPlanSettings& settings, bool list_walls, const ToPx& to_px) {
   using namespace rise::semantic;
   using testing::detail::Segment;
   const Segmentation seg = segment_floor_plan(g, settings);
@@ -89,6 +90,10 @@ void draw_detections(cv::Mat& img, const OccupancyGrid& g, const std::string& tr
       std::printf("uncovered truth %.1f of %.1f m: (%.2f, %.2f) - (%.2f, %.2f)\n", miss, len, expected[i].first.x(),
                   expected[i].first.y(), expected[i].second.x(), expected[i].second.y());
   }
+  if (list_walls)
+    for (const auto& w : seg.walls)
+      std::printf("wall (%.2f, %.2f) - (%.2f, %.2f) thickness %.2f\n", w.from_m.x(), w.from_m.y(), w.to_m.x(),
+                  w.to_m.y(), w.thickness_m);
   for (const Door& d : seg.doors) {
     const Eigen::Vector2d t(std::cos(d.yaw_rad), std::sin(d.yaw_rad));
     const Eigen::Vector2d a = d.center_m - d.width_m / 2 * t, b = d.center_m + d.width_m / 2 * t;
@@ -114,7 +119,7 @@ int main(int argc, char** argv) try {
   std::string image, truth, dump;
   double res = 0.05;
   int px = 2;
-  bool region = false, detect = false;
+  bool region = false, detect = false, list_walls = false;
   rise::semantic::FloorPlanSettings settings;
   const std::map<std::string, double*> knobs = {
       {"door_min_width_m", &settings.door_min_width_m},     {"door_max_width_m", &settings.door_max_width_m},
@@ -126,6 +131,7 @@ int main(int argc, char** argv) try {
       {"door_min_free", &settings.door_min_free},           {"door_jamb_m", &settings.door_jamb_m},
       {"door_min_depth_m", &settings.door_min_depth_m}, {"corner_door_min_depth_m", &settings.corner_door_min_depth_m},     {"minor_direction_share", &settings.minor_direction_share},
       {"minor_wall_min_length_m", &settings.minor_wall_min_length_m},
+      {"slant_within_m", &settings.slant_within_m},         {"slant_min_solid", &settings.slant_min_solid},
       {"door_jamb_solid", &settings.door_jamb_solid}};
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   for (int i = 3; i < argc; ++i) {
@@ -136,6 +142,7 @@ int main(int argc, char** argv) try {
     else if (a == "--truth") truth = argv[++i];
     else if (a == "--dump") dump = argv[++i];
     else if (a == "--detect") detect = true;
+    else if (a == "--walls") list_walls = true;
     else if (a == "--set") {  // --set NAME=VALUE: a FloorPlanSettings field
       const std::string kv = argv[++i];
       const auto k = knobs.find(kv.substr(0, kv.find('=')));
@@ -209,7 +216,7 @@ int main(int argc, char** argv) try {
       cv::circle(img, to_px(cx, cy), 3, {0, 150, 0}, -1);
     }
   }
-  if (detect) draw_detections(img, g, truth, settings, to_px);
+  if (detect) draw_detections(img, g, truth, settings, list_walls, to_px);
   cv::imwrite(out, img);
   return 0;
 } catch (const std::exception& e) {
