@@ -29,10 +29,12 @@ struct RegistrationSettings {
   IcpMetric coarse_metric = IcpMetric::PointToPlane;
   IcpMetric fine_metric = IcpMetric::PointToPlane;
   /// The finest level's voxel; 0: the one that keeps fine_points of the
-  /// target, or the target's point spacing if that is larger.
+  /// target, or fine_spacing_share of the target's point spacing if that is
+  /// larger (a cloud of fewer points keeps them all).
   double fine_voxel_m = 0.0;
+  double fine_spacing_share = 0.5;
   /// The coarsest level's voxel; 0: the one that keeps coarse_points of the
-  /// target, and at least 4 fine voxels.
+  /// target, and at least 4 fine voxels and 4 point spacings.
   double coarse_voxel_m = 0.0;
   size_t fine_points = 40000;
   size_t coarse_points = 1500;
