@@ -432,8 +432,10 @@ std::vector<cv::Point> cells_near(const OccupancyGrid& grid, const cv::Mat& occu
   return out;
 }
 
-// The longest stretch of `along` (sorted) with no gap of gap_m or more: its first and last values.
+// The longest stretch of `along` (sorted, not empty) with no gap of gap_m or more between neighbouring values: its
+// first and last values.
 std::pair<double, double> longest_run(const std::vector<double>& along, double gap_m) {
+  if (along.empty()) throw std::invalid_argument("longest_run: no values");
   std::size_t best0 = 0, best1 = 0;
   for (std::size_t k0 = 0, k = 1; k <= along.size(); ++k)
     if (k == along.size() || along[k] - along[k - 1] >= gap_m) {
@@ -450,12 +452,17 @@ bool off_directions(const Eigen::Vector2d& d, const std::vector<double>& thetas,
                      [&](double t) { return std::abs(std::remainder(a - t, kPi)) > 2 * s.angle_tolerance_rad; });
 }
 
-// The slanted wall along `line` (a0..a1 of it), or false: the line refitted
-// to the cells within slant_within_m of it, a few times, over the longest
-// stretch of them with no gap a door wide; a wall where that stretch is
-// minor_wall_min_length_m long, still off every direction, no thicker than
-// a wall, solid along slant_min_solid of it (a line drawn across clutter or
-// across two walls is not) and with free space on one side at least.
+// The slanted wall along `line` (a0..a1 of it), or false: three times, the
+// line refitted to the cells within slant_within_m of it over a0..a1
+// widened by a door's width at each end, a0..a1 then the longest stretch of
+// them with no gap a door wide (so the stretch may grow by up to three door
+// widths each way along cells in line with it); a wall where that stretch
+// is minor_wall_min_length_m long, still off every direction, solid along
+// slant_min_solid of it (a line drawn across clutter or across two walls is
+// not) and with free space on one side at least. Its thickness is that of
+// its cells within slant_within_m of the line, so at most 2 slant_within_m
+// and a cell: the band, not max_wall_thickness_m, bounds it with the
+// defaults (0.35 m against 0.5 m; the check is for a wider band).
 bool slanted_wall(const OccupancyGrid& grid, const cv::Mat& occupied, detail::Line2 line, double a0, double a1,
                   const std::vector<double>& thetas, const FloorPlanSettings& s, Piece& out,
                   std::vector<cv::Point>& cells) {
@@ -515,8 +522,8 @@ void slanted_walls(const OccupancyGrid& grid, const cv::Mat& occupied, const std
   cv::Mat grown;
   cv::dilate(occupied, grown, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(3, 3)));
   std::vector<cv::Vec4i> segs;
-  cv::HoughLinesP(grown, segs, 1, kPi / 360, cells(s.minor_wall_min_length_m) / 2, cells(s.minor_wall_min_length_m),
-                  cells(s.door_min_width_m));
+  cv::HoughLinesP(grown, segs, 1, kPi / 360, std::max(1, cells(s.minor_wall_min_length_m) / 2),
+                  cells(s.minor_wall_min_length_m), cells(s.door_min_width_m));
   const auto length = [](const cv::Vec4i& v) { return std::hypot(v[2] - v[0], v[3] - v[1]); };
   std::sort(segs.begin(), segs.end(), [&](const cv::Vec4i& a, const cv::Vec4i& b) { return length(a) > length(b); });
   taken = cv::Mat::zeros(occupied.size(), CV_8U);
@@ -537,9 +544,10 @@ void slanted_walls(const OccupancyGrid& grid, const cv::Mat& occupied, const std
 }
 
 // Frame f without the slanted walls' cells (`taken`, turned as f is),
-// but for those on a run of a row a wall long that goes on a face's length
-// past them: a straight wall of f's direction that a slanted one meets or
-// crosses keeps its cells (a slanted wall's own rows are its staircase).
+// but for those on a run of a row a wall long (occupied cells closed across
+// noise gaps) that holds a face's length of cells not taken, anywhere on
+// it: a straight wall of f's direction that a slanted one meets or crosses
+// keeps its cells (a slanted wall's own rows are its staircase).
 void without_slanted(Frame& f, const Frame& taken, const FloorPlanSettings& s) {
   const auto cells = [&](double m) { return cell_count(m, f.res); };
   cv::Mat runs;

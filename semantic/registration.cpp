@@ -122,6 +122,8 @@ void validate(const Cloud& source, const Cloud& target, const RegistrationSettin
   if (!(s.fine_voxel_m >= 0.0) || !(s.coarse_voxel_m >= 0.0) || !std::isfinite(s.fine_voxel_m) ||
       !std::isfinite(s.coarse_voxel_m))
     throw std::invalid_argument("register: voxels must be finite and >= 0");
+  if (!(s.fine_spacing_share > 0.0) || !std::isfinite(s.fine_spacing_share))
+    throw std::invalid_argument("register: fine_spacing_share must be finite and > 0");
   if (!(s.pairing_voxels >= 1.0)) throw std::invalid_argument("register: pairing_voxels must be at least 1");
   if (s.iterations_per_level < 1) throw std::invalid_argument("register: iterations_per_level must be at least 1");
   if (!(s.min_inlier_ratio >= 0.0 && s.min_inlier_ratio <= 1.0))

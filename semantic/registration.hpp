@@ -30,11 +30,15 @@ struct RegistrationSettings {
   IcpMetric fine_metric = IcpMetric::PointToPlane;
   /// The finest level's voxel; 0: the one that keeps fine_points of the
   /// target, or fine_spacing_share of the target's point spacing if that is
-  /// larger (a cloud of fewer points keeps them all).
+  /// larger (a cloud of fewer points keeps nearly all of them: a voxel of
+  /// half the spacing merges only points closer than usual).
   double fine_voxel_m = 0.0;
+  /// The finest voxel of a cloud under fine_points, as a share of its
+  /// median point spacing (finite, > 0; used where fine_voxel_m is 0).
   double fine_spacing_share = 0.5;
   /// The coarsest level's voxel; 0: the one that keeps coarse_points of the
-  /// target, and at least 4 fine voxels and 4 point spacings.
+  /// target, and at least 4 fine voxels and, where the fine voxel is sized
+  /// here (fine_voxel_m 0), 4 point spacings.
   double coarse_voxel_m = 0.0;
   size_t fine_points = 40000;
   size_t coarse_points = 1500;

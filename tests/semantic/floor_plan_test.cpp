@@ -143,13 +143,19 @@ TEST_CASE("a slanted wall in no direction of its own is one wall, not its stairc
   fill(g, 7.4, 1.0, 7.45, 6.25, CellState::Occupied);   // east
   const Segmentation seg = segment_floor_plan(g);
   const Eigen::Vector2d slant = Eigen::Vector2d(0.8, -0.25).normalized();
+  const Eigen::Vector2d first_dash{0.2 + 0.375, 3.0 + 0.075};  // the dashes' centres lie on this line along `slant`
+  const Eigen::Vector2d across{-slant.y(), slant.x()};
   int slanted = 0;
   for (const Wall& w : seg.walls) {
-    INFO("wall (" << w.from_m.transpose() << ") - (" << w.to_m.transpose() << ")");
+    INFO("wall (" << w.from_m.transpose() << ") - (" << w.to_m.transpose() << "), " << w.thickness_m << " m thick");
     if (std::abs(w.direction().dot(slant)) < std::cos(3.0 * 3.14159265358979 / 180)) continue;
     ++slanted;
     CHECK((w.to_m - w.from_m).norm() >= 0.9 * (kDashes - 1) * Eigen::Vector2d(0.8, 0.25).norm());
-    CHECK(w.thickness_m <= 0.35);
+    // On the dashes' centre line, not beside it on one edge of the staircase
+    // (the dashes' own cells lie within 0.19 m of that line).
+    CHECK(std::abs(((w.from_m + w.to_m) / 2 - first_dash).dot(across)) < 0.05);
+    CHECK(w.thickness_m >= 0.15);
+    CHECK(w.thickness_m <= 0.45);
   }
   CHECK(slanted == 1);
   CHECK(seg.walls.size() == 4);  // the slanted one, north, west, east: no dash a wall of its own
@@ -175,6 +181,7 @@ const std::map<std::string, Floors> kMeasured = {
     {"freiburg-101", {0.97, 0.9, 1.0, 0.5}},   // 0.984 0.914 1.00 0.50
     {"intel", {0.89, 0.9, 1.0, 0.9}},          // 0.901 0.908 1.00 0.929 (13 of 14)
     {"pwr", {0.9, 0.9, 1.0, 1.0}},             // 0.914 0.926 1.00 (none found, none true) 1.00
+    // pwr's walls hold 0.9 with the wedge's south wall in its truth (added 2026-12-05; 0.894 / 0.925 without it).
 };
 
 TEST_CASE("walls and doorways of the real buildings match their truth files no worse than measured",

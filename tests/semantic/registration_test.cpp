@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <vector>
 
 #include "semantic/cloud_io.hpp"
@@ -294,6 +295,11 @@ TEST_CASE("register_clouds sizes its pyramid from the clouds and refuses bad set
   bad = {};
   bad.restart_min_share = 1.5;
   CHECK_THROWS_AS(sem::register_clouds(room, room, Eigen::Isometry3d::Identity(), bad), std::invalid_argument);
+  for (const double share : {0.0, -0.5, std::numeric_limits<double>::infinity(), std::nan("")}) {
+    bad = {};
+    bad.fine_spacing_share = share;
+    CHECK_THROWS_AS(sem::register_clouds(room, room, Eigen::Isometry3d::Identity(), bad), std::invalid_argument);
+  }
   CHECK_THROWS_AS(sem::register_clouds(sem::Cloud{}, room, Eigen::Isometry3d::Identity()), std::invalid_argument);
 }
 
