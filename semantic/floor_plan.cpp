@@ -648,6 +648,90 @@ bool continues(const Piece& p, const std::vector<Piece>& all, double at, int out
   return false;
 }
 
+// Whether `x` lies in wall q's box (its centre line lengthened by half its
+// thickness at each end, half its thickness either side), grown by `margin`.
+bool inside(const Piece& q, const Eigen::Vector2d& x, double margin) {
+  const double a = q.d.dot(x), o = q.n.dot(x) - q.offset, h = q.thickness / 2 + margin;
+  return a >= q.a0 - h && a <= q.a1 + h && std::abs(o) <= h;
+}
+
+// Whether another wall's box reaches into the passage through doorway g of
+// wall p (one of `walls`): the middle of the gap, door_clearance_m out
+// either side.
+bool blocked(const std::vector<Piece>& walls, const Piece& p, const std::pair<double, double>& g,
+             const FloorPlanSettings& s) {
+  const double w = g.second - g.first, reach = p.thickness / 2 + s.door_clearance_m;
+  for (double a = g.first + w / 5; a <= g.second - w / 5; a += 0.05)
+    for (double o = -reach; o <= reach; o += 0.05)
+      for (const Piece& q : walls)
+        if (&q != &p && inside(q, p.d * a + p.n * (p.offset + o), 0.0)) return true;
+  return false;
+}
+
+// Whether occupied cells reach door_jamb_m from wall p's line at along
+// `x` .. x + 2 cells outward, on door_jamb_solid of the steps at least:
+// along the line (the wall goes on, in pieces too short to be walls), or
+// across it to one side only (a stub: a wall's end too short to be a wall,
+// or a door frame's return; a wall across the line to both sides is a
+// passage round a corner, not a jamb).
+bool grid_jamb(const OccupancyGrid& grid, const Piece& p, double x, int outward, const FloorPlanSettings& s) {
+  const double res = grid.resolution_m, t = p.thickness / 2;
+  const double lo = std::min(x, x + outward * s.door_jamb_m), hi = std::max(x, x + outward * s.door_jamb_m);
+  if (solid_share(grid, p, lo, hi) >= s.door_jamb_solid) return true;
+  const auto reach = [&](int side) {  // the share of steps out to side with an occupied cell
+    int solid = 0, all = 0;
+    for (double o = t + res; o <= t + s.door_jamb_m; o += res, ++all) {
+      bool hit = false;
+      for (double a = x; outward * (a - x) <= 2 * res && !hit; a += outward * res) {
+        const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + side * o) * p.n);
+        hit = grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied;
+      }
+      solid += hit ? 1 : 0;
+    }
+    return all == 0 ? 0.0 : solid / static_cast<double>(all);
+  };
+  const double minus = reach(-1), plus = reach(+1);
+  return std::max(minus, plus) >= s.door_jamb_solid && std::min(minus, plus) < 1.0 - s.door_jamb_solid;
+}
+
+// A doorway past wall p's free end at along `a` (outward: +1 at a1, -1 at
+// a0) seen on the grid itself, where no wall piece stands at its far side:
+// p's cells going on past the end across gaps narrower than a door (a
+// dotted end its faces left out; door_max_width_m at most), then a gap a
+// door wide, then a solid cross-section that is a jamb (grid_jamb); none
+// of it in another wall of `all` (where one stands, meeting has had its
+// say: a corner, or a passage round one) and no wall in its passage
+// (blocked). It is held to a
+// doorway beside a corner (free cells corner_door_min_depth_m deep on both
+// sides). The new end (in the far jamb) and the doorway's g0..g1; or NaN.
+double grid_doorway(const OccupancyGrid& grid, const Piece& p, double a, int outward, const std::vector<Piece>& all,
+                    const FloorPlanSettings& s, std::pair<double, double>& door) {
+  const double res = grid.resolution_m, step = res / 2;
+  const auto in_a_wall = [&](double x) {
+    const Eigen::Vector2d at = p.d * x + p.n * p.offset;
+    return std::any_of(all.begin(), all.end(), [&](const Piece& q) { return &q != &p && inside(q, at, res); });
+  };
+  double end = a;  // the last solid cross-section of p's own cells
+  for (double x = a + outward * step; outward * (x - end) <= s.door_max_width_m + 2 * res + step; x += outward * step) {
+    if (in_a_wall(x)) break;
+    if (!solid_across(grid, p, x)) continue;
+    const double gap = outward * (x - end) - step;
+    if (gap < s.door_min_width_m) {
+      if (outward * (x - a) > s.door_max_width_m) return std::numeric_limits<double>::quiet_NaN();
+      end = x;
+      continue;
+    }
+    const double near = end + outward * step / 2, far = x - outward * step / 2;
+    const double g0 = std::min(near, far), g1 = std::max(near, far);
+    if (in_a_wall(x + outward * res) || !grid_jamb(grid, p, x, outward, s) ||
+        !doorway(grid, p, g0, g1, s, outward > 0, outward < 0, true) || blocked(all, p, {g0, g1}, s))
+      break;
+    door = {g0, g1};
+    return x + outward * res;
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
 // Where wall `p`'s end at along `a` (outward: +1 at a1, -1 at a0) meets a
 // crossing wall within corner_gap_m; or, as a doorway, a crossing wall a
 // door's width beyond it with free space through the gap: the new end (on
@@ -686,6 +770,7 @@ double meeting(const OccupancyGrid& grid, const Piece& p, double a, int outward,
       continue;
     best = c.at, best_dist = gap, door = {g0, g1};
   }
+  if (std::isnan(best) && std::isnan(corner)) return grid_doorway(grid, p, a, outward, all, s, door);
   return best;
 }
 
@@ -705,26 +790,6 @@ bool in_line(const std::vector<Piece>& all, std::size_t i, const FloorPlanSettin
     const double gap = std::max(q0 - p.a1, p.a0 - q1);
     if (gap <= s.door_max_width_m + 2 * s.corner_gap_m) return true;
   }
-  return false;
-}
-
-// Whether `x` lies in wall q's box (its centre line lengthened by half its
-// thickness at each end, half its thickness either side), grown by `margin`.
-bool inside(const Piece& q, const Eigen::Vector2d& x, double margin) {
-  const double a = q.d.dot(x), o = q.n.dot(x) - q.offset, h = q.thickness / 2 + margin;
-  return a >= q.a0 - h && a <= q.a1 + h && std::abs(o) <= h;
-}
-
-// Whether another wall's box reaches into the passage through doorway g of
-// wall i: the middle of the gap, door_clearance_m out either side.
-bool blocked(const std::vector<Piece>& walls, std::size_t i, const std::pair<double, double>& g,
-             const FloorPlanSettings& s) {
-  const Piece& p = walls[i];
-  const double w = g.second - g.first, reach = p.thickness / 2 + s.door_clearance_m;
-  for (double a = g.first + w / 5; a <= g.second - w / 5; a += 0.05)
-    for (double o = -reach; o <= reach; o += 0.05)
-      for (std::size_t j = 0; j < walls.size(); ++j)
-        if (j != i && inside(walls[j], p.d * a + p.n * (p.offset + o), 0.0)) return true;
   return false;
 }
 
@@ -772,7 +837,7 @@ std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Pie
   for (std::size_t i = 0; i < kept.size(); ++i) {
     auto& doors = kept[i].doorways;
     doors.erase(std::remove_if(doors.begin(), doors.end(),
-                               [&](const std::pair<double, double>& g) { return blocked(kept, i, g, s); }),
+                               [&](const std::pair<double, double>& g) { return blocked(kept, kept[i], g, s); }),
                 doors.end());
   }
   return kept;

@@ -15,7 +15,8 @@
 // faces join across door-wide gaps; a slanted wall in no direction of its
 // own (too few edges for a peak) is a long, solid Hough line of occupied
 // cells off every direction; a gap of door width with free space
-// through it on both sides is a doorway, kept as an opening with a lintel
+// through it on both sides is a doorway (its far jamb a wall, or, read on
+// the grid itself, a stub too short to be one), kept as an opening with a lintel
 // at the door height, so the world file has wall above it.
 
 #include "semantic/occupancy_grid.hpp"
