@@ -701,9 +701,9 @@ bool grid_jamb(const OccupancyGrid& grid, const Piece& p, double x, int outward,
 // door wide, then a solid cross-section that is a jamb (grid_jamb); none
 // of it in another wall of `all` (where one stands, meeting has had its
 // say: a corner, or a passage round one) and no wall in its passage
-// (blocked). It is held to a
-// doorway beside a corner (free cells corner_door_min_depth_m deep on both
-// sides). The new end (in the far jamb) and the doorway's g0..g1; or NaN.
+// (blocked). It is held to a doorway beside a corner (free cells
+// corner_door_min_depth_m deep on both sides). The new end (in the far
+// jamb) and the doorway's g0..g1; or NaN.
 double grid_doorway(const OccupancyGrid& grid, const Piece& p, double a, int outward, const std::vector<Piece>& all,
                     const FloorPlanSettings& s, std::pair<double, double>& door) {
   const double res = grid.resolution_m, step = res / 2;
