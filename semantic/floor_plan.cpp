@@ -199,6 +199,12 @@ struct Piece {
   std::vector<std::pair<double, double>> doorways;  // along, a0 < from < to < a1
 };
 
+// The state of the cell holding point x; Unknown outside the grid.
+CellState state_at(const OccupancyGrid& grid, const Eigen::Vector2d& x) {
+  const Eigen::Vector2i c = grid.cell_of(x);
+  return grid.contains(c.x(), c.y()) ? grid.at(c.x(), c.y()) : CellState::Unknown;
+}
+
 // Share of free cells of `grid` over the rectangle along a0..a1, offset
 // o0..o1 of the line (d, n), sampled at the grid's resolution.
 double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eigen::Vector2d& n, double a0,
@@ -206,9 +212,8 @@ double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eig
   int free = 0, all = 0;
   for (double a = a0; a <= a1; a += grid.resolution_m)
     for (double o = o0; o <= o1; o += grid.resolution_m) {
-      const Eigen::Vector2i c = grid.cell_of(a * d + o * n);
       ++all;
-      if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Free) ++free;
+      if (state_at(grid, a * d + o * n) == CellState::Free) ++free;
     }
   return all == 0 ? 0.0 : free / static_cast<double>(all);
 }
@@ -218,8 +223,7 @@ double free_share(const OccupancyGrid& grid, const Eigen::Vector2d& d, const Eig
 bool solid_across(const OccupancyGrid& grid, const Piece& p, double a) {
   const double t = p.thickness / 2 + grid.resolution_m;
   for (double o = -t; o <= t; o += grid.resolution_m) {
-    const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + o) * p.n);
-    if (grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied) return true;
+    if (state_at(grid, a * p.d + (p.offset + o) * p.n) == CellState::Occupied) return true;
   }
   return false;
 }
@@ -251,9 +255,10 @@ double free_reach(const OccupancyGrid& grid, const Piece& p, double a0, double a
   double reach = 0.0;
   for (double a = a0; a <= a1; a += res)
     for (double o = res; o <= limit; o += res) {
-      const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + side * (face + o)) * p.n);
-      if (!grid.contains(c.x(), c.y()) || grid.at(c.x(), c.y()) == CellState::Occupied) break;
-      if (grid.at(c.x(), c.y()) == CellState::Free) reach = std::max(reach, o);
+      // Outside the grid counts as unknown: a line that leaves it does not come back.
+      const CellState state = state_at(grid, a * p.d + (p.offset + side * (face + o)) * p.n);
+      if (state == CellState::Occupied) break;
+      if (state == CellState::Free) reach = std::max(reach, o);
     }
   return reach;
 }
@@ -682,10 +687,8 @@ bool grid_jamb(const OccupancyGrid& grid, const Piece& p, double x, int outward,
     int solid = 0, all = 0;
     for (double o = t + res; o <= t + s.door_jamb_m; o += res, ++all) {
       bool hit = false;
-      for (double a = x; outward * (a - x) <= 2 * res && !hit; a += outward * res) {
-        const Eigen::Vector2i c = grid.cell_of(a * p.d + (p.offset + side * o) * p.n);
-        hit = grid.contains(c.x(), c.y()) && grid.at(c.x(), c.y()) == CellState::Occupied;
-      }
+      for (double a = x; outward * (a - x) <= 2 * res && !hit; a += outward * res)
+        hit = state_at(grid, a * p.d + (p.offset + side * o) * p.n) == CellState::Occupied;
       solid += hit ? 1 : 0;
     }
     return all == 0 ? 0.0 : solid / static_cast<double>(all);
@@ -817,10 +820,8 @@ std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Pie
           const Eigen::Vector2d y = x - q.n * (q.n.dot(x) - q.offset);  // x's foot on q's line
           const double len = (y - x).norm();
           bool clear = true;
-          for (double t = 0; t <= len && clear; t += grid.resolution_m) {
-            const Eigen::Vector2i c = grid.cell_of(x + (y - x) * (t / len));
-            clear = !grid.contains(c.x(), c.y()) || grid.at(c.x(), c.y()) != CellState::Free;
-          }
+          for (double t = 0; t <= len && clear; t += grid.resolution_m)
+            clear = state_at(grid, x + (y - x) * (t / len)) != CellState::Free;
           behind += clear ? 1 : 0;
         }
       }
