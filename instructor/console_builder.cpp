@@ -175,6 +175,7 @@ class LiveView {
   void learn(double seconds) {
     std::lock_guard lock(mutex_);
     stats_.assign(signals_.size(), {});
+    learn_samples_ = 0;
     learn_until_us_ = msgs::monotonic_us() + static_cast<int64_t>(seconds * 1e6);
     learning_ = true;
   }
@@ -220,6 +221,7 @@ class LiveView {
       if (learning_ && msgs::monotonic_us() >= learn_until_us_) finish_learning();
       v["learning"] = learning_;
       v["learn_left_s"] = learning_ ? static_cast<double>(learn_until_us_ - msgs::monotonic_us()) / 1e6 : 0.0;
+      v["learn_samples"] = learn_samples_;
       if (!proposal_.isNull()) v["proposal"] = proposal_;
     }
     if (preview_) v["preview"] = preview_json(preview_->snapshot(), preview_->definition());
@@ -270,6 +272,7 @@ class LiveView {
   void on_raw(const hil::PanelSnapshot& snap) {
     std::lock_guard lock(mutex_);
     source_status_ = snap.sources;  // as JSON when the page asks (state_json), not at 100 Hz
+    learn_samples_ += learning_ ? 1 : 0;
     for (std::size_t i = 0; i < signals_.size() && i < snap.controls.size(); ++i) {
       if (snap.controls[i].forced_safe) continue;  // stale: not what the control does
       const double x = raw_value(signals_[i], snap.controls[i], wide_definition_.sources[signals_[i].source].is_dbc());
@@ -349,6 +352,7 @@ class LiveView {
   std::vector<hil::SourceStatus> source_status_;
   std::vector<LearnStats> stats_;
   bool learning_ = false;
+  int learn_samples_ = 0;  // snapshots the learn window has read (the first is each signal's rest)
   int64_t learn_until_us_ = 0;
   Json::Value proposal_;
   std::unique_ptr<hil::Bridge> raw_;  // after what its callback uses: stopped first

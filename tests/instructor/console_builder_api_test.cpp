@@ -279,11 +279,15 @@ TEST_CASE("learning an axis proposes its signal, invert and deadband from its re
   }));
   CHECK(http.Post("/api/builder/console_learn", R"({"seconds": 100})", "application/json")->status == 400);
   REQUIRE(http.Post("/api/builder/console_learn", R"({"seconds": 1.5})", "application/json")->status == 200);
-  REQUIRE(wait_for([](const Json::Value& s) { return s["learning"].asBool(); }));
-  std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  // Pulled to its negative end and let go: it is wired the other way round.
+  // The window has read the lever at rest (its first snapshot is the rest) ...
+  REQUIRE(wait_for([](const Json::Value& s) { return s["learning"].asBool() && s["learn_samples"].asInt() >= 1; }));
+  // ... then pulled to its negative end and let go once the window has read
+  // it there (the live value and the learn statistics come from one
+  // snapshot): it is wired the other way round.
   console.set(-0.9f);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  REQUIRE(wait_for([](const Json::Value& s) {
+    return s["learning"].asBool() && std::fabs(s["values"][5].asDouble() + 0.9) < 0.001;
+  }));
   console.set(0.02f);
   REQUIRE(wait_for([](const Json::Value& s) { return !s["learning"].asBool() && s.isMember("proposal"); }));
   const auto p = state()["proposal"];
