@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <tuple>
 #include <utility>
@@ -291,8 +292,13 @@ bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, co
 // (unless they are a single face and `refuse_thick` is false: a face is
 // straight by construction).
 bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& xy, bool both_faces, bool single_face,
-                const FloorPlanSettings& s, std::vector<Piece>& out, bool refuse_thick = false) {
-  const detail::Line2 line = detail::fit_line(xy);
+                const FloorPlanSettings& s, std::vector<Piece>& out, bool refuse_thick = false,
+                const std::optional<Eigen::Vector2d>& direction = std::nullopt) {
+  detail::Line2 line = detail::fit_line(xy);
+  if (direction) {  // its sense kept: the ends' order does not change
+    line.direction = direction->dot(line.direction) < 0 ? Eigen::Vector2d(-*direction) : *direction;
+    line.normal = {-line.direction.y(), line.direction.x()};
+  }
   std::vector<double> along, across;
   for (const auto& p : xy) along.push_back(line.along(p)), across.push_back(line.offset(p));
   const double lo = detail::quantile(across, 0.03), hi = detail::quantile(across, 0.97);
@@ -401,6 +407,35 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
     }
     split_wall(grid, xy, false, true, s, out);
   };
+  // The direction of a group's faces as parallel lines: one direction,
+  // one offset for each line of collinear faces (a face's mid row within
+  // collinear_offset_m of another's). One line through the cells of two
+  // faces of unequal length tilts towards the shorter one (a cabinet's
+  // top beside a 5 m wall: 2 degrees).
+  const auto parallel_direction = [&](const std::vector<int>& group) {
+    std::vector<int> line_of(group.size());
+    std::iota(line_of.begin(), line_of.end(), 0);
+    for (std::size_t i = 0; i < group.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        if (std::abs(faces[static_cast<std::size_t>(group[i])].mid() - faces[static_cast<std::size_t>(group[j])].mid()) *
+                f.res <= s.collinear_offset_m) {
+          line_of[i] = line_of[j];
+          break;
+        }
+    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+    for (std::size_t k = 0; k < group.size(); ++k) {
+      if (line_of[k] != static_cast<int>(k)) continue;
+      std::vector<Eigen::Vector2d> xy;
+      for (std::size_t i = 0; i < group.size(); ++i)
+        if (line_of[i] == static_cast<int>(k)) cells_of(faces[static_cast<std::size_t>(group[i])], xy);
+      Eigen::Vector2d c = Eigen::Vector2d::Zero();
+      for (const auto& p : xy) c += p;
+      c /= static_cast<double>(xy.size());
+      for (const auto& p : xy) scatter += (p - c) * (p - c).transpose();
+    }
+    const double angle = std::atan2(2 * scatter(0, 1), scatter(0, 0) - scatter(1, 1)) / 2;  // the major axis
+    return Eigen::Vector2d(std::cos(angle), std::sin(angle));
+  };
   for (const auto& group : groups) {
     if (group.empty()) continue;
     if (group.size() == 1) {
@@ -414,7 +449,7 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
       cells_of(face, xy);
       for (const int j : group) both = both || face.r1 < faces[static_cast<std::size_t>(j)].r0;
     }
-    if (split_wall(grid, xy, both, false, s, out)) continue;
+    if (split_wall(grid, xy, both, false, s, out, false, parallel_direction(group))) continue;
     // Joined faces that do not make one straight slab: each on its own.
     for (const int i : group) alone(faces[static_cast<std::size_t>(i)]);
   }
