@@ -1,8 +1,9 @@
 // `rise-semantic segment` on the real 2D maps of shared/data and on the 3D
 // map of a real room: the world it writes loads in the simulator, and the
 // tracked robot, put 1 m in front of each doorway it fits (facing it, in
-// free space), drives straight through to the other side; in the room it
-// also stands where the world says it starts.
+// free space), drives straight through to the other side; in every world
+// it also stands where the world says it starts, with room around it and
+// touching nothing.
 
 #include <catch2/catch.hpp>
 
@@ -115,6 +116,29 @@ bool room_in_3d_at(const OccupancyGrid& g, const rise::sim::WorldDescription& w,
   return room_at(g, w, p, heading) && occupied_under(g, p, heading) == 0;
 }
 
+// The robot left 1 s at the world's own start: how far it moved, what it
+// touched, whether it tipped over.
+struct Standing {
+  Eigen::Vector2d start, facing;
+  double moved_m = 0;
+  std::string hit;
+  bool tipped = false;
+};
+
+Standing stand_at_start(const rise::sim::WorldDescription& world) {
+  Standing r;
+  r.start = {world.robot_start_m[0], world.robot_start_m[1]};
+  r.facing = {std::cos(world.robot_start_yaw_rad), std::sin(world.robot_start_yaw_rad)};
+  rise::sim::Simulation sim(rise::sim::load_robot_description(kTracked), world);
+  std::vector<rise::sim::SimEvent> log;
+  run(sim, 1.0, log);
+  r.moved_m = (Eigen::Vector2d(sim.snapshot().position_m[0], sim.snapshot().position_m[1]) - r.start).norm();
+  for (const auto& e : log)
+    if (e.kind == rise::sim::SimEventKind::CollisionStarted) r.hit += " " + e.a + "/" + e.b;
+  r.tipped = any(log, rise::sim::SimEventKind::TippedOver);
+  return r;
+}
+
 // The robot put 1 m before doorway `d` facing along `toward`, driven straight
 // on for 2.5 m, or until 10 s have passed (stuck).
 struct Drive {
@@ -179,6 +203,15 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
     const auto world = rise::sim::load_world_description((out / "world.yaml").string());
     CHECK(!world.walls.empty());
     const OccupancyGrid grid = image.empty() ? grid_from_scans(read_carmen_log(map)) : read_ros_map(map, image);
+    {  // The world's own start: room for the robot, and there it stands touching nothing.
+      const Standing st = stand_at_start(world);
+      INFO(m.name << ": start (" << st.start.transpose() << ") facing (" << st.facing.transpose() << "); after 1 s "
+                  << st.moved_m << " m from it; collisions:" << st.hit);
+      CHECK(room_at(grid, world, st.start, st.facing));
+      CHECK(st.hit.empty());
+      CHECK_FALSE(st.tipped);
+      CHECK(st.moved_m < 0.05);
+    }
     for (const Doorway& d : doorways(world)) {
       if (d.width_m < kFitsM) continue;
       // From 1 m out on one side to 1.5 m beyond on the other, each with room for the robot.
@@ -239,22 +272,14 @@ TEST_CASE("the tracked robot starts clear and drives through the doorway in the 
 
   // The world's own start: room for the robot, and there it stands for 1 s
   // touching nothing.
-  const Eigen::Vector2d start(world.robot_start_m[0], world.robot_start_m[1]);
-  const Eigen::Vector2d facing(std::cos(world.robot_start_yaw_rad), std::sin(world.robot_start_yaw_rad));
   {
-    rise::sim::Simulation sim(rise::sim::load_robot_description(kTracked), world);
-    std::vector<rise::sim::SimEvent> log;
-    run(sim, 1.0, log);
-    const Eigen::Vector2d p(sim.snapshot().position_m[0], sim.snapshot().position_m[1]);
-    std::string hit;
-    for (const auto& e : log)
-      if (e.kind == rise::sim::SimEventKind::CollisionStarted) hit += " " + e.a + "/" + e.b;
-    INFO("start (" << start.x() << ", " << start.y() << ") yaw " << world.robot_start_yaw_rad << " rad; after 1 s "
-                   << (p - start).norm() << " m from it; collisions:" << hit);
-    CHECK(room_in_3d_at(grid, world, start, facing));
-    CHECK(hit.empty());
-    CHECK_FALSE(any(log, rise::sim::SimEventKind::TippedOver));
-    CHECK((p - start).norm() < 0.05);
+    const Standing st = stand_at_start(world);
+    INFO("start (" << st.start.transpose() << ") yaw " << world.robot_start_yaw_rad << " rad; after 1 s " << st.moved_m
+                   << " m from it; collisions:" << st.hit);
+    CHECK(room_in_3d_at(grid, world, st.start, st.facing));
+    CHECK(st.hit.empty());
+    CHECK_FALSE(st.tipped);
+    CHECK(st.moved_m < 0.05);
   }
 
   // Each doorway it fits, from 1 m before it. Where neither side has room
