@@ -1,19 +1,23 @@
 // `rise-semantic segment` on the real 2D maps of shared/data and on the 3D
 // map of a real room: the world it writes loads in the simulator, and the
 // tracked robot, put 1 m in front of each doorway it fits (facing it, in
-// free space), drives straight through to the other side; in every world
-// it also stands where the world says it starts, with room around it and
-// touching nothing.
+// free space, on a side it can get to from the world's start), drives
+// straight through to the other side; in every world it also stands where
+// the world says it starts, with room around it and touching nothing.
 
 #include <catch2/catch.hpp>
 
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
+#include <queue>
 #include <string>
 #include <vector>
 
@@ -65,20 +69,26 @@ bool occupied_at(const OccupancyGrid& g, const Eigen::Vector2d& p) {
   return g.contains(c.x(), c.y()) && g.at(c.x(), c.y()) == CellState::Occupied;
 }
 
-// Inside a box of the world the robot would hit: a wall (not a lintel) or a prop reaching below 0.5 m.
-bool in_solid(const rise::sim::WorldDescription& w, const Eigen::Vector2d& q) {
-  const auto inside = [&](const rise::sim::BoxObstacle& b) {
-    if (b.center_m[2] - b.size_m[2] / 2 > 0.5) return false;
-    const double c = std::cos(b.yaw_rad), s = std::sin(b.yaw_rad);
-    const Eigen::Vector2d d = q - Eigen::Vector2d(b.center_m[0], b.center_m[1]);
-    return std::abs(c * d.x() + s * d.y()) < b.size_m[0] / 2 && std::abs(-s * d.x() + c * d.y()) < b.size_m[1] / 2;
-  };
+// The boxes of the world the robot would hit: walls (not lintels) and props reaching below 0.5 m.
+std::vector<rise::sim::BoxObstacle> solids(const rise::sim::WorldDescription& w) {
+  std::vector<rise::sim::BoxObstacle> out;
   for (const auto& wall : w.walls)
-    for (const auto& b : rise::sim::wall_boxes(wall))
-      if (inside(b)) return true;
-  for (const auto& p : w.props)
-    if (inside(p.box)) return true;
-  return false;
+    for (const auto& b : rise::sim::wall_boxes(wall)) out.push_back(b);
+  for (const auto& p : w.props) out.push_back(p.box);
+  out.erase(std::remove_if(out.begin(), out.end(), [](const auto& b) { return b.center_m[2] - b.size_m[2] / 2 > 0.5; }),
+            out.end());
+  return out;
+}
+
+bool inside(const rise::sim::BoxObstacle& b, const Eigen::Vector2d& q) {
+  const double c = std::cos(b.yaw_rad), s = std::sin(b.yaw_rad);
+  const Eigen::Vector2d d = q - Eigen::Vector2d(b.center_m[0], b.center_m[1]);
+  return std::abs(c * d.x() + s * d.y()) < b.size_m[0] / 2 && std::abs(-s * d.x() + c * d.y()) < b.size_m[1] / 2;
+}
+
+bool in_solid(const rise::sim::WorldDescription& w, const Eigen::Vector2d& q) {
+  const auto all = solids(w);
+  return std::any_of(all.begin(), all.end(), [&](const auto& b) { return inside(b, q); });
 }
 
 // The robot's footprint with its base at `p` heading along unit `heading`,
@@ -177,6 +187,67 @@ Drive drive_through(const rise::sim::WorldDescription& world, const Doorway& d, 
   return r;
 }
 
+// Where the robot can go from one place on a map, as a disc `radius_m`
+// wide: through free cells of the map whose distance to every other cell
+// and to the world's solid boxes is at least that (Dijkstra on the
+// 8-neighbour grid): the length of the shortest way to each cell.
+class Reach {
+ public:
+  Reach(const OccupancyGrid& g, const rise::sim::WorldDescription& w, const Eigen::Vector2d& from, double radius_m)
+      : g_(g), length_(static_cast<std::size_t>(g.width) * g.height, std::numeric_limits<double>::infinity()) {
+    cv::Mat open(g.height, g.width, CV_8U, cv::Scalar(0));
+    for (int r = 0; r < g.height; ++r)
+      for (int c = 0; c < g.width; ++c) open.at<uint8_t>(r, c) = g.at(c, r) == CellState::Free ? 255 : 0;
+    for (const auto& b : solids(w)) {  // each box's cells closed
+      const double reach = std::hypot(b.size_m[0], b.size_m[1]) / 2;
+      const Eigen::Vector2i lo = g.cell_of({b.center_m[0] - reach, b.center_m[1] - reach});
+      const Eigen::Vector2i hi = g.cell_of({b.center_m[0] + reach, b.center_m[1] + reach});
+      for (int r = std::max(0, lo.y()); r <= std::min(g.height - 1, hi.y()); ++r)
+        for (int c = std::max(0, lo.x()); c <= std::min(g.width - 1, hi.x()); ++c)
+          if (inside(b, g.center(c, r))) open.at<uint8_t>(r, c) = 0;
+    }
+    cv::Mat cells_to_closed;
+    cv::distanceTransform(open, cells_to_closed, cv::DIST_L2, cv::DIST_MASK_5);
+    const auto passable = [&](int c, int r) {
+      return g.contains(c, r) && cells_to_closed.at<float>(r, c) * g.resolution_m >= radius_m;
+    };
+    const Eigen::Vector2i s = g.cell_of(from);
+    if (!passable(s.x(), s.y())) return;
+    using Item = std::pair<double, std::size_t>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
+    length_[index(s.x(), s.y())] = 0;
+    queue.emplace(0.0, index(s.x(), s.y()));
+    while (!queue.empty()) {
+      const auto [length, i] = queue.top();
+      queue.pop();
+      if (length > length_[i]) continue;
+      const int c = static_cast<int>(i % static_cast<std::size_t>(g.width));
+      const int r = static_cast<int>(i / static_cast<std::size_t>(g.width));
+      for (int dr = -1; dr <= 1; ++dr)
+        for (int dc = -1; dc <= 1; ++dc) {
+          if ((dc == 0 && dr == 0) || !passable(c + dc, r + dr)) continue;
+          const double next = length + std::hypot(dc, dr) * g.resolution_m;
+          const std::size_t n = index(c + dc, r + dr);
+          if (next < length_[n]) length_[n] = next, queue.emplace(next, n);
+        }
+    }
+  }
+
+  /// The length of the way to `to`; infinity where there is none.
+  double length_to(const Eigen::Vector2d& to) const {
+    const Eigen::Vector2i t = g_.cell_of(to);
+    return g_.contains(t.x(), t.y()) ? length_[index(t.x(), t.y())] : std::numeric_limits<double>::infinity();
+  }
+
+ private:
+  std::size_t index(int c, int r) const {
+    return static_cast<std::size_t>(r) * static_cast<std::size_t>(g_.width) + static_cast<std::size_t>(c);
+  }
+
+  const OccupancyGrid& g_;
+  std::vector<double> length_;
+};
+
 }  // namespace
 
 TEST_CASE("the tracked robot drives through every doorway it fits in the worlds rise-semantic segment makes of real maps",
@@ -212,6 +283,7 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
       CHECK_FALSE(st.tipped);
       CHECK(st.moved_m < 0.05);
     }
+    const Reach reach(grid, world, {world.robot_start_m[0], world.robot_start_m[1]}, kRobotWidthM / 2);
     for (const Doorway& d : doorways(world)) {
       if (d.width_m < kFitsM) continue;
       // From 1 m out on one side to 1.5 m beyond on the other, each with room for the robot.
@@ -219,13 +291,21 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
       const auto clear = [&] {
         return room_at(grid, world, d.center - toward, toward) && room_at(grid, world, d.center + 1.5 * toward, toward);
       };
-      if (!clear()) toward = -toward;
+      // From the side the robot can get to from the world's start, where it has room both sides.
+      const auto from_start = [&] { return clear() && std::isfinite(reach.length_to(d.center - toward)); };
+      if (!from_start()) toward = -toward;
+      if (!from_start() && !clear()) toward = -toward;
       if (!clear()) {
         WARN(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y()
                     << ") has no room for the robot 1 m before and 1.5 m beyond it");
         ++cramped;
         continue;
       }
+      const double way = reach.length_to(d.center - toward);
+      INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << "): the start ("
+                  << world.robot_start_m[0] << ", " << world.robot_start_m[1] << ") leads to neither side of it");
+      CHECK(std::isfinite(way));
+      std::printf("%s: doorway at (%.2f, %.2f): %.1f m from the start\n", m.name, d.center.x(), d.center.y(), way);
       const Drive r = drive_through(world, d, toward);
       INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << ") width " << d.width_m
                   << ": base " << r.past_m << " m past its wall line, crossed it " << r.off_m
