@@ -293,12 +293,8 @@ bool doorway(const OccupancyGrid& grid, const Piece& p, double g0, double g1, co
 // straight by construction).
 bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& xy, bool both_faces, bool single_face,
                 const FloorPlanSettings& s, std::vector<Piece>& out, bool refuse_thick = false,
-                const std::optional<Eigen::Vector2d>& direction = std::nullopt) {
-  detail::Line2 line = detail::fit_line(xy);
-  if (direction) {  // its sense kept: the ends' order does not change
-    line.direction = direction->dot(line.direction) < 0 ? Eigen::Vector2d(-*direction) : *direction;
-    line.normal = {-line.direction.y(), line.direction.x()};
-  }
+                const std::optional<detail::Line2>& fitted = std::nullopt) {
+  const detail::Line2 line = fitted ? *fitted : detail::fit_line(xy);
   std::vector<double> along, across;
   for (const auto& p : xy) along.push_back(line.along(p)), across.push_back(line.offset(p));
   const double lo = detail::quantile(across, 0.03), hi = detail::quantile(across, 0.97);
@@ -350,6 +346,7 @@ bool split_wall(const OccupancyGrid& grid, const std::vector<Eigen::Vector2d>& x
 // one wall; collinear faces across door-wide gaps).
 void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings& s, std::vector<Piece>& out) {
   std::vector<Face> faces = faces_of(f, s);
+  const auto collinear = [&](double mid_a, double mid_b) { return std::abs(mid_a - mid_b) * f.res <= s.collinear_offset_m; };
   std::vector<int> parent(faces.size());
   std::iota(parent.begin(), parent.end(), 0);
   for (std::size_t i = 0; i < faces.size(); ++i)
@@ -358,7 +355,7 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
       const int overlap = std::min(a.c1, b.c1) - std::max(a.c0, b.c0) + 1;
       const int gap = -overlap;  // columns between them when they do not overlap
       bool join = false;
-      if (std::abs(a.mid() - b.mid()) * f.res <= s.collinear_offset_m && gap * f.res <= s.door_max_width_m) {
+      if (collinear(a.mid(), b.mid()) && gap * f.res <= s.door_max_width_m) {
         join = true;
       } else if ((std::max(a.r1, b.r1) - std::min(a.r0, b.r0) + 1) * f.res <= s.max_wall_thickness_m &&
                  overlap * 2 >= std::min(a.c1 - a.c0, b.c1 - b.c0)) {
@@ -407,34 +404,24 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
     }
     split_wall(grid, xy, false, true, s, out);
   };
-  // The direction of a group's faces as parallel lines: one direction,
-  // one offset for each line of collinear faces (a face's mid row within
-  // collinear_offset_m of another's). One line through the cells of two
-  // faces of unequal length tilts towards the shorter one (a cabinet's
-  // top beside a 5 m wall: 2 degrees).
-  const auto parallel_direction = [&](const std::vector<int>& group) {
-    std::vector<int> line_of(group.size());
-    std::iota(line_of.begin(), line_of.end(), 0);
-    for (std::size_t i = 0; i < group.size(); ++i)
-      for (std::size_t j = 0; j < i; ++j)
-        if (std::abs(faces[static_cast<std::size_t>(group[i])].mid() - faces[static_cast<std::size_t>(group[j])].mid()) *
-                f.res <= s.collinear_offset_m) {
-          line_of[i] = line_of[j];
-          break;
-        }
-    Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
-    for (std::size_t k = 0; k < group.size(); ++k) {
-      if (line_of[k] != static_cast<int>(k)) continue;
-      std::vector<Eigen::Vector2d> xy;
-      for (std::size_t i = 0; i < group.size(); ++i)
-        if (line_of[i] == static_cast<int>(k)) cells_of(faces[static_cast<std::size_t>(group[i])], xy);
-      Eigen::Vector2d c = Eigen::Vector2d::Zero();
-      for (const auto& p : xy) c += p;
-      c /= static_cast<double>(xy.size());
-      for (const auto& p : xy) scatter += (p - c) * (p - c).transpose();
+  // A group's faces in more than one line (two faces of a wall) as
+  // parallel lines, one offset for each line of collinear faces: one line
+  // through all their cells tilts towards the shorter face (a cabinet's
+  // top beside a 5 m wall: 2 degrees). Faces all in one line: none (the
+  // plain fit is the same).
+  const auto parallel_lines = [&](const std::vector<int>& group) -> std::optional<detail::Line2> {
+    std::vector<std::vector<Eigen::Vector2d>> lines;
+    std::vector<std::size_t> line_of;  // each face's line: that of the first face before it collinear with it
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      const Face& face = faces[static_cast<std::size_t>(group[i])];
+      std::size_t j = 0;
+      while (j < i && !collinear(face.mid(), faces[static_cast<std::size_t>(group[j])].mid())) ++j;
+      line_of.push_back(j < i ? line_of[j] : lines.size());
+      if (j == i) lines.emplace_back();
+      cells_of(face, lines[line_of.back()]);
     }
-    const double angle = std::atan2(2 * scatter(0, 1), scatter(0, 0) - scatter(1, 1)) / 2;  // the major axis
-    return Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    if (lines.size() < 2) return std::nullopt;
+    return detail::fit_parallel_lines(lines);
   };
   for (const auto& group : groups) {
     if (group.empty()) continue;
@@ -449,7 +436,7 @@ void walls_of(const OccupancyGrid& grid, const Frame& f, const FloorPlanSettings
       cells_of(face, xy);
       for (const int j : group) both = both || face.r1 < faces[static_cast<std::size_t>(j)].r0;
     }
-    if (split_wall(grid, xy, both, false, s, out, false, parallel_direction(group))) continue;
+    if (split_wall(grid, xy, both, false, s, out, false, parallel_lines(group))) continue;
     // Joined faces that do not make one straight slab: each on its own.
     for (const int i : group) alone(faces[static_cast<std::size_t>(i)]);
   }

@@ -29,19 +29,43 @@ void check_grid(const Eigen::Vector2d& extent_m, double cell_m, const char* what
                                 std::to_string(cell_m) + " m (crop the cloud or raise the cell size)");
 }
 
-Line2 fit_line(const std::vector<Eigen::Vector2d>& xy) {
-  Line2 l;
-  if (xy.empty()) return l;
-  Eigen::Vector2d c = Eigen::Vector2d::Zero();
-  for (const auto& p : xy) c += p;
-  c /= static_cast<double>(xy.size());
-  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+namespace {
+
+// Adds the scatter of xy about its own mean to C; returns the sum of xy.
+Eigen::Vector2d add_scatter(const std::vector<Eigen::Vector2d>& xy, Eigen::Matrix2d& C) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const auto& p : xy) sum += p;
+  const Eigen::Vector2d c = sum / static_cast<double>(xy.size());
   for (const auto& p : xy) C += (p - c) * (p - c).transpose();
+  return sum;
+}
+
+// The line through `point` along the major axis of the scatter C.
+Line2 major_axis_line(const Eigen::Matrix2d& C, const Eigen::Vector2d& point) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(C);
-  l.point = c;
+  Line2 l;
+  l.point = point;
   l.direction = es.eigenvectors().col(1).normalized();
   l.normal = {-l.direction.y(), l.direction.x()};
   return l;
+}
+
+}  // namespace
+
+Line2 fit_line(const std::vector<Eigen::Vector2d>& xy) {
+  if (xy.empty()) return {};
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  const Eigen::Vector2d sum = add_scatter(xy, C);
+  return major_axis_line(C, sum / static_cast<double>(xy.size()));
+}
+
+Line2 fit_parallel_lines(const std::vector<std::vector<Eigen::Vector2d>>& lines) {
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  std::size_t n = 0;
+  for (const auto& xy : lines)
+    if (!xy.empty()) sum += add_scatter(xy, C), n += xy.size();
+  return n == 0 ? Line2{} : major_axis_line(C, sum / static_cast<double>(n));
 }
 
 namespace {

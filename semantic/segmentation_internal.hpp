@@ -32,6 +32,11 @@ void check_grid(const Eigen::Vector2d& extent_m, double cell_m, const char* what
 /// Total least squares (PCA) line through the points' xy.
 Line2 fit_line(const std::vector<Eigen::Vector2d>& xy);
 
+/// The same for parallel lines, one offset each: their common direction
+/// (the major axis of each line's scatter about its own mean, summed),
+/// through the mean of all their points.
+Line2 fit_parallel_lines(const std::vector<std::vector<Eigen::Vector2d>>& lines);
+
 void find_floor_and_ceiling(const Cloud& cloud, const SegmentationSettings& s, Floor& floor, Ceiling& ceiling);
 
 /// What fills a gap of door width in a wall (doors.cpp).
