@@ -86,10 +86,6 @@ bool inside(const rise::sim::BoxObstacle& b, const Eigen::Vector2d& q) {
   return std::abs(c * d.x() + s * d.y()) < b.size_m[0] / 2 && std::abs(-s * d.x() + c * d.y()) < b.size_m[1] / 2;
 }
 
-bool in_solid(const rise::sim::WorldDescription& w, const Eigen::Vector2d& q) {
-  const auto all = solids(w);
-  return std::any_of(all.begin(), all.end(), [&](const auto& b) { return inside(b, q); });
-}
 
 // The robot's footprint with its base at `p` heading along unit `heading`,
 // every 5 cm: how many of its points `f` holds at.
@@ -103,7 +99,10 @@ int footprint_count(const Eigen::Vector2d& p, const Eigen::Vector2d& heading, F 
 }
 
 bool clear_of_world(const rise::sim::WorldDescription& w, const Eigen::Vector2d& p, const Eigen::Vector2d& heading) {
-  return footprint_count(p, heading, [&](const Eigen::Vector2d& q) { return in_solid(w, q); }) == 0;
+  const auto boxes = solids(w);
+  return footprint_count(p, heading, [&](const Eigen::Vector2d& q) {
+           return std::any_of(boxes.begin(), boxes.end(), [&](const auto& b) { return inside(b, q); });
+         }) == 0;
 }
 
 int occupied_under(const OccupancyGrid& g, const Eigen::Vector2d& p, const Eigen::Vector2d& heading) {
@@ -287,15 +286,16 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
     for (const Doorway& d : doorways(world)) {
       if (d.width_m < kFitsM) continue;
       // From 1 m out on one side to 1.5 m beyond on the other, each with room for the robot.
-      Eigen::Vector2d toward = d.normal;
-      const auto clear = [&] {
+      const auto clear = [&](const Eigen::Vector2d& toward) {
         return room_at(grid, world, d.center - toward, toward) && room_at(grid, world, d.center + 1.5 * toward, toward);
       };
-      // From the side the robot can get to from the world's start, where it has room both sides.
-      const auto from_start = [&] { return clear() && std::isfinite(reach.length_to(d.center - toward)); };
-      if (!from_start()) toward = -toward;
-      if (!from_start() && !clear()) toward = -toward;
-      if (!clear()) {
+      const auto from_start = [&](const Eigen::Vector2d& toward) {
+        return std::isfinite(reach.length_to(d.center - toward));
+      };
+      // From a side with room, the one the robot can get to from the world's start where only one is.
+      Eigen::Vector2d toward = d.normal;
+      if (!clear(toward) || (!from_start(toward) && clear(-toward) && from_start(-toward))) toward = -toward;
+      if (!clear(toward)) {
         WARN(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y()
                     << ") has no room for the robot 1 m before and 1.5 m beyond it");
         ++cramped;
