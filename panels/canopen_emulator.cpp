@@ -163,11 +163,13 @@ int CanopenEmulator::tick(hil::io::CanBus& bus, int64_t now_us) {
   if (boot_due_) {
     boot(now_us);
     // The boot-up message: a heartbeat with state 0 (CiA 301 §7.2.8.3.3).
-    sent += send(bus, co::heartbeat_frame(def_.node, co::NmtState::BootUp));
+    const int beat = send(bus, co::heartbeat_frame(def_.node, co::NmtState::BootUp)) ? 1 : 0;
+    sent += beat, heartbeats_sent_ += beat;
     state_ = co::NmtState::PreOperational;  // after the boot-up, on its own (§7.3.2.2.1)
   }
   if (now_us >= next_heartbeat_us_) {
-    sent += send(bus, co::heartbeat_frame(def_.node, state_));
+    const int beat = send(bus, co::heartbeat_frame(def_.node, state_)) ? 1 : 0;
+    sent += beat, heartbeats_sent_ += beat;
     const int64_t period_us = 1000 * static_cast<int64_t>(def_.eds->heartbeat_ms());
     next_heartbeat_us_ += period_us;
     if (next_heartbeat_us_ <= now_us) next_heartbeat_us_ = now_us + period_us;

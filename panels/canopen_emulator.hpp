@@ -53,6 +53,8 @@ class CanopenEmulator {
   bool powered() const { return powered_; }
   bool ended() const { return ended_; }
   int64_t frames_sent() const { return frames_sent_; }
+  /// Heartbeats sent (the boot-up message too): how often the node has been heard, whatever its state.
+  int64_t heartbeats_sent() const { return heartbeats_sent_; }
   int64_t syncs_seen() const { return syncs_seen_; }
   /// The value an LED or display of the source shows (LEDs 1/0, displays
   /// raw / 10^decimals); nullopt before its RPDO came.
@@ -90,6 +92,7 @@ class CanopenEmulator {
   int corrupt_left_ = 0;
   int64_t next_heartbeat_us_ = 0;
   int64_t frames_sent_ = 0;
+  int64_t heartbeats_sent_ = 0;
   int64_t syncs_seen_ = 0;
 };
 

@@ -59,12 +59,16 @@ class CanopenNodeThread {
     std::lock_guard lock(mutex_);
     return emulator_.syncs_seen();
   }
+  int64_t heartbeats() {
+    std::lock_guard lock(mutex_);
+    return emulator_.heartbeats_sent();
+  }
   co::NmtState state() {
     std::lock_guard lock(mutex_);
     return emulator_.state();
   }
   // Until `done` holds for the node, checked as each frame it takes is
-  // handled; false after timeout_ms.
+  // handled and after each tick that sent one; false after timeout_ms.
   bool wait_until(const std::function<bool(rise::panels::CanopenEmulator&)>& done, int timeout_ms) {
     std::unique_lock lock(mutex_);
     return handled_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] { return done(emulator_); });
@@ -74,10 +78,12 @@ class CanopenNodeThread {
   void run() {
     rise::hil::io::CanFrame f;
     while (running_) {
+      bool sent = false;
       {
         std::lock_guard lock(mutex_);
-        emulator_.tick(*bus_, rise::msgs::monotonic_us());
+        sent = emulator_.tick(*bus_, rise::msgs::monotonic_us()) > 0;
       }
+      if (sent) handled_.notify_all();
       while (bus_->receive(f, 1) == rise::hil::io::IoStatus::Ok) {
         {
           std::lock_guard lock(mutex_);
@@ -180,8 +186,11 @@ TEST_CASE("a canopen console is reset, started, read from its PDOs and shown its
     CHECK(safe->failsafe_reason.find("node 5 pre-operational") != std::string::npos);
     CHECK(safe->time_us - t0 < 60'000);  // its next heartbeat (sent at once) + one publish period
     CHECK(safe->controls[drive_y].axis == 0.0f);
-    // Not started again while it stays heard: still safe 300 ms later.
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // proving an absence over a span
+    // Not started again while it stays heard: still pre-operational and
+    // safe after three more of its heartbeats (0x1017: every 100 ms).
+    const int64_t beats = node.heartbeats();
+    CHECK(node.wait_until([&](rise::panels::CanopenEmulator& e) { return e.heartbeats_sent() >= beats + 3; }, 2000));
+    CHECK(node.state() == co::NmtState::PreOperational);
     CHECK(bridge.snapshot().failsafe);
     // Power cycle: boot-up, NMT start, PDOs again. Every snapshot from here
     // on is failsafe until the node is started again.
