@@ -49,7 +49,7 @@ packages=(
   universal-ctags
   iproute2 faketime curl jq
   libasound2-dev sox
-  libassimp-dev
+  libassimp-dev libxml2-dev
   libpcap-dev tcpdump tshark
 )
 

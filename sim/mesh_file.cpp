@@ -11,11 +11,11 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <optional>
 #include <sstream>
 #include <stdexcept>
-#include <string_view>
 #include <vector>
+
+#include "sim/collada_geometry.hpp"
 
 namespace rise::sim {
 namespace {
@@ -64,112 +64,6 @@ TriangleMesh from_scene(const aiScene* scene, const Assimp::Importer& importer, 
   return out;
 }
 
-// assimp 5.2's COLLADA reader misreads an index list with a non-digit in it
-// and asks for gigabytes (found by the mesh fuzz target): the index lists
-// (<p>, <v>, <vcount>) must be digits and white space before it sees them.
-void check_collada_indices(const std::string& text, const std::string& where) {
-  for (const std::string tag : {"p", "v", "vcount"}) {
-    const std::string open = "<" + tag, close = "</" + tag + ">";
-    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
-      const std::size_t after = at + open.size();
-      if (after >= text.size()) break;
-      const char c = text[after];
-      if (c != '>' && !std::isspace(static_cast<unsigned char>(c))) continue;  // another element: <param>, <vertices>
-      const std::size_t start = text.find('>', after);
-      if (start == std::string::npos) break;
-      if (text[start - 1] == '/') continue;  // empty: <p/>
-      const std::size_t end = text.find(close, start);
-      if (end == std::string::npos) fail(where + ": <" + tag + "> without </" + tag + ">");
-      // XML's white space only: assimp splits on these, not on \v or \f
-      // (a \v between indices made it ask for 2.4 GB, the fuzz target found).
-      for (std::size_t i = start + 1; i < end; ++i)
-        if (!std::isdigit(static_cast<unsigned char>(text[i])) && std::string_view(" \t\n\r").find(text[i]) == std::string_view::npos)
-          fail(where + ": <" + tag + "> holds a non-digit (an index list is digits and white space)");
-    }
-  }
-}
-
-// ... and it follows a null pointer for an array or a primitive list without
-// its count (the fuzz target's next find): each must carry count="digits".
-void check_collada_counts(const std::string& text, const std::string& where) {
-  for (const std::string tag : {"float_array", "int_array", "accessor", "triangles", "polylist", "polygons", "tristrips",
-                                "trifans", "lines", "linestrips"}) {
-    const std::string open = "<" + tag;
-    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
-      const std::size_t after = at + open.size();
-      if (after >= text.size()) break;
-      if (text[after] != '>' && text[after] != '/' && !std::isspace(static_cast<unsigned char>(text[after]))) continue;
-      const std::size_t end = text.find('>', after);
-      if (end == std::string::npos) fail(where + ": <" + tag + " without its '>'");
-      const std::string attrs = text.substr(after, end - after);
-      std::size_t c = std::string::npos;
-      for (const char* key : {" count=\"", "\tcount=\"", "\ncount=\""})
-        if (c == std::string::npos) c = attrs.find(key);
-      bool ok = c != std::string::npos;
-      if (ok) {
-        std::size_t i = c + 8, digits = 0;
-        while (i < attrs.size() && std::isdigit(static_cast<unsigned char>(attrs[i]))) ++i, ++digits;
-        ok = digits > 0 && digits <= 9 && i < attrs.size() && attrs[i] == '"';
-      }
-      if (!ok) fail(where + ": <" + tag + "> needs count=\"N\"");
-    }
-  }
-}
-
-// The integers of the element `tag` (its first, within [from, to)), or
-// nullopt when there is none; check_collada_indices has made them digits.
-std::optional<std::vector<uint64_t>> numbers_in(const std::string& text, const std::string& tag, std::size_t from,
-                                                std::size_t to) {
-  const std::string open = "<" + tag + ">";
-  const std::size_t at = text.find(open, from);
-  if (at == std::string::npos || at >= to) return std::nullopt;
-  const std::size_t end = text.find("</" + tag + ">", at);
-  if (end == std::string::npos || end > to) return std::nullopt;
-  std::vector<uint64_t> out;
-  std::istringstream in(text.substr(at + open.size(), end - at - open.size()));
-  std::string word;
-  while (in >> word) out.push_back(word.size() > 9 ? UINT32_MAX : std::stoull(word));
-  return out;
-}
-
-// ... and aborts (an ai_assert) when a primitive list's count does not
-// match its indices: each <triangles count="N"> must hold 3 N vertices in
-// its <p>, each <polylist count="N"> N <vcount>s and their sum in <p>, a
-// vertex being one index per input offset. Other primitives are refused.
-void check_collada_primitives(const std::string& text, const std::string& where) {
-  for (const char* tag : {"polygons", "tristrips", "trifans", "lines", "linestrips"})
-    if (text.find("<" + std::string(tag)) != std::string::npos)
-      fail(where + ": <" + tag + ">: only <triangles> and <polylist> meshes are read");
-  for (const std::string tag : {"triangles", "polylist"}) {
-    const std::string open = "<" + tag;
-    for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
-      const std::size_t head_end = text.find('>', at);
-      const std::size_t end = text.find("</" + tag + ">", at);
-      if (head_end == std::string::npos || end == std::string::npos) fail(where + ": <" + tag + "> without its end");
-      const std::string head = text.substr(at, head_end - at);
-      const std::size_t c = head.find("count=\"");
-      const uint64_t count = c == std::string::npos ? 0 : std::strtoull(head.c_str() + c + 7, nullptr, 10);
-      // One index per distinct input offset.
-      uint64_t stride = 1;
-      for (std::size_t i = text.find("<input", at); i != std::string::npos && i < end; i = text.find("<input", i + 1)) {
-        const std::size_t o = text.find("offset=\"", i);
-        const std::size_t e = text.find('>', i);
-        if (o != std::string::npos && o < e) stride = std::max<uint64_t>(stride, std::strtoull(text.c_str() + o + 8, nullptr, 10) + 1);
-      }
-      const auto p = numbers_in(text, "p", at, end);
-      uint64_t vertices = 3 * count;
-      if (tag == "polylist") {
-        const auto v = numbers_in(text, "vcount", at, end);
-        if (!v || v->size() != count) fail(where + ": <polylist count> does not match its <vcount>");
-        vertices = 0;
-        for (uint64_t n : *v) vertices += n;
-      }
-      if (!p || p->size() != vertices * stride)
-        fail(where + ": <" + tag + " count=\"" + std::to_string(count) + "\"> does not match its <p>");
-    }
-  }
-}
-
 bool looks_like_collada(const std::string& bytes, const std::string& hint) {
   if (hint == "dae" || hint == "DAE") return true;
   if (hint == "stl" || hint == "STL") return false;
@@ -198,13 +92,13 @@ void check_stl(const std::string& bytes, const std::string& where) {
 
 TriangleMesh read(const std::string& bytes, const std::string& hint, const std::array<double, 3>& scale,
                   const std::string& where) {
+  Assimp::Importer importer;
   if (hint == "stl" || hint == "STL") check_stl(bytes, where);
   else if (looks_like_collada(bytes, hint)) {
-    check_collada_indices(bytes, where);
-    check_collada_counts(bytes, where);
-    check_collada_primitives(bytes, where);
+    // assimp reads our plain rewrite of its geometry, never the file itself.
+    const std::string plain = plain_collada(bytes, where);
+    return from_scene(importer.ReadFileFromMemory(plain.data(), plain.size(), kFlags, "dae"), importer, scale, where);
   }
-  Assimp::Importer importer;
   return from_scene(importer.ReadFileFromMemory(bytes.data(), bytes.size(), kFlags, hint.c_str()), importer, scale,
                     where);
 }

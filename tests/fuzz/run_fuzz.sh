@@ -41,7 +41,7 @@ case "$target" in
   configs)
     sources=("$root"/panels/{panel_definition,canopen_definition,yaml_reader,yaml_writer,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp
-             "$root"/sim/{robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp "$root"/sim/training/{task_description,yaml_comments}.cpp
+             "$root"/sim/{robot_description,urdf_robot,urdf_tree,mesh_file,collada_geometry,world_description}.cpp "$root"/sim/training/{task_description,yaml_comments}.cpp
              "$root/instructor/scenario.cpp")
     ;;
   # The training graph without its tasks (TaskResult is apart from the
@@ -73,7 +73,7 @@ case "$target" in
   # web_json.cpp draws the view (its message types by lcm-gen here).
   robot_builder)
     sources=("$root"/instructor/{robot_builder,builder_errors,web_json,trainee_directory}.cpp "$root"/msgs/{channels,publisher_session,failsafe}.cpp
-             "$root"/sim/{yaml_edit,robot_description,urdf_robot,urdf_tree,mesh_file,world_description}.cpp
+             "$root"/sim/{yaml_edit,robot_description,urdf_robot,urdf_tree,mesh_file,collada_geometry,world_description}.cpp
              "$root"/panels/{yaml_reader,yaml_writer}.cpp)
     ;;
   # The Console Builder's request body: JSON → controls → the panel's text →
@@ -83,8 +83,8 @@ case "$target" in
              "$root"/panels/{panel_writer,panel_definition,canopen_definition,yaml_reader,modbus_point}.cpp
              "$root"/firmware_protocol/{console_can,dbc,sdl_mapping,canopen,canopen_eds}.cpp)
     ;;
-  urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file}.cpp) ;;
-  mesh) sources=("$root/sim/mesh_file.cpp") ;;
+  urdf) sources=("$root"/sim/{urdf_robot,urdf_tree,mesh_file,collada_geometry}.cpp) ;;
+  mesh) sources=("$root"/sim/{mesh_file,collada_geometry}.cpp) ;;
   # The messages of the multicast group as the instructor takes them (every type by lcm-gen here).
   lcm_messages)
     sources=("$root"/msgs/{channels,publisher_session,failsafe}.cpp "$root"/instructor/{web_json,trainee_directory}.cpp
@@ -142,8 +142,8 @@ if [ $rebuild -eq 1 ]; then
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-lyaml-cpp -ljsoncpp)
       ;;
-    urdf) flags=(-isystem /usr/include/eigen3) libs=(-lurdfdom_model -lconsole_bridge -lassimp) ;;
-    mesh) libs=(-lassimp) ;;
+    urdf) flags=(-isystem /usr/include/eigen3 -isystem /usr/include/libxml2) libs=(-lurdfdom_model -lconsole_bridge -lassimp -lxml2) ;;
+    mesh) flags=(-isystem /usr/include/libxml2) libs=(-lassimp -lxml2) ;;
     training_graph) flags=(-isystem /usr/include/eigen3) libs=(-lyaml-cpp) ;;
     training_builder | task_builder)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
@@ -151,16 +151,16 @@ if [ $rebuild -eq 1 ]; then
       ;;
     robot_builder)
       bash "$root/msgs/lcm_gen.sh" lcm-gen "$work/lcmgen-all" "$root"/msgs/lcmtypes/*.lcm
-      flags=(-I"$work/lcmgen-all" -isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
-      libs=(-ljsoncpp -llcm -lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
+      flags=(-I"$work/lcmgen-all" -isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -isystem /usr/include/libxml2 -DRISE_SOURCE_DIR="\"$root\"")
+      libs=(-ljsoncpp -llcm -lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp -lxml2)
       ;;
     console_builder)
       flags=(-isystem /usr/include/eigen3 -isystem /usr/include/jsoncpp -DRISE_SOURCE_DIR="\"$root\"")
       libs=(-lyaml-cpp -ljsoncpp)
       ;;
     configs)
-      flags=(-isystem /usr/include/eigen3)
-      libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp)
+      flags=(-isystem /usr/include/eigen3 -isystem /usr/include/libxml2)
+      libs=(-lyaml-cpp -lurdfdom_model -lconsole_bridge -lassimp -lxml2)
       ;;
   esac
   "$clangxx" -std=c++20 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
