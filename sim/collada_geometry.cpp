@@ -57,6 +57,11 @@ std::vector<std::string> words(const std::string& text) {
   return out;
 }
 
+// A word or attribute of the file in an error: quoted, at most 40 bytes.
+std::string quoted(const std::string& s) { return "\"" + s.substr(0, 40) + (s.size() > 40 ? "...\"" : "\""); }
+
+std::string tag_of(const xmlNode* n) { return "<" + std::string(reinterpret_cast<const char*>(n->name)) + ">"; }
+
 std::string number_text(double v) {
   char buf[32];
   const auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
@@ -73,7 +78,7 @@ class Rewriter {
   explicit Rewriter(std::string where) : where_(std::move(where)) {}
 
   std::string document(const xmlNode* root) {
-    if (!named(root, "COLLADA")) fail(root, "the root element is <" + std::string(reinterpret_cast<const char*>(root->name)) + ">, not <COLLADA>");
+    if (!named(root, "COLLADA")) fail(root, "the root element is " + tag_of(root) + ", not <COLLADA>");
     out_ = "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n"
            "<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" version=\"1.4.1\">";
     if (const xmlNode* asset = first(root, "asset")) write_asset(asset);
@@ -96,13 +101,14 @@ class Rewriter {
     const char* end = word.data() + word.size();
     const auto [stop, ec] = std::from_chars(word.data(), end, v);
     if (word.empty() || word.size() > 9 || ec != std::errc() || stop != end)
-      fail(n, what + " \"" + word + "\" is not a count (up to 9 digits)");
+      fail(n, what + " " + quoted(word) + " is not a count (up to 9 digits)");
     return v;
   }
 
   uint64_t count_attribute(const xmlNode* n, const char* name, uint64_t otherwise) const {
     if (!has(n, name)) return otherwise;
-    return count_of(n, attribute(n, name), "<" + std::string(reinterpret_cast<const char*>(n->name)) + " " + name + ">");
+    const std::string tag = tag_of(n);
+    return count_of(n, attribute(n, name), tag.substr(0, tag.size() - 1) + " " + name + ">");
   }
 
   double number_of(const xmlNode* n, std::string word) const {
@@ -111,7 +117,7 @@ class Rewriter {
     const char* end = word.data() + word.size();
     const auto [stop, ec] = std::from_chars(word.data(), end, v);
     if (word.empty() || ec != std::errc() || stop != end || !std::isfinite(v))
-      fail(n, "<" + std::string(reinterpret_cast<const char*>(n->name)) + "> holds \"" + word.substr(0, 40) + "\", not a finite number");
+      fail(n, tag_of(n) + " holds " + quoted(word) + ", not a finite number");
     return v;
   }
 
@@ -124,7 +130,7 @@ class Rewriter {
   // "#id" → id.
   std::string reference(const xmlNode* n, const char* name) const {
     const std::string ref = attribute(n, name);
-    if (ref.size() < 2 || ref[0] != '#') fail(n, std::string(name) + "=\"" + ref + "\" is not a reference (#id)");
+    if (ref.size() < 2 || ref[0] != '#') fail(n, std::string(name) + "=" + quoted(ref) + " is not a reference (#id)");
     return ref.substr(1);
   }
 
