@@ -224,7 +224,7 @@ put() {
   mkdir -p "$ROOT$(dirname -- "$src")"
   if [ -d "$src" ]; then cp -rL -- "$src" "$ROOT$src"; return 0; fi
   cp -L -- "$src" "$ROOT$src"
-  # The guest keeps its files in its 256 MB of RAM: debug info (most of a
+  # The guest keeps its files in its 512 MB of RAM: debug info (most of a
   # RelWithDebInfo test program) would fill it. Not an ELF file: left as it is.
   strip --strip-debug -- "$ROOT$src" 2>/dev/null || true
   out=$(ldd -- "$src" 2>/dev/null) || return 0  # static binary or script
@@ -257,7 +257,7 @@ APPEND="console=ttyS0 panic=-1 oops=panic quiet loglevel=3 mitigations=off"
 APPEND="$APPEND cryptomgr.notests tsc=reliable no_timer_check nowatchdog audit=0 init_on_alloc=0"
 # "pc", not "microvm": microvm hung on ~30% of boots under TCG.
 timeout --kill-after=5 "$TIMEOUT_S" qemu-system-x86_64 \
-  -nodefaults -no-user-config -machine pc "${ACCEL[@]}" -smp 1 -m 256 \
+  -nodefaults -no-user-config -machine pc "${ACCEL[@]}" -smp 1 -m 512 \
   -display none -monitor none -no-reboot \
   -kernel "$BOOT_KERNEL" -initrd "$WORK/initramfs.cpio" -append "$APPEND" \
   -serial "file:$WORK/console" -serial "file:$WORK/result" -serial "file:$WORK/output" \
