@@ -1,9 +1,11 @@
 // `rise-semantic segment` on the real 2D maps of shared/data and on the 3D
 // map of a real room: the world it writes loads in the simulator, and the
-// tracked robot, put 1 m in front of each doorway it fits (facing it, in
-// free space, on a side it can get to from the world's start), drives
-// straight through to the other side; in every world it also stands where
-// the world says it starts, with room around it and touching nothing.
+// tracked robot drives through each doorway it fits to the other side: on
+// the 2D maps from the world's start along a route planned for its
+// footprint (footprint_route.hpp), touching nothing on the way, or, where
+// the planner finds none, put 1 m in front of it (with a warning); in
+// every world it also stands where the world says it starts, with room
+// around it and touching nothing.
 
 #include <catch2/catch.hpp>
 
@@ -28,6 +30,7 @@
 #include "sim/simulation.hpp"
 #include "sim/world_description.hpp"
 #include "tests/semantic/building_cloud.hpp"
+#include "tests/semantic/footprint_route.hpp"
 #include "tests/semantic/sim_drive.hpp"
 #include "tests/test_data.hpp"
 
@@ -56,8 +59,12 @@ const Map kMaps[] = {
     {"aces", "pointclouds/acschaefer_ple/aces-corrected.log.gz", ""},
 };
 
-// The tracked robot's footprint over its tracks, with 5 cm to spare all round.
-constexpr double kRobotLengthM = 0.9 + 2 * 0.09 + 0.1, kRobotWidthM = 0.52 + 0.18 + 0.1;
+// The tracked robot over its tracks: 0.52 m gauge and 0.18 m tracks; from
+// the base 0.45 m to each roller's centre (radius 9 cm), and the front run's
+// 0.25 m rising at 40° beyond: 0.73 m ahead, 0.54 m behind.
+constexpr double kBodyWidthM = 0.52 + 0.18, kBodyFrontM = 0.45 + 0.25 * 0.766 + 0.09, kBodyRearM = 0.45 + 0.09;
+// Its footprint as the checks of room take it (centred), with 5 cm to spare all round.
+constexpr double kRobotLengthM = 0.9 + 2 * 0.09 + 0.1, kRobotWidthM = kBodyWidthM + 0.1;
 
 bool free_at(const OccupancyGrid& g, const Eigen::Vector2d& p) {
   const Eigen::Vector2i c = g.cell_of(p);
@@ -159,19 +166,18 @@ struct Drive {
   bool tipped = false;
 };
 
-Drive drive_through(const rise::sim::WorldDescription& world, const Doorway& d, const Eigen::Vector2d& toward) {
-  const Eigen::Vector2d start = d.center - toward;
-  auto w = world;
-  w.robot_start_m = {start.x(), start.y()};
-  w.robot_start_yaw_rad = std::atan2(toward.y(), toward.x());
-  rise::sim::Simulation sim(rise::sim::load_robot_description(kTracked), w);
+// The robot in `sim`, before doorway `d` and facing along `toward`, driven
+// straight on until its base is 1.5 m beyond the wall line, or until 10 s
+// have passed (stuck).
+Drive cross(rise::sim::Simulation& sim, const Doorway& d, const Eigen::Vector2d& toward) {
   sim.set_input(drive(1.0f, 1));
   std::vector<rise::sim::SimEvent> log;
   Drive r;
-  Eigen::Vector2d p = start;
-  for (double t = 0; t < 10.0 && (p - start).norm() < 2.5; t += 0.1) {
+  Eigen::Vector2d p = base_of(sim);
+  const double t0 = sim.time_s();
+  for (double t = 0; t < 10.0 && toward.dot(p - d.center) < 1.5; t += 0.1) {
     run(sim, 0.1, log);
-    p = {sim.snapshot().position_m[0], sim.snapshot().position_m[1]};
+    p = base_of(sim);
     if (r.off_m < 0 && toward.dot(p - d.center) >= 0) {
       r.off_m = std::abs(d.along.dot(p - d.center));
       for (const auto& e : log)
@@ -179,80 +185,78 @@ Drive drive_through(const rise::sim::WorldDescription& world, const Doorway& d, 
     }
   }
   r.past_m = toward.dot(p - d.center);
-  r.time_s = sim.time_s();
+  r.time_s = sim.time_s() - t0;
   for (const auto& e : log)
     if (e.kind == rise::sim::SimEventKind::CollisionStarted) r.hit += " " + e.a + "/" + e.b;
   r.tipped = any(log, rise::sim::SimEventKind::TippedOver);
   return r;
 }
 
-// Where the robot can go from one place on a map, as a disc `radius_m`
-// wide: through free cells of the map whose distance to every other cell
-// and to the world's solid boxes is at least that (Dijkstra on the
-// 8-neighbour grid): the length of the shortest way to each cell.
-class Reach {
- public:
-  Reach(const OccupancyGrid& g, const rise::sim::WorldDescription& w, const Eigen::Vector2d& from, double radius_m)
-      : g_(g), length_(static_cast<std::size_t>(g.width) * g.height, std::numeric_limits<double>::infinity()) {
-    cv::Mat open(g.height, g.width, CV_8U, cv::Scalar(0));
-    for (int r = 0; r < g.height; ++r)
-      for (int c = 0; c < g.width; ++c) open.at<uint8_t>(r, c) = g.at(c, r) == CellState::Free ? 255 : 0;
-    for (const auto& b : solids(w)) {  // each box's cells closed
-      const double reach = std::hypot(b.size_m[0], b.size_m[1]) / 2;
-      const Eigen::Vector2i lo = g.cell_of({b.center_m[0] - reach, b.center_m[1] - reach});
-      const Eigen::Vector2i hi = g.cell_of({b.center_m[0] + reach, b.center_m[1] + reach});
-      for (int r = std::max(0, lo.y()); r <= std::min(g.height - 1, hi.y()); ++r)
-        for (int c = std::max(0, lo.x()); c <= std::min(g.width - 1, hi.x()); ++c)
-          if (inside(b, g.center(c, r))) open.at<uint8_t>(r, c) = 0;
-    }
-    cv::Mat cells_to_closed;
-    cv::distanceTransform(open, cells_to_closed, cv::DIST_L2, cv::DIST_MASK_5);
-    const auto passable = [&](int c, int r) {
-      return g.contains(c, r) && cells_to_closed.at<float>(r, c) * g.resolution_m >= radius_m;
-    };
-    const Eigen::Vector2i s = g.cell_of(from);
-    if (!passable(s.x(), s.y())) return;
-    using Item = std::pair<double, std::size_t>;
-    std::priority_queue<Item, std::vector<Item>, std::greater<>> queue;
-    length_[index(s.x(), s.y())] = 0;
-    queue.emplace(0.0, index(s.x(), s.y()));
-    while (!queue.empty()) {
-      const auto [length, i] = queue.top();
-      queue.pop();
-      if (length > length_[i]) continue;
-      const int c = static_cast<int>(i % static_cast<std::size_t>(g.width));
-      const int r = static_cast<int>(i / static_cast<std::size_t>(g.width));
-      for (int dr = -1; dr <= 1; ++dr)
-        for (int dc = -1; dc <= 1; ++dc) {
-          if ((dc == 0 && dr == 0) || !passable(c + dc, r + dr)) continue;
-          const double next = length + std::hypot(dc, dr) * g.resolution_m;
-          const std::size_t n = index(c + dc, r + dr);
-          if (next < length_[n]) length_[n] = next, queue.emplace(next, n);
-        }
-    }
-  }
+// The robot put 1 m before doorway `d`, facing along `toward`, then cross().
+Drive drive_through(const rise::sim::WorldDescription& world, const Doorway& d, const Eigen::Vector2d& toward) {
+  const Eigen::Vector2d start = d.center - toward;
+  auto w = world;
+  w.robot_start_m = {start.x(), start.y()};
+  w.robot_start_yaw_rad = std::atan2(toward.y(), toward.x());
+  rise::sim::Simulation sim(rise::sim::load_robot_description(kTracked), w);
+  return cross(sim, d, toward);
+}
 
-  /// The length of the way to `to`; infinity where there is none.
-  double length_to(const Eigen::Vector2d& to) const {
-    const Eigen::Vector2i t = g_.cell_of(to);
-    return g_.contains(t.x(), t.y()) ? length_[index(t.x(), t.y())] : std::numeric_limits<double>::infinity();
-  }
-
- private:
-  std::size_t index(int c, int r) const {
-    return static_cast<std::size_t>(r) * static_cast<std::size_t>(g_.width) + static_cast<std::size_t>(c);
-  }
-
-  const OccupancyGrid& g_;
-  std::vector<double> length_;
+// The robot driven from the world's start along `legs` to before doorway
+// `d` (on the line through its middle, facing along `toward`), then through it.
+struct Trip {
+  bool arrived = false;
+  double route_m = 0, route_s = 0;
+  Eigen::Vector2d ended;
+  std::string hit;  ///< what it touched on the way
+  bool tipped = false;
+  Drive through;
 };
+
+Trip drive_from_start(const rise::sim::RobotDescription& robot, const rise::sim::WorldDescription& world,
+                      const std::vector<Leg>& legs, const Doorway& d, const Eigen::Vector2d& toward) {
+  Trip t;
+  Eigen::Vector2d was(world.robot_start_m[0], world.robot_start_m[1]);
+  for (const Leg& leg : legs) t.route_m += (leg.end - was).norm(), was = leg.end;
+  rise::sim::Simulation sim(robot, world);
+  std::vector<rise::sim::SimEvent> log;
+  const auto before_it = [&] {
+    const Eigen::Vector2d q = base_of(sim) - d.center;
+    return -toward.dot(q) > 0.8 && -toward.dot(q) < 1.7 && std::abs(d.along.dot(q)) < 0.15;
+  };
+  t.arrived = drive_legs(sim, legs, log) && before_it() && face(sim, std::atan2(toward.y(), toward.x()), log);
+  t.route_s = sim.time_s();
+  t.ended = base_of(sim);
+  for (const auto& e : log)
+    if (e.kind == rise::sim::SimEventKind::CollisionStarted) t.hit += " " + e.a + "/" + e.b;
+  t.tipped = any(log, rise::sim::SimEventKind::TippedOver);
+  if (t.arrived) t.through = cross(sim, d, toward);
+  return t;
+}
+
+// Where the robot may be on a map: 255 on the free cells that none of the
+// world's solid boxes covers.
+cv::Mat open_cells(const OccupancyGrid& g, const rise::sim::WorldDescription& w) {
+  cv::Mat open(g.height, g.width, CV_8U, cv::Scalar(0));
+  for (int r = 0; r < g.height; ++r)
+    for (int c = 0; c < g.width; ++c) open.at<uint8_t>(r, c) = g.at(c, r) == CellState::Free ? 255 : 0;
+  for (const auto& b : solids(w)) {  // each box's cells closed
+    const double reach = std::hypot(b.size_m[0], b.size_m[1]) / 2;
+    const Eigen::Vector2i lo = g.cell_of({b.center_m[0] - reach, b.center_m[1] - reach});
+    const Eigen::Vector2i hi = g.cell_of({b.center_m[0] + reach, b.center_m[1] + reach});
+    for (int r = std::max(0, lo.y()); r <= std::min(g.height - 1, hi.y()); ++r)
+      for (int c = std::max(0, lo.x()); c <= std::min(g.width - 1, hi.x()); ++c)
+        if (inside(b, g.center(c, r))) open.at<uint8_t>(r, c) = 0;
+  }
+  return open;
+}
 
 }  // namespace
 
 TEST_CASE("the tracked robot drives through every doorway it fits in the worlds rise-semantic segment makes of real maps",
           "[semantic]") {
   const fs::path dir = fs::temp_directory_path() / ("rise_floor_plan_world_test_" + std::to_string(getpid()));
-  int driven = 0, cramped = 0;
+  int from_start = 0, placed = 0, cramped = 0;
   for (const Map& m : kMaps) {
     const std::string map = rise::test::data_file(m.source);
     if (map.empty()) {
@@ -282,31 +286,58 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
       CHECK_FALSE(st.tipped);
       CHECK(st.moved_m < 0.05);
     }
-    const Reach reach(grid, world, {world.robot_start_m[0], world.robot_start_m[1]}, kRobotWidthM / 2);
+    // Each doorway it fits, driven to from the world's start along a route
+    // for its footprint (1 m before the doorway, facing it), then straight through.
+    const Eigen::Vector2d start(world.robot_start_m[0], world.robot_start_m[1]);
+    const FootprintRoutes routes(grid, open_cells(grid, world), kBodyFrontM + 0.03, kBodyRearM + 0.03, kBodyWidthM + 0.06);
+    const auto robot = rise::sim::load_robot_description(kTracked);
     for (const Doorway& d : doorways(world)) {
       if (d.width_m < kFitsM) continue;
       // From 1 m out on one side to 1.5 m beyond on the other, each with room for the robot.
       const auto clear = [&](const Eigen::Vector2d& toward) {
         return room_at(grid, world, d.center - toward, toward) && room_at(grid, world, d.center + 1.5 * toward, toward);
       };
-      const auto from_start = [&](const Eigen::Vector2d& toward) {
-        return std::isfinite(reach.length_to(d.center - toward));
+      const auto way_to = [&](const Eigen::Vector2d& toward) {
+        return clear(toward) ? routes.route(start, world.robot_start_yaw_rad, d.center, toward) : std::vector<Leg>{};
       };
-      // From a side with room, the one the robot can get to from the world's start where only one is.
+      // From a side with room, the one there is a way to from the start where only one has.
       Eigen::Vector2d toward = d.normal;
-      if (!clear(toward) || (!from_start(toward) && clear(-toward) && from_start(-toward))) toward = -toward;
+      std::vector<Leg> legs = way_to(toward);
+      if (legs.empty()) {
+        std::vector<Leg> other = way_to(-toward);
+        if (!other.empty() || !clear(toward)) toward = -toward, legs = std::move(other);
+      }
       if (!clear(toward)) {
         WARN(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y()
                     << ") has no room for the robot 1 m before and 1.5 m beyond it");
         ++cramped;
         continue;
       }
-      const double way = reach.length_to(d.center - toward);
-      INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << "): the start ("
-                  << world.robot_start_m[0] << ", " << world.robot_start_m[1] << ") leads to neither side of it");
-      CHECK(std::isfinite(way));
-      std::printf("%s: doorway at (%.2f, %.2f): %.1f m from the start\n", m.name, d.center.x(), d.center.y(), way);
-      const Drive r = drive_through(world, d, toward);
+      Drive r;
+      std::string how;
+      if (legs.empty()) {
+        WARN(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << ") width " << d.width_m
+                    << ": no route for the robot's footprint from the start (" << start.transpose()
+                    << "); put 1 m before it instead");
+        r = drive_through(world, d, toward);
+        how = "put 1 m before it (no route from the start)";
+        ++placed;
+      } else {
+        const Trip trip = drive_from_start(robot, world, legs, d, toward);
+        INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << "): the route of " << legs.size()
+                    << " runs, " << trip.route_m << " m, ended at (" << trip.ended.transpose() << ") after "
+                    << trip.route_s << " s; collisions:" << trip.hit);
+        CHECK(trip.arrived);
+        CHECK(trip.hit.empty());
+        CHECK_FALSE(trip.tipped);
+        if (!trip.arrived) continue;
+        r = trip.through;
+        char line[160];
+        std::snprintf(line, sizeof line, "%.1f m from the start in %zu runs, %.0f s, touching nothing", trip.route_m,
+                      legs.size(), trip.route_s);
+        how = line;
+        ++from_start;
+      }
       INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << ") width " << d.width_m
                   << ": base " << r.past_m << " m past its wall line, crossed it " << r.off_m
                   << " m off its middle, after " << r.time_s << " s; collisions:" << r.hit);
@@ -314,11 +345,16 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
       CHECK(r.off_m >= 0);
       CHECK(r.off_m < d.width_m / 2);
       CHECK_FALSE(r.tipped);
-      ++driven;
+      std::printf("%s: doorway at (%.2f, %.2f) %.2f m wide: %s; crossed %.3f m off its middle, %.2f m past it; "
+                  "collisions there:%s\n",
+                  m.name, d.center.x(), d.center.y(), d.width_m, how.c_str(), r.off_m, r.past_m,
+                  r.hit.empty() ? " none" : r.hit.c_str());
     }
   }
   fs::remove_all(dir);
-  std::printf("drove through %d doorways; %d without room for the robot either side\n", driven, cramped);
+  std::printf("drove through %d doorways: %d from the world's start, %d put before them (no route for the footprint); "
+              "%d without room for the robot either side\n",
+              from_start + placed, from_start, placed, cramped);
 }
 
 TEST_CASE("the tracked robot starts clear and drives through the doorway in the world rise-semantic segment makes of "
