@@ -289,7 +289,9 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
     // Each doorway it fits, driven to from the world's start along a route
     // for its footprint (1 m before the doorway, facing it), then straight through.
     const Eigen::Vector2d start(world.robot_start_m[0], world.robot_start_m[1]);
-    const FootprintRoutes routes(grid, open_cells(grid, world), kBodyFrontM + 0.03, kBodyRearM + 0.03, kBodyWidthM + 0.06);
+    // The footprint with 3 cm to spare ahead (the arm's gripper hangs 0.70 m
+    // ahead and swings a little), 1 cm behind and 1.5 cm each side.
+    const FootprintRoutes routes(grid, open_cells(grid, world), kBodyFrontM + 0.03, kBodyRearM + 0.01, kBodyWidthM + 0.03);
     const auto robot = rise::sim::load_robot_description(kTracked);
     for (const Doorway& d : doorways(world)) {
       if (d.width_m < kFitsM) continue;
@@ -333,9 +335,9 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
         if (!trip.arrived) continue;
         r = trip.through;
         char line[160];
-        std::snprintf(line, sizeof line, "%.1f m from the start in %zu runs, %.0f s, touching nothing", trip.route_m,
-                      legs.size(), trip.route_s);
-        how = line;
+        std::snprintf(line, sizeof line, "%.1f m from the start in %zu runs, %.0f s", trip.route_m, legs.size(),
+                      trip.route_s);
+        how = line + (trip.hit.empty() ? std::string(", touching nothing") : ", touching" + trip.hit);
         ++from_start;
       }
       INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << ") width " << d.width_m

@@ -205,7 +205,7 @@ inline bool face(rise::sim::Simulation& sim, double yaw_rad, std::vector<rise::s
       return true;
     }
     const double e = error();
-    sim.set_input(steered(0.0f, std::copysign(std::max(std::abs(e), 0.15), e), 2));
+    sim.set_input(steered(0.0f, std::copysign(std::max(std::abs(e), 0.15), e), 1));
     run(sim, 0.02, log);
   }
   return false;
