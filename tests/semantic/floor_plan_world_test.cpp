@@ -299,17 +299,20 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
       const auto clear = [&](const Eigen::Vector2d& toward) {
         return room_at(grid, world, d.center - toward, toward) && room_at(grid, world, d.center + 1.5 * toward, toward);
       };
-      const auto way_to = [&](const Eigen::Vector2d& toward) {
-        return clear(toward) ? routes.route(start, world.robot_start_yaw_rad, d.center, toward) : std::vector<Leg>{};
+      const Eigen::Vector2d sides[2] = {d.normal, -d.normal};
+      const bool room[2] = {clear(sides[0]), clear(sides[1])};  // each side checked once
+      const auto way_to = [&](int side) {
+        return room[side] ? routes.route(start, world.robot_start_yaw_rad, d.center, sides[side]) : std::vector<Leg>{};
       };
       // From a side with room, the one there is a way to from the start where only one has.
-      Eigen::Vector2d toward = d.normal;
-      std::vector<Leg> legs = way_to(toward);
+      int side = 0;
+      std::vector<Leg> legs = way_to(0);
       if (legs.empty()) {
-        std::vector<Leg> other = way_to(-toward);
-        if (!other.empty() || !clear(toward)) toward = -toward, legs = std::move(other);
+        std::vector<Leg> other = way_to(1);
+        if (!other.empty() || !room[0]) side = 1, legs = std::move(other);
       }
-      if (!clear(toward)) {
+      const Eigen::Vector2d toward = sides[side];
+      if (!room[side]) {
         WARN(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y()
                     << ") has no room for the robot 1 m before and 1.5 m beyond it");
         ++cramped;
