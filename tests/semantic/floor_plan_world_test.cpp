@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <queue>
 #include <string>
 #include <vector>
@@ -87,10 +88,12 @@ std::vector<rise::sim::BoxObstacle> solids(const rise::sim::WorldDescription& w)
   return out;
 }
 
-bool inside(const rise::sim::BoxObstacle& b, const Eigen::Vector2d& q) {
+// `q` inside box `b` grown by `grow_m` on each side.
+bool inside(const rise::sim::BoxObstacle& b, const Eigen::Vector2d& q, double grow_m = 0) {
   const double c = std::cos(b.yaw_rad), s = std::sin(b.yaw_rad);
   const Eigen::Vector2d d = q - Eigen::Vector2d(b.center_m[0], b.center_m[1]);
-  return std::abs(c * d.x() + s * d.y()) < b.size_m[0] / 2 && std::abs(-s * d.x() + c * d.y()) < b.size_m[1] / 2;
+  return std::abs(c * d.x() + s * d.y()) < b.size_m[0] / 2 + grow_m &&
+         std::abs(-s * d.x() + c * d.y()) < b.size_m[1] / 2 + grow_m;
 }
 
 
@@ -235,18 +238,20 @@ Trip drive_from_start(const rise::sim::RobotDescription& robot, const rise::sim:
 }
 
 // Where the robot may be on a map: 255 on the free cells that none of the
-// world's solid boxes covers.
+// world's solid boxes reaches into (the box grown by half a cell's diagonal
+// holds the cell's centre).
 cv::Mat open_cells(const OccupancyGrid& g, const rise::sim::WorldDescription& w) {
+  const double half_cell = g.resolution_m * M_SQRT1_2;
   cv::Mat open(g.height, g.width, CV_8U, cv::Scalar(0));
   for (int r = 0; r < g.height; ++r)
     for (int c = 0; c < g.width; ++c) open.at<uint8_t>(r, c) = g.at(c, r) == CellState::Free ? 255 : 0;
   for (const auto& b : solids(w)) {  // each box's cells closed
-    const double reach = std::hypot(b.size_m[0], b.size_m[1]) / 2;
+    const double reach = std::hypot(b.size_m[0], b.size_m[1]) / 2 + half_cell;
     const Eigen::Vector2i lo = g.cell_of({b.center_m[0] - reach, b.center_m[1] - reach});
     const Eigen::Vector2i hi = g.cell_of({b.center_m[0] + reach, b.center_m[1] + reach});
     for (int r = std::max(0, lo.y()); r <= std::min(g.height - 1, hi.y()); ++r)
       for (int c = std::max(0, lo.x()); c <= std::min(g.width - 1, hi.x()); ++c)
-        if (inside(b, g.center(c, r))) open.at<uint8_t>(r, c) = 0;
+        if (inside(b, g.center(c, r), half_cell)) open.at<uint8_t>(r, c) = 0;
   }
   return open;
 }
@@ -291,7 +296,9 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
     const Eigen::Vector2d start(world.robot_start_m[0], world.robot_start_m[1]);
     // The footprint with 3 cm to spare ahead (the arm's gripper hangs 0.70 m
     // ahead and swings a little), 1 cm behind and 1.5 cm each side.
-    const FootprintRoutes routes(grid, open_cells(grid, world), kBodyFrontM + 0.03, kBodyRearM + 0.01, kBodyWidthM + 0.03);
+    const cv::Mat open = open_cells(grid, world);
+    const FootprintRoutes routes(grid, open, kBodyFrontM + 0.03, kBodyRearM + 0.01, kBodyWidthM + 0.03);
+    std::optional<FootprintRoutes> bare;  // the footprint with nothing to spare, where that has no route
     const auto robot = rise::sim::load_robot_description(kTracked);
     for (const Doorway& d : doorways(world)) {
       if (d.width_m < kFitsM) continue;
@@ -321,9 +328,18 @@ TEST_CASE("the tracked robot drives through every doorway it fits in the worlds 
       Drive r;
       std::string how;
       if (legs.empty()) {
+        // Then the bare footprint has none either, to either side with
+        // room: the way there is narrower than the robot (else it fits,
+        // and the spare kept it from being driven).
+        if (!bare) bare.emplace(grid, open, kBodyFrontM, kBodyRearM, kBodyWidthM);
+        for (int s : {0, 1}) {
+          INFO(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << "), side " << s
+                      << ": a route for the bare footprint from the start, none with the spare");
+          CHECK((!room[s] || bare->route(start, world.robot_start_yaw_rad, d.center, sides[s]).empty()));
+        }
         WARN(m.name << ": doorway at (" << d.center.x() << ", " << d.center.y() << ") width " << d.width_m
                     << ": no route for the robot's footprint from the start (" << start.transpose()
-                    << "); put 1 m before it instead");
+                    << "), nor for it with nothing to spare; put 1 m before it instead");
         r = drive_through(world, d, toward);
         how = "put 1 m before it (no route from the start)";
         ++placed;

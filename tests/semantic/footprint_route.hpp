@@ -4,10 +4,10 @@
 // as an operator would, for the tests that check a world rise-semantic wrote
 // can be driven: a route planned for the robot's footprint over the map the
 // world was made from (A* over poses every 10 cm and 32 headings, moves
-// straight ahead and turns on the spot, the footprint clear of every cell
-// that is not free and of the world's boxes at every pose and halfway
-// through every move), then driven with the stick: turn on the spot, drive
-// straight to the run's end, turn, and so on.
+// straight ahead or back and turns on the spot, the footprint clear of
+// every cell that is not free and of the world's boxes at every pose and
+// halfway through every move), then driven with the stick: turn on the
+// spot, drive straight (on or back) to the run's end, turn, and so on.
 
 #include <Eigen/Core>
 #include <opencv2/imgproc.hpp>
@@ -33,10 +33,12 @@ inline const std::array<Eigen::Vector2i, 32> kSteps = {
 constexpr int kHeadings = 32;
 constexpr int kStride = 2;  // lattice points every kStride cells (10 cm)
 
-/// One run of a route: turn on the spot to `yaw_rad`, then straight to `end`.
+/// One run of a route: turn on the spot to `yaw_rad`, then straight to
+/// `end`, ahead or (`backward`) back.
 struct Leg {
   double yaw_rad = 0;
   Eigen::Vector2d end;
+  bool backward = false;
 };
 
 class FootprintRoutes {
@@ -46,7 +48,7 @@ class FootprintRoutes {
   /// ahead of the robot's base and `rear_m` behind it, `width_m` wide.
   FootprintRoutes(const OccupancyGrid& g, const cv::Mat& open, double front_m, double rear_m, double width_m)
       : g_(g), open_(open), front_m_(front_m), rear_m_(rear_m), width_m_(width_m), cols_((g.width + kStride - 1) / kStride), rows_((g.height + kStride - 1) / kStride),
-        valid_(static_cast<std::size_t>(cols_) * rows_ * kHeadings, -1) {
+        valid_(static_cast<std::size_t>(cols_) * rows_ * kHeadings, -1), moves_(valid_.size(), 0) {
     cv::distanceTransform(open, clear_, cv::DIST_L2, cv::DIST_MASK_PRECISE);
   }
 
@@ -72,6 +74,7 @@ class FootprintRoutes {
     if (!inside(s) || !valid(start)) return {};
     std::vector<float> cost(valid_.size(), std::numeric_limits<float>::infinity());
     std::vector<std::int32_t> parent(valid_.size(), -1);
+    std::vector<bool> slant(valid_.size(), false);  // reached by a side step (below)
     using Item = std::pair<double, std::size_t>;
     std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
     cost[start] = 0;
@@ -81,31 +84,81 @@ class FootprintRoutes {
       open.pop();
       const double c = cost[i];
       if (f > c + to_goal(position(i)) + 1e-3) continue;  // stale (costs are floats)
-      if (goal(i)) return legs(i, parent);
-      const int x = static_cast<int>(i / kHeadings % cols_), y = static_cast<int>(i / kHeadings / cols_), k = static_cast<int>(i % kHeadings);
-      const auto relax = [&](std::size_t n, double step) {
+      if (goal(i)) return legs(i, parent, slant);
+      const auto relax = [&](std::size_t n, double step, bool side_step = false) {
         if (c + step >= cost[n]) return;
-        cost[n] = static_cast<float>(c + step), parent[n] = static_cast<std::int32_t>(i);
+        cost[n] = static_cast<float>(c + step), parent[n] = static_cast<std::int32_t>(i), slant[n] = side_step;
         open.emplace(c + step + to_goal(position(n)), n);
       };
-      for (int turn : {-1, 1}) {  // on the spot, clear halfway round too
-        const int kn = (k + turn + kHeadings) % kHeadings;
-        const std::size_t n = index(x, y, kn);
-        if (valid(n) && fits(position(i), (heading(k) + heading(kn)).normalized())) relax(n, 0.15);
+      const std::uint16_t can = moves(i);
+      for (int m = 0; m < kMoves; ++m) {
+        if (!(can & (1u << m))) continue;
+        const std::size_t n = target(i, m);
+        if (m < 2) {  // a turn on the spot
+          relax(n, 0.15);
+          continue;
+        }
+        // Each metre costs more near things: the route keeps to the middle.
+        const Eigen::Vector2d mid = (position(i) + position(n)) / 2;
+        const double near = 0.6 / std::max(clearance(mid), 0.05);
+        const double metres = (position(n) - position(i)).norm() * (1 + near * near * near * near);
+        if (m < 4)
+          relax(n, (m == 2 ? 1 : 2) * metres);  // ahead, or back at twice the cost (an operator backs up where he must)
+        else
+          relax(n, metres + 0.3, true);  // a side step and its two small turns
       }
-      const Eigen::Vector2i to_cell(x + kSteps[k].x(), y + kSteps[k].y());
-      if (!inside(to_cell)) continue;
-      const std::size_t n = index(to_cell.x(), to_cell.y(), k);
-      const Eigen::Vector2d mid = (position(i) + position(n)) / 2;
-      if (!valid(n) || !fits(mid, heading(k))) continue;
-      // Each metre costs more near things: the route keeps to the middle.
-      const double near = 0.6 / std::max(clearance(mid), 0.05);
-      relax(n, (position(n) - position(i)).norm() * (1 + near * near * near * near));
     }
     return {};
   }
 
  private:
+  // The moves from a pose: 0, 1 a turn on the spot to the next heading
+  // right or left, clear halfway round too; 2, 3 a lattice step ahead or
+  // back, clear halfway; 4-9 a side step, as an operator edges over in a
+  // corridor too narrow to turn in: turn a little (atan(1 / kAhead): 7-18°),
+  // drive on kAhead steps and one step aside, turn back, clear at the
+  // slant every 5 cm along the way and halfway through each turn.
+  static constexpr int kMoves = 10;
+  static constexpr std::array<int, 3> kAhead = {3, 5, 8};
+
+  // The pose move `m` from pose `i` ends at, if inside the lattice, else `i`.
+  std::size_t target(std::size_t i, int m) const {
+    const int x = static_cast<int>(i / kHeadings % cols_), y = static_cast<int>(i / kHeadings / cols_), k = static_cast<int>(i % kHeadings);
+    if (m < 2) return index(x, y, (k + (m == 0 ? -1 : 1) + kHeadings) % kHeadings);
+    Eigen::Vector2i to(x, y);
+    if (m < 4)
+      to += (m == 2 ? 1 : -1) * kSteps[k];
+    else
+      to += kAhead[(m - 4) / 2] * kSteps[k] + ((m - 4) % 2 == 0 ? -1 : 1) * kSteps[(k + kHeadings / 4) % kHeadings];
+    return inside(to) ? index(to.x(), to.y(), k) : i;
+  }
+
+  // Which moves from pose `i` (bit m for move m) are clear: worked out once.
+  std::uint16_t moves(std::size_t i) const {
+    if (moves_[i] & kKnown) return moves_[i];
+    std::uint16_t can = kKnown;
+    const Eigen::Vector2d from = position(i), h = heading(static_cast<int>(i % kHeadings));
+    for (int m = 0; m < kMoves; ++m) {
+      if (m == 4 && (can & 3u) == 3u) break;  // side steps only where a turn is blocked
+      const std::size_t n = target(i, m);
+      if (n == i || !valid(n)) continue;
+      const Eigen::Vector2d to = position(n);
+      bool clear;
+      if (m < 2) {
+        clear = fits(from, (h + heading(static_cast<int>(n % kHeadings))).normalized());
+      } else if (m < 4) {
+        clear = fits((from + to) / 2, h);
+      } else {
+        const Eigen::Vector2d u = (to - from).normalized(), half_turn = (u + h).normalized();
+        clear = fits(from, half_turn) && fits(to, half_turn);
+        const int samples = static_cast<int>(std::ceil((to - from).norm() / 0.05));
+        for (int t = 0; t <= samples && clear; ++t) clear = fits(from + (to - from) * t / samples, u);
+      }
+      if (clear) can = static_cast<std::uint16_t>(can | (1u << m));
+    }
+    return moves_[i] = can;
+  }
+
   Eigen::Vector2i lattice_of(const Eigen::Vector2d& p) const {
     const Eigen::Vector2d c = ((p - g_.origin_m) / g_.resolution_m - Eigen::Vector2d(0.5, 0.5)) / kStride;
     return {static_cast<int>(std::lround(c.x())), static_cast<int>(std::lround(c.y()))};
@@ -145,14 +198,19 @@ class FootprintRoutes {
     bool discs = true;
     for (int k = 0; k < 5 && discs; ++k) discs = clearance(p + ((2 * k + 1) * half - rear_m_) * h) >= radius;
     if (discs) return true;
+    // (along each of its lines, a point's clearance is skipped over at once).
     const Eigen::Vector2d side(-h.y(), h.x());
     const int nu = static_cast<int>(std::ceil(length / 0.025)), nv = static_cast<int>(std::ceil(width_m_ / 0.025));
-    for (int a = 0; a <= nu; ++a)
-      for (int b = 0; b <= nv; ++b) {
-        const Eigen::Vector2d q = p + (a * length / nu - rear_m_) * h + (b * width_m_ / nv - width_m_ / 2) * side;
+    for (int b = 0; b <= nv; ++b) {
+      const Eigen::Vector2d line = p - rear_m_ * h + (b * width_m_ / nv - width_m_ / 2) * side;
+      for (int a = 0; a <= nu;) {
+        const Eigen::Vector2d q = line + a * length / nu * h;
         const Eigen::Vector2i c = g_.cell_of(q);
         if (!g_.contains(c.x(), c.y()) || open_.at<uint8_t>(c.y(), c.x()) == 0) return false;
+        // (less a fifth of a cell: the nearest cell centre may lie that much nearer than its corner)
+        a += std::max(1, static_cast<int>((clearance(q) - g_.resolution_m / 5) / (length / nu)));
       }
+    }
     return true;
   }
 
@@ -161,18 +219,30 @@ class FootprintRoutes {
     return valid_[i] == 1;
   }
 
-  std::vector<Leg> legs(std::size_t goal, const std::vector<std::int32_t>& parent) const {
+  std::vector<Leg> legs(std::size_t goal, const std::vector<std::int32_t>& parent, const std::vector<bool>& slant) const {
     std::vector<std::size_t> poses;
     for (auto i = static_cast<std::int32_t>(goal); i >= 0; i = parent[static_cast<std::size_t>(i)])
       poses.push_back(static_cast<std::size_t>(i));
     std::reverse(poses.begin(), poses.end());
     std::vector<Leg> out;
-    for (std::size_t i : poses) {
-      const Eigen::Vector2d h = heading(static_cast<int>(i % kHeadings));
-      if (out.empty() || std::abs(std::remainder(out.back().yaw_rad - std::atan2(h.y(), h.x()), 2 * M_PI)) > 1e-9)
-        out.push_back({std::atan2(h.y(), h.x()), position(i)});
-      else
-        out.back().end = position(i);
+    bool moved = false;  // the last leg has run, not only turned
+    for (std::size_t j = 0; j < poses.size(); ++j) {
+      const Eigen::Vector2d h = heading(static_cast<int>(poses[j] % kHeadings)), p = position(poses[j]);
+      const double yaw = std::atan2(h.y(), h.x());
+      if (j > 0 && slant[poses[j]]) {  // a side step: at its slant from the last pose to this one
+        const Eigen::Vector2d u = p - position(poses[j - 1]);
+        out.push_back({std::atan2(u.y(), u.x()), p});
+        moved = true;
+        continue;
+      }
+      if (out.empty() || std::abs(std::remainder(out.back().yaw_rad - yaw, 2 * M_PI)) > 1e-9) {
+        out.push_back({yaw, p});  // a turn on the spot
+        moved = false;
+        continue;
+      }
+      const bool backward = h.dot(p - out.back().end) < 0;
+      if (moved && backward != out.back().backward) out.push_back({yaw, p, backward});  // the other way
+      out.back().end = p, out.back().backward = backward, moved = true;
     }
     return out;
   }
@@ -182,6 +252,8 @@ class FootprintRoutes {
   double front_m_, rear_m_, width_m_;
   int cols_, rows_;
   mutable std::vector<std::int8_t> valid_;  ///< per pose: -1 not yet known
+  static constexpr std::uint16_t kKnown = 1u << 15;
+  mutable std::vector<std::uint16_t> moves_;  ///< per pose: its clear moves, once kKnown
 };
 
 inline Eigen::Vector2d base_of(const rise::sim::Simulation& sim) {
@@ -211,17 +283,21 @@ inline bool face(rise::sim::Simulation& sim, double yaw_rad, std::vector<rise::s
   return false;
 }
 
-/// Drives the robot straight to `end`, steering at it, until it is past it
-/// (within 2 cm along the way); false when it made no headway for 3 s.
-inline bool drive_to(rise::sim::Simulation& sim, const Eigen::Vector2d& end, std::vector<rise::sim::SimEvent>& log) {
+/// Drives the robot straight to `end`, ahead or (`backward`) back, steering
+/// at it, until it is past it (within 2 cm along the way); false when it
+/// made no headway for 3 s.
+inline bool drive_to(rise::sim::Simulation& sim, const Eigen::Vector2d& end, std::vector<rise::sim::SimEvent>& log,
+                     bool backward = false) {
   const Eigen::Vector2d way = (end - base_of(sim)).normalized();
+  const double sign = backward ? -1.0 : 1.0;
   Eigen::Vector2d was = base_of(sim);
   double still_s = 0;
   while (way.dot(end - base_of(sim)) > 0.02) {
     const Eigen::Vector2d to_end = end - base_of(sim);
-    const Eigen::Vector2d aim = to_end.norm() > 0.3 ? to_end : way;
+    const Eigen::Vector2d aim = sign * (to_end.norm() > 0.3 ? to_end : way);  // where the robot should face
     const double error = std::remainder(std::atan2(aim.y(), aim.x()) - sim.snapshot().yaw_rad(), 2 * M_PI);
-    sim.set_input(steered(static_cast<float>(std::clamp(0.15 + 0.6 * way.dot(to_end), 0.0, 1.0)), error, 2));
+    const double speed = std::clamp(0.15 + 0.6 * way.dot(to_end), 0.0, 1.0);
+    sim.set_input(steered(static_cast<float>(sign * speed), error, 2));
     run(sim, 0.02, log);
     still_s = (base_of(sim) - was).norm() > 0.02 ? 0 : still_s + 0.02;
     if ((base_of(sim) - was).norm() > 0.02) was = base_of(sim);
@@ -232,10 +308,11 @@ inline bool drive_to(rise::sim::Simulation& sim, const Eigen::Vector2d& end, std
   return true;
 }
 
-/// Drives `legs` (turn, then straight on); false where a turn or a run did not end.
+/// Drives `legs` (turn, then straight on or back); false where a turn or a run did not end.
 inline bool drive_legs(rise::sim::Simulation& sim, const std::vector<Leg>& legs, std::vector<rise::sim::SimEvent>& log) {
   for (const Leg& leg : legs)
-    if (!face(sim, leg.yaw_rad, log) || ((leg.end - base_of(sim)).norm() > 0.02 && !drive_to(sim, leg.end, log)))
+    if (!face(sim, leg.yaw_rad, log) ||
+        ((leg.end - base_of(sim)).norm() > 0.02 && !drive_to(sim, leg.end, log, leg.backward)))
       return false;
   return true;
 }
