@@ -3,7 +3,8 @@
 // tracked robot drives through each doorway it fits to the other side: on
 // the 2D maps from the world's start along a route planned for its
 // footprint (footprint_route.hpp), touching nothing on the way, or, where
-// the planner finds none, put 1 m in front of it (with a warning); in
+// the planner finds none (nor any for the bare footprint), put 1 m in
+// front of it (with a warning); in
 // every world it also stands where the world says it starts, with room
 // around it and touching nothing.
 

@@ -4,10 +4,11 @@
 // as an operator would, for the tests that check a world rise-semantic wrote
 // can be driven: a route planned for the robot's footprint over the map the
 // world was made from (A* over poses every 10 cm and 32 headings, moves
-// straight ahead or back and turns on the spot, the footprint clear of
-// every cell that is not free and of the world's boxes at every pose and
-// halfway through every move), then driven with the stick: turn on the
-// spot, drive straight (on or back) to the run's end, turn, and so on.
+// straight ahead or back, turns on the spot and, where a turn is blocked,
+// side steps; the footprint clear of every cell that is not free or that
+// a world box reaches into, at every pose and halfway through every move),
+// then driven with the stick: turn on the spot, drive straight (on or
+// back) to the run's end, turn, and so on.
 
 #include <Eigen/Core>
 #include <opencv2/imgproc.hpp>
