@@ -54,9 +54,10 @@ class FootprintRoutes {
   }
 
   /// The legs from the pose (`from`, `from_yaw_rad`) to one before the
-  /// doorway whose middle is `door`, facing it along unit `toward` (within
-  /// 6°): on the line through its middle, 0.9-1.6 m before it, within 7 cm
-  /// of that line. Empty when there is no way.
+  /// doorway whose middle is `door`, facing it along unit `toward` within
+  /// 10° (the headings lie up to 18.4° apart; the last turn on the spot to
+  /// `toward` must be clear too): on the line through its middle, 0.9-1.6 m
+  /// before it, within 7 cm of that line. Empty when there is no way.
   std::vector<Leg> route(const Eigen::Vector2d& from, double from_yaw_rad, const Eigen::Vector2d& door,
                          const Eigen::Vector2d& toward) const {
     const Eigen::Vector2d far_end = door - 1.6 * toward;
@@ -68,7 +69,8 @@ class FootprintRoutes {
       const Eigen::Vector2d q = position(i) - door;
       const Eigen::Vector2d h = heading(static_cast<int>(i % kHeadings));
       return -toward.dot(q) >= 0.9 && -toward.dot(q) <= 1.6 && std::abs(toward.x() * q.y() - toward.y() * q.x()) <= 0.07 &&
-             h.dot(toward) >= std::cos(0.105);
+             h.dot(toward) >= std::cos(10 * M_PI / 180) && fits(position(i), (h + toward).normalized()) &&
+             fits(position(i), toward);
     };
     const Eigen::Vector2i s = lattice_of(from);
     const std::size_t start = index(s.x(), s.y(), nearest_heading(from_yaw_rad));
