@@ -77,7 +77,6 @@ class FootprintRoutes {
     if (!inside(s) || !valid(start)) return {};
     std::vector<float> cost(valid_.size(), std::numeric_limits<float>::infinity());
     std::vector<std::int32_t> parent(valid_.size(), -1);
-    std::vector<bool> slant(valid_.size(), false);  // reached by a side step (below)
     using Item = std::pair<double, std::size_t>;
     std::priority_queue<Item, std::vector<Item>, std::greater<>> open;
     cost[start] = 0;
@@ -87,10 +86,10 @@ class FootprintRoutes {
       open.pop();
       const double c = cost[i];
       if (f > c + to_goal(position(i)) + 1e-3) continue;  // stale (costs are floats)
-      if (goal(i)) return legs(i, parent, slant);
-      const auto relax = [&](std::size_t n, double step, bool side_step = false) {
+      if (goal(i)) return legs(i, parent);
+      const auto relax = [&](std::size_t n, double step) {
         if (c + step >= cost[n]) return;
-        cost[n] = static_cast<float>(c + step), parent[n] = static_cast<std::int32_t>(i), slant[n] = side_step;
+        cost[n] = static_cast<float>(c + step), parent[n] = static_cast<std::int32_t>(i);
         open.emplace(c + step + to_goal(position(n)), n);
       };
       const std::uint16_t can = moves(i);
@@ -108,7 +107,7 @@ class FootprintRoutes {
         if (m < 4)
           relax(n, (m == 2 ? 1 : 2) * metres);  // ahead, or back at twice the cost (an operator backs up where he must)
         else
-          relax(n, metres + 0.3, true);  // a side step and its two small turns
+          relax(n, metres + 0.3);  // a side step and its two small turns
       }
     }
     return {};
@@ -222,7 +221,7 @@ class FootprintRoutes {
     return valid_[i] == 1;
   }
 
-  std::vector<Leg> legs(std::size_t goal, const std::vector<std::int32_t>& parent, const std::vector<bool>& slant) const {
+  std::vector<Leg> legs(std::size_t goal, const std::vector<std::int32_t>& parent) const {
     std::vector<std::size_t> poses;
     for (auto i = static_cast<std::int32_t>(goal); i >= 0; i = parent[static_cast<std::size_t>(i)])
       poses.push_back(static_cast<std::size_t>(i));
@@ -232,8 +231,8 @@ class FootprintRoutes {
     for (std::size_t j = 0; j < poses.size(); ++j) {
       const Eigen::Vector2d h = heading(static_cast<int>(poses[j] % kHeadings)), p = position(poses[j]);
       const double yaw = std::atan2(h.y(), h.x());
-      if (j > 0 && slant[poses[j]]) {  // a side step: at its slant from the last pose to this one
-        const Eigen::Vector2d u = p - position(poses[j - 1]);
+      const Eigen::Vector2d u = j > 0 ? Eigen::Vector2d(p - position(poses[j - 1])) : Eigen::Vector2d::Zero();
+      if (std::abs(h.x() * u.y() - h.y() * u.x()) > 1e-6) {  // a side step (off the heading): one run at its slant
         out.push_back({std::atan2(u.y(), u.x()), p});
         moved = true;
         continue;
