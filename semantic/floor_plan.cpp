@@ -67,13 +67,24 @@ std::vector<std::pair<double, double>> wall_directions(const cv::Mat& occupied, 
   std::vector<double> smooth(kBins, 0.0);
   for (int i = 0; i < kBins; ++i)
     for (int k = -2; k <= 2; ++k) smooth[wrap(i)] += hist[wrap(i + k)];
-  // Peaks: the largest bin within twice the angle tolerance either side.
-  const int window = std::max(3, static_cast<int>(std::lround(2 * s.angle_tolerance_rad / kPi * kBins)));
+  // Peaks: the largest bin within the angle tolerance either side, and
+  // within twice it but for a higher bin beyond a valley below half its
+  // height (a hall's two walls 10 degrees apart are two directions; a
+  // direction's bumpy flank is not one).
+  const int near = std::max(2, static_cast<int>(std::lround(s.angle_tolerance_rad / kPi * kBins)));
   std::vector<std::pair<double, int>> peaks;
   for (int i = 0; i < kBins; ++i) {
-    bool top = smooth[wrap(i)] > 0.0;
-    for (int k = 1; k <= window && top; ++k)
-      top = smooth[wrap(i)] > smooth[wrap(i - k)] && smooth[wrap(i)] >= smooth[wrap(i + k)];
+    const double h = smooth[wrap(i)];
+    bool top = h > 0.0;
+    for (const int dir : {-1, 1}) {
+      double valley = h;
+      for (int k = 1; k <= 2 * near && top; ++k) {
+        const double v = smooth[wrap(i + dir * k)];
+        const bool higher = dir < 0 ? v >= h : v > h;
+        if (higher) top = k > near && valley <= h / 2;
+        valley = std::min(valley, v);
+      }
+    }
     if (top) peaks.emplace_back(smooth[wrap(i)], i);
   }
   std::sort(peaks.rbegin(), peaks.rend());
@@ -697,14 +708,26 @@ bool blocked(const std::vector<Piece>& walls, const Piece& p, const std::pair<do
 
 // Whether occupied cells reach door_jamb_m from wall p's line at along
 // `x` .. x + 2 cells outward, on door_jamb_solid of the steps at least:
-// along the line (the wall goes on, in pieces too short to be walls), or
-// across it to one side only (a stub: a wall's end too short to be a wall,
-// or a door frame's return; a wall across the line to both sides is a
-// passage round a corner, not a jamb).
+// along the line (the wall goes on, in pieces too short to be walls; or
+// past a post, a gap narrower than a door and then on: a door's frame
+// post beside a see-through side pane), or across it to one side only (a
+// stub: a wall's end too short to be a wall, or a door frame's return; a
+// wall across the line to both sides is a passage round a corner, not a
+// jamb).
 bool grid_jamb(const OccupancyGrid& grid, const Piece& p, double x, int outward, const FloorPlanSettings& s) {
   const double res = grid.resolution_m, t = p.thickness / 2;
-  const double lo = std::min(x, x + outward * s.door_jamb_m), hi = std::max(x, x + outward * s.door_jamb_m);
-  if (solid_share(grid, p, lo, hi) >= s.door_jamb_solid) return true;
+  const auto solid_from = [&](double from) {
+    const double lo = std::min(from, from + outward * s.door_jamb_m), hi = std::max(from, from + outward * s.door_jamb_m);
+    return solid_share(grid, p, lo, hi) >= s.door_jamb_solid;
+  };
+  if (solid_from(x)) return true;
+  double post = x;  // the post's last solid cross-section, then the pane's far side
+  while (solid_across(grid, p, post + outward * res)) post += outward * res;
+  for (double y = post + outward * res; outward * (y - post) < s.door_min_width_m; y += outward * res)
+    if (solid_across(grid, p, y)) {
+      if (solid_from(y)) return true;
+      break;
+    }
   const auto reach = [&](int side) {  // the share of steps out to side with an occupied cell
     int solid = 0, all = 0;
     for (double o = t + res; o <= t + s.door_jamb_m; o += res, ++all) {
@@ -725,16 +748,24 @@ bool grid_jamb(const OccupancyGrid& grid, const Piece& p, double x, int outward,
 // dotted end its faces left out; door_max_width_m at most), then a gap a
 // door wide, then a solid cross-section that is a jamb (grid_jamb); none
 // of it in another wall of `all` (where one stands, meeting has had its
-// say: a corner, or a passage round one) and no wall in its passage
+// say: a corner, or a passage round one; p found again in another
+// direction's frame, shorter, does not count) and no wall in its passage
 // (blocked). It is held to a doorway beside a corner (free cells
 // corner_door_min_depth_m deep on both sides). The new end (in the far
 // jamb) and the doorway's g0..g1; or NaN.
 double grid_doorway(const OccupancyGrid& grid, const Piece& p, double a, int outward, const std::vector<Piece>& all,
                     const FloorPlanSettings& s, std::pair<double, double>& door) {
   const double res = grid.resolution_m, step = res / 2;
+  // A wall in p's direction over p's own stretch, shorter than p: p found
+  // again from another direction's frame, that without_duplicates drops.
+  const auto again = [&](const Piece& q) {
+    if (std::abs(p.d.dot(q.d)) < std::cos(2 * s.angle_tolerance_rad) || q.a1 - q.a0 >= p.a1 - p.a0) return false;
+    const double b0 = p.d.dot(q.d * q.a0 + q.n * q.offset), b1 = p.d.dot(q.d * q.a1 + q.n * q.offset);
+    return std::min(std::max(b0, b1), p.a1) - std::max(std::min(b0, b1), p.a0) >= (q.a1 - q.a0) / 2;
+  };
   const auto in_a_wall = [&](double x) {
     const Eigen::Vector2d at = p.d * x + p.n * p.offset;
-    return std::any_of(all.begin(), all.end(), [&](const Piece& q) { return &q != &p && inside(q, at, res); });
+    return std::any_of(all.begin(), all.end(), [&](const Piece& q) { return &q != &p && !again(q) && inside(q, at, res); });
   };
   double end = a;  // the last solid cross-section of p's own cells
   for (double x = a + outward * step; outward * (x - end) <= s.door_max_width_m + 2 * res + step; x += outward * step) {

@@ -132,7 +132,9 @@ int main(int argc, char** argv) try {
       {"door_min_depth_m", &settings.door_min_depth_m}, {"corner_door_min_depth_m", &settings.corner_door_min_depth_m},     {"minor_direction_share", &settings.minor_direction_share},
       {"minor_wall_min_length_m", &settings.minor_wall_min_length_m},
       {"slant_within_m", &settings.slant_within_m},         {"slant_min_solid", &settings.slant_min_solid},
-      {"door_jamb_solid", &settings.door_jamb_solid}};
+      {"door_jamb_solid", &settings.door_jamb_solid},       {"angle_tolerance_rad", &settings.angle_tolerance_rad},
+      {"straight_share", &settings.straight_share},         {"straight_within_m", &settings.straight_within_m},
+      {"trim_keep", &settings.trim_keep}};
   double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   for (int i = 3; i < argc; ++i) {
     const std::string a = argv[i];
