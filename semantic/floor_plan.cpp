@@ -709,23 +709,24 @@ bool blocked(const std::vector<Piece>& walls, const Piece& p, const std::pair<do
 // Whether occupied cells reach door_jamb_m from wall p's line at along
 // `x` .. x + 2 cells outward, on door_jamb_solid of the steps at least:
 // along the line (the wall goes on, in pieces too short to be walls; or
-// past a post, a gap narrower than a door and then on: a door's frame
-// post beside a see-through side pane), or across it to one side only (a
+// past a post, a gap narrower than a door and then on for twice a jamb's
+// length: a door's frame post beside a see-through side pane, the wall
+// beyond it no wall across the way), or across it to one side only (a
 // stub: a wall's end too short to be a wall, or a door frame's return; a
 // wall across the line to both sides is a passage round a corner, not a
 // jamb).
 bool grid_jamb(const OccupancyGrid& grid, const Piece& p, double x, int outward, const FloorPlanSettings& s) {
   const double res = grid.resolution_m, t = p.thickness / 2;
-  const auto solid_from = [&](double from) {
-    const double lo = std::min(from, from + outward * s.door_jamb_m), hi = std::max(from, from + outward * s.door_jamb_m);
+  const auto solid_from = [&](double from, double length) {
+    const double lo = std::min(from, from + outward * length), hi = std::max(from, from + outward * length);
     return solid_share(grid, p, lo, hi) >= s.door_jamb_solid;
   };
-  if (solid_from(x)) return true;
+  if (solid_from(x, s.door_jamb_m)) return true;
   double post = x;  // the post's last solid cross-section, then the pane's far side
   while (solid_across(grid, p, post + outward * res)) post += outward * res;
   for (double y = post + outward * res; outward * (y - post) < s.door_min_width_m; y += outward * res)
     if (solid_across(grid, p, y)) {
-      if (solid_from(y)) return true;
+      if (solid_from(y, 2 * s.door_jamb_m)) return true;
       break;
     }
   const auto reach = [&](int side) {  // the share of steps out to side with an occupied cell

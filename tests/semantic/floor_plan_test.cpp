@@ -240,8 +240,11 @@ void fill_band(OccupancyGrid& g, const Eigen::Vector2d& a, const Eigen::Vector2d
 // A wall along y = 2.5 between two free rooms (x 0.5..11.5, y 0.5..4.5)
 // with a 1.0 m doorway at x 4.0..5.0 whose far jamb is a post 0.1 m wide,
 // then a see-through side pane `pane_m` wide (free cells: the laser looked
-// through it), then the wall again (Freiburg 101's hall at 4.0, 1.6).
-OccupancyGrid door_beside_pane(double pane_m) {
+// through it), then the wall again (Freiburg 101's hall at 4.0, 1.6); or,
+// `across`, a wall 0.25 m thick right across the line there, the line
+// ending at it (a passage round a corner beyond the post: ACES's map at
+// 4 cm, 5.5, -40.9).
+OccupancyGrid door_beside_pane(double pane_m, bool across = false) {
   OccupancyGrid g = blank(240, 100);
   fill(g, 0.5, 0.5, 11.5, 4.5, CellState::Free);
   fill(g, 0.45, 0.45, 11.55, 0.5, CellState::Occupied);  // outer walls
@@ -250,7 +253,10 @@ OccupancyGrid door_beside_pane(double pane_m) {
   fill(g, 11.5, 0.45, 11.55, 4.55, CellState::Occupied);
   fill(g, 0.5, 2.45, 4.0, 2.55, CellState::Occupied);  // the wall, the doorway's near jamb at 4.0
   fill(g, 5.0, 2.45, 5.1, 2.55, CellState::Occupied);  // the post
-  fill(g, 5.1 + pane_m, 2.45, 11.5, 2.55, CellState::Occupied);
+  if (across)
+    fill(g, 5.1 + pane_m, 0.5, 5.35 + pane_m, 4.5, CellState::Occupied);
+  else
+    fill(g, 5.1 + pane_m, 2.45, 11.5, 2.55, CellState::Occupied);
   return g;
 }
 
@@ -282,8 +288,10 @@ TEST_CASE("a doorway whose far jamb is a post beside a see-through side pane is 
   CHECK(seg.doors[0].center_m.x() == Approx(4.5).margin(0.05));
   CHECK(seg.doors[0].center_m.y() == Approx(2.5).margin(0.05));
   CHECK(seg.doors[0].width_m == Approx(1.0).margin(0.06));
-  // A post between two gaps a door wide is no jamb: the wall is open there.
+  // A post between two gaps a door wide is no jamb: the wall is open there;
+  // nor is a post before a wall across the way.
   CHECK(segment_floor_plan(door_beside_pane(0.7)).doors.empty());
+  CHECK(segment_floor_plan(door_beside_pane(0.4, true)).doors.empty());
 }
 
 TEST_CASE("a hall's south wall 10 degrees off its north wall keeps its own direction and its doorway", "[semantic]") {
