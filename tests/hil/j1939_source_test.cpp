@@ -208,8 +208,11 @@ TEST_CASE("the bridge claims its address, finds the J1939 console by NAME and de
     CHECK(lost->failsafe_reason.find("BJM") != std::string::npos);
   }
   SECTION("the console claims another address with the same NAME: the bridge follows it") {
+    // Failsafe after the console stopped (not the one before it first
+    // spoke): its last frames no longer count when the moved one is awaited.
+    const auto stopped = published.size();
     console.reset();
-    REQUIRE(published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 2000).has_value());
+    REQUIRE(published.wait_for([](const PanelSnapshot& s) { return s.failsafe; }, 2000, stopped).has_value());
     auto moved = std::make_unique<J1939ConsoleThread>(def, "mem://j1939_bridge", 0x95);
     moved->apply(set(def, "deadman", 0.0f, true));
     moved->apply(fast);
@@ -217,11 +220,8 @@ TEST_CASE("the bridge claims its address, finds the J1939 console by NAME and de
     const auto back = published.wait_for(
         [&](const PanelSnapshot& s) { return !s.failsafe && s.controls[speed].position == 2; }, 5000, before);
     REQUIRE(back.has_value());
-    // The address is stored after the frame that made the panel live was
-    // taken; the publish thread can be first.
-    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(1);
-    while (source->console_address() != 0x95 && std::chrono::steady_clock::now() < until)
-      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    // Live again, so from the moved console: the source stores its address
+    // before that frame's change can be published (J1939Source::receive).
     CHECK(source->console_address() == 0x95);
   }
   SECTION("a lower NAME claims the bridge's address: it claims the next free one and RTS/CTS reaches it there") {
