@@ -766,7 +766,7 @@ double grid_doorway(const OccupancyGrid& grid, const Piece& p, double a, int out
   };
   const auto in_a_wall = [&](double x) {
     const Eigen::Vector2d at = p.d * x + p.n * p.offset;
-    return std::any_of(all.begin(), all.end(), [&](const Piece& q) { return &q != &p && !again(q) && inside(q, at, res); });
+    return std::any_of(all.begin(), all.end(), [&](const Piece& q) { return &q != &p && inside(q, at, res) && !again(q); });
   };
   double end = a;  // the last solid cross-section of p's own cells
   for (double x = a + outward * step; outward * (x - end) <= s.door_max_width_m + 2 * res + step; x += outward * step) {
