@@ -66,7 +66,7 @@ struct NoRobotStart : std::runtime_error {
 };
 
 /// Where the robot starts, x, y, yaw: settings.robot_start; or the first
-/// of the known poses with robot_half_width_m + robot_margin_m clear of the
+/// of the known poses with robot_half_width_m (it stood there) clear of the
 /// solids (model_boxes below robot_height_m) and the floor plan's occupied
 /// cells; or the point with the most clearance in the largest region of the
 /// floor plan (free cells, without the solids) where that clearance fits,

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <vector>
 
 #include "semantic/cloud_io.hpp"
 #include "semantic/floor_plan.hpp"
@@ -61,10 +62,13 @@ int run_segment(const SegmentOptions& o) {
   const bool plan = is_ros_map(o.cloud) || is_carmen_log(o.cloud);
   OccupancyGrid grid;
   Cloud cloud;
+  std::vector<Eigen::Vector3d> scan_poses;  // where a CARMEN log's laser stood, in order
   if (is_ros_map(o.cloud)) {
     grid = read_ros_map(o.cloud, o.image);
   } else if (is_carmen_log(o.cloud)) {
-    grid = grid_from_scans(read_carmen_log(o.cloud), o.resolution_m);
+    const auto scans = read_carmen_log(o.cloud);
+    grid = grid_from_scans(scans, o.resolution_m);
+    for (const auto& s : scans) scan_poses.push_back(s.pose);
   } else {
     cloud = read_cloud(o.cloud);
     if (o.level) {
@@ -122,6 +126,10 @@ int run_segment(const SegmentOptions& o) {
     // frame, or the first scan's in a map SLAM made (rise-semantic map's
     // map.pcd, 3DTK, PCL's scans). A pose the robot has been at.
     if (!plan && !o.level) st.known_poses.push_back(Eigen::Vector3d::Zero());
+    // A CARMEN log has the robot's own path: it starts where the robot did
+    // (the laser's pose; the base is a few cm behind it), or at the first
+    // pose after it with room, in the part of the building the robot drove.
+    st.known_poses.insert(st.known_poses.end(), scan_poses.begin(), scan_poses.end());
     // The map first: it shows why, when the world file has no start.
     write_map_png((dir / "map.png").string(), net, &cloud, st);
     write_text_file((dir / "world.sdf").string(), sdf_world(net, st));

@@ -310,12 +310,25 @@ inline bool drive_to(rise::sim::Simulation& sim, const Eigen::Vector2d& end, std
   return true;
 }
 
-/// Drives `legs` (turn, then straight on or back); false where a turn or a run did not end.
+/// Drives `legs` (turn, then straight on or back); false where a turn or a
+/// run did not end. A run shorter than 0.3 m goes straight on or back to
+/// where its end lies across the robot's way: the first run's end is the
+/// route's lattice pose, up to 7 cm from where the robot stands and to any
+/// side of it; steering at it would drive a loop.
 inline bool drive_legs(rise::sim::Simulation& sim, const std::vector<Leg>& legs, std::vector<rise::sim::SimEvent>& log) {
-  for (const Leg& leg : legs)
-    if (!face(sim, leg.yaw_rad, log) ||
-        ((leg.end - base_of(sim)).norm() > 0.02 && !drive_to(sim, leg.end, log, leg.backward)))
-      return false;
+  for (const Leg& leg : legs) {
+    if (!face(sim, leg.yaw_rad, log)) return false;
+    Eigen::Vector2d end = leg.end;
+    bool backward = leg.backward;
+    const Eigen::Vector2d to_end = end - base_of(sim);
+    if (to_end.norm() < 0.3) {
+      const double yaw = sim.snapshot().yaw_rad();
+      const Eigen::Vector2d h(std::cos(yaw), std::sin(yaw));
+      end = base_of(sim) + h.dot(to_end) * h;
+      backward = h.dot(to_end) < 0;
+    }
+    if ((end - base_of(sim)).norm() > 0.02 && !drive_to(sim, end, log, backward)) return false;
+  }
   return true;
 }
 

@@ -3,10 +3,15 @@
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <sys/wait.h>
 
@@ -121,5 +126,67 @@ TEST_CASE("rise-semantic segment on PCL's room scan finds room for the robot on 
   const auto world = rise::sim::load_world_description((dir / "world.yaml").string());
   CHECK(world.robot_start_m[0] == Approx(3.16).margin(0.3));
   CHECK(world.robot_start_m[1] == Approx(0.36).margin(0.3));
+  std::filesystem::remove_all(dir);
+}
+
+namespace {
+
+// A CARMEN log of a laser in a 3 x 3 m room (x 0..3, y 0..3) whose east
+// wall has a 1 m doorway (y 1..2) into a 10 x 7 m hall (x 3..13, y -2..5):
+// FLASER lines of 180 beams, 1 deg apart from -90 deg, cast at `poses`.
+std::string two_room_log(const std::vector<Eigen::Vector3d>& poses) {
+  struct Seg {
+    double x0, y0, x1, y1;
+  };
+  const Seg walls[] = {{0, 0, 3, 0},  {0, 3, 3, 3},   {0, 0, 0, 3},   {3, 0, 3, 1},   {3, 2, 3, 3},  {3, -2, 3, 0},
+                       {3, 3, 3, 5},  {3, -2, 13, -2}, {3, 5, 13, 5}, {13, -2, 13, 5}};
+  std::ostringstream log;
+  log << "PARAM robot_front_laser_max 50.0 nohost 0\n";
+  double t = 1;
+  for (const auto& p : poses) {
+    log << "FLASER 180";
+    for (int b = 0; b < 180; ++b) {
+      const double a = p.z() + (b - 90) * M_PI / 180, dx = std::cos(a), dy = std::sin(a);
+      double range = 50;
+      for (const Seg& w : walls) {  // ray p + r d against segment w
+        const double ex = w.x1 - w.x0, ey = w.y1 - w.y0, den = dx * ey - dy * ex;
+        if (std::abs(den) < 1e-12) continue;
+        const double qx = w.x0 - p.x(), qy = w.y0 - p.y();
+        const double r = (qx * ey - qy * ex) / den, s = (qx * dy - qy * dx) / den;
+        if (r > 0 && s >= 0 && s <= 1) range = std::min(range, r);
+      }
+      log << " " << range;
+    }
+    log << " " << p.x() << " " << p.y() << " " << p.z() << " " << p.x() << " " << p.y() << " " << p.z() << " " << t
+        << " nohost " << t << "\n";
+    t += 1;
+  }
+  return log.str();
+}
+
+}  // namespace
+
+TEST_CASE("rise-semantic segment starts a CARMEN log's world where its robot started, at the first pose with room",
+          "[semantic]") {
+  // The first pose is 0.2 m from the small room's west wall (no room for
+  // the robot's half-width); the second is the room's middle. The hall
+  // beyond the doorway is the larger free area and has the most clearance:
+  // where a map without poses starts.
+  std::vector<Eigen::Vector3d> poses = {{0.2, 1.5, 0.0}};
+  for (double yaw : {0.0, M_PI / 2, M_PI, -M_PI / 2}) poses.emplace_back(1.5, 1.5, yaw);
+  for (double x : {5.0, 8.0, 11.0})
+    for (double yaw : {0.0, M_PI / 2, M_PI, -M_PI / 2}) poses.emplace_back(x, 1.5, yaw);
+  const auto dir = std::filesystem::temp_directory_path() / "rise_segment_command_test_carmen";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto log = dir / "two_rooms.log";
+  std::ofstream(log) << two_room_log(poses);
+  const std::string cmd = kProgram + " segment " + log.string() + " -o " + (dir / "out").string() + " > /dev/null 2>&1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const auto world = rise::sim::load_world_description((dir / "out" / "world.yaml").string());
+  INFO("start (" << world.robot_start_m[0] << ", " << world.robot_start_m[1] << ") yaw " << world.robot_start_yaw_rad);
+  CHECK(world.robot_start_m[0] == Approx(1.5).margin(1e-3));
+  CHECK(world.robot_start_m[1] == Approx(1.5).margin(1e-3));
+  CHECK(world.robot_start_yaw_rad == Approx(0.0).margin(1e-3));
   std::filesystem::remove_all(dir);
 }
