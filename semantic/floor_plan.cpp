@@ -898,6 +898,54 @@ std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Pie
   return kept;
 }
 
+// Inside wall q's box as the world builds it: lengthened by its thickness
+// at both ends, open over its doorways.
+bool in_solid(const Piece& q, const Eigen::Vector2d& x) {
+  const double a = q.d.dot(x), o = q.n.dot(x) - q.offset;
+  if (std::abs(o) >= q.thickness / 2 || a <= q.a0 - q.thickness / 2 || a >= q.a1 + q.thickness / 2) return false;
+  return std::none_of(q.doorways.begin(), q.doorways.end(), [&](const std::pair<double, double>& g) {
+    return g.first > q.a0 && g.second < q.a1 && a > g.first && a < g.second;
+  });
+}
+
+// Each doorway narrowed to its clear width: the widest stretch of its gap
+// whose cross-section through the wall's slab no other wall's box reaches
+// into (a wall meeting the doorway's jamb, its box lengthened past its
+// line, stands in the gap); one left narrower than door_min_width_m is
+// closed.
+void clear_doorways(std::vector<Piece>& walls, const FloorPlanSettings& s) {
+  constexpr double kStep = 0.005;
+  std::vector<std::vector<std::pair<double, double>>> cleared(walls.size());
+  for (std::size_t i = 0; i < walls.size(); ++i) {
+    const Piece& p = walls[i];
+    for (const auto& [g0, g1] : p.doorways) {
+      const int n = static_cast<int>(std::floor((g1 - g0) / kStep));
+      const auto open_at = [&](int k) {
+        const double a = g0 + k * (g1 - g0) / n;
+        for (double v = -0.4; v <= 0.41; v += 0.2) {
+          const Eigen::Vector2d x = p.d * a + p.n * (p.offset + v * p.thickness);
+          for (std::size_t q = 0; q < walls.size(); ++q)
+            if (q != i && in_solid(walls[q], x)) return false;
+        }
+        return true;
+      };
+      int best0 = 0, best1 = -1;
+      for (int k = 0, run = -1; k <= n; ++k) {
+        if (!open_at(k)) {
+          run = -1;
+          continue;
+        }
+        if (run < 0) run = k;
+        if (k - run > best1 - best0) best0 = run, best1 = k;
+      }
+      const double c0 = g0 + best0 * (g1 - g0) / n, c1 = g0 + best1 * (g1 - g0) / n;
+      if (best1 < 0 || (c1 - c0 < s.door_min_width_m && c1 - c0 < g1 - g0)) continue;
+      cleared[i].emplace_back(c0, c1);
+    }
+  }
+  for (std::size_t i = 0; i < walls.size(); ++i) walls[i].doorways = std::move(cleared[i]);
+}
+
 }  // namespace
 
 Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettings& s) {
@@ -950,6 +998,7 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     if (door1.second > door1.first) met[i].doorways.push_back(door1);
   }
   met = without_duplicates(grid, std::move(met), s);
+  std::vector<Piece> kept;
   for (const Piece& p : met) {
     if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
     // A short wall standing free, touching no other, is furniture or
@@ -957,6 +1006,10 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     double solid = p.a1 - p.a0;
     for (const auto& [g0, g1] : p.doorways) solid -= g1 - g0;
     if (!p.joined && solid < s.free_wall_min_length_m) continue;
+    kept.push_back(p);
+  }
+  clear_doorways(kept, s);
+  for (const Piece& p : kept) {
     Wall w;
     w.from_m = p.d * p.a0 + p.n * p.offset;
     w.to_m = p.d * p.a1 + p.n * p.offset;

@@ -97,6 +97,34 @@ TEST_CASE("a wall seen as two faces is one wall with its thickness, and its door
   CHECK(seg.floor.max_m.x() == Approx(8.6).margin(0.06));
 }
 
+TEST_CASE("a doorway a wall meets at its jamb is as wide as the gap the wall's box leaves", "[semantic]") {
+  // The two rooms' 0.9 m doorway (y 1.0..1.9), and in the east room a
+  // 0.3 m wall along x from the shared wall's east face, y 0.9..1.2: its
+  // box, lengthened by half its thickness past its line's end at the
+  // shared wall's centre line, reaches a little further into the gap than
+  // its cells do.
+  OccupancyGrid g = two_rooms(true);
+  fill(g, 4.55, 0.9, 7.0, 1.2, CellState::Occupied);
+  const Segmentation seg = segment_floor_plan(g, {});
+  const auto shared = walls_at_x(seg, 4.35);
+  REQUIRE(shared.size() == 1);
+  REQUIRE(shared[0].openings.size() == 1);
+  const double at = shared[0].from_m.y() < shared[0].to_m.y() ? shared[0].from_m.y() + shared[0].openings[0].at_m
+                                                              : shared[0].from_m.y() - shared[0].openings[0].at_m -
+                                                                    shared[0].openings[0].width_m;
+  INFO("opening from y " << at << ", " << shared[0].openings[0].width_m << " m wide");
+  CHECK(shared[0].openings[0].width_m == Approx(0.7).margin(0.03));  // 0.75 between the cells
+  CHECK(at == Approx(1.2).margin(0.06));
+  REQUIRE(seg.doors.size() == 1);
+  CHECK(seg.doors[0].width_m == shared[0].openings[0].width_m);
+  // The wall across: its box ends where the opening begins.
+  const Wall* across = nullptr;
+  for (const Wall& w : seg.walls)
+    if (std::abs(w.direction().y()) < 0.1 && std::abs(w.from_m.y() - 1.05) < 0.1) across = &w;
+  REQUIRE(across != nullptr);
+  CHECK(across->from_m.y() + across->thickness_m / 2 <= at + 0.01);  // (1.225 and 1.19 before the clearing)
+}
+
 TEST_CASE("a gap of door width whose far side is unknown is no doorway, and a wall without one is whole",
           "[semantic]") {
   SECTION("no gap: one wall, no door") {
