@@ -898,8 +898,8 @@ std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Pie
   return kept;
 }
 
-// Inside wall q's box as the world builds it: lengthened by its thickness
-// at both ends, open over its doorways.
+// Inside wall q's box as the world builds it (sim::wall_boxes): half its
+// thickness past each end of its line, open over its doorways.
 bool in_solid(const Piece& q, const Eigen::Vector2d& x) {
   const double a = q.d.dot(x), o = q.n.dot(x) - q.offset;
   if (std::abs(o) >= q.thickness / 2 || a <= q.a0 - q.thickness / 2 || a >= q.a1 + q.thickness / 2) return false;
