@@ -70,6 +70,15 @@ PcdHeader parse_pcd_header(const std::string& path, std::string_view text) {
       }
     } else if (key == "COUNT") {
       ints(h.counts);
+      // PCL's ascii reader sizes its buffers by the values a point has,
+      // whatever the number of points (tests/fuzz/pcd_fuzz.cpp: COUNT
+      // 1297379212 and no points asked it for 41 GB). The largest
+      // descriptor PCL writes holds 640 (ESF).
+      constexpr int kMaxCount = 1 << 16;
+      for (int c : h.counts)
+        if (c > kMaxCount)
+          fail_line(path, n, "COUNT: " + std::to_string(c) + " values in one field, more than " +
+                                 std::to_string(kMaxCount) + " (a descriptor has some hundreds)");
     } else if (key == "WIDTH") {
       if (w.size() != 2) fail_line(path, n, "WIDTH: expected one number");
       h.width = number<uint64_t>(w[1], path, n, key);

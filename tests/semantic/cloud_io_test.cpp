@@ -252,6 +252,11 @@ TEST_CASE("bad files are refused with the file and the line or byte offset", "[s
     CHECK_THAT(error_of("t.pcd", "VERSION .5\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n\nDATA ascii\nCOUNT0.01349 0.0407" +
                                      std::string(5, '\0') + "0 0.086298 " + std::string(11, '\0') + "337\n"),
                Catch::Contains("t.pcd: byte 58: ascii data has a line beginning with 'COUNT'"));
+    // Found by the fuzzer: PCL's ascii reader sizes its buffers by a point's
+    // values, with no points at all: 41 GB for this COUNT.
+    CHECK_THAT(error_of("t.pcd", "# .PCD v.5\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1297379212\nDATA ascii\n"
+                                 "82 39795\n"),
+               Catch::Contains("t.pcd:5: COUNT: 1297379212 values in one field, more than 65536"));
     // 1.2 GB announced by a 4-byte LZF block: refused before PCL allocates.
     const std::string huge = "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 100000000\nHEIGHT 1\n"
                              "POINTS 100000000\nDATA binary_compressed\n";
