@@ -898,11 +898,11 @@ std::vector<Piece> without_duplicates(const OccupancyGrid& grid, std::vector<Pie
   return kept;
 }
 
-// Inside wall q's box as the world builds it (sim::wall_boxes): half its
-// thickness past each end of its line, open over its doorways.
+// Inside wall q's box (inside()) and not in one of its doorways: solid as
+// the world builds it (sim::wall_boxes).
 bool in_solid(const Piece& q, const Eigen::Vector2d& x) {
-  const double a = q.d.dot(x), o = q.n.dot(x) - q.offset;
-  if (std::abs(o) >= q.thickness / 2 || a <= q.a0 - q.thickness / 2 || a >= q.a1 + q.thickness / 2) return false;
+  if (!inside(q, x, 0.0)) return false;
+  const double a = q.d.dot(x);
   return std::none_of(q.doorways.begin(), q.doorways.end(), [&](const std::pair<double, double>& g) {
     return g.first > q.a0 && g.second < q.a1 && a > g.first && a < g.second;
   });
@@ -998,18 +998,16 @@ Segmentation segment_floor_plan(const OccupancyGrid& grid, const FloorPlanSettin
     if (door1.second > door1.first) met[i].doorways.push_back(door1);
   }
   met = without_duplicates(grid, std::move(met), s);
-  std::vector<Piece> kept;
-  for (const Piece& p : met) {
-    if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) continue;
+  std::erase_if(met, [&](const Piece& p) {
+    if (p.a1 - p.a0 < s.min_wall_length_m - p.thickness) return true;
     // A short wall standing free, touching no other, is furniture or
     // clutter: short by its solid length (desks in a row are no wall with doorways).
     double solid = p.a1 - p.a0;
     for (const auto& [g0, g1] : p.doorways) solid -= g1 - g0;
-    if (!p.joined && solid < s.free_wall_min_length_m) continue;
-    kept.push_back(p);
-  }
-  clear_doorways(kept, s);
-  for (const Piece& p : kept) {
+    return !p.joined && solid < s.free_wall_min_length_m;
+  });
+  clear_doorways(met, s);
+  for (const Piece& p : met) {
     Wall w;
     w.from_m = p.d * p.a0 + p.n * p.offset;
     w.to_m = p.d * p.a1 + p.n * p.offset;
