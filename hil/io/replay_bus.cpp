@@ -45,6 +45,11 @@ void ReplayBus::step(int frames) {
   step_cv_.notify_all();
 }
 
+bool ReplayBus::awaiting_step() const {
+  std::lock_guard lock(mutex_);
+  return step_waiters_ > 0;
+}
+
 ReplayBus::Progress ReplayBus::progress() const {
   std::lock_guard lock(mutex_);
   Progress p;
@@ -100,8 +105,11 @@ IoStatus ReplayBus::receive(CanFrame& frame, int timeout_ms) {
   if (address_.fast || address_.step) {
     if (!clock_.anchored()) clock_.anchor(pending_ts_us_);
     if (address_.step) {
-      if (!step_cv_.wait_for(lock, std::chrono::milliseconds(std::max(timeout_ms, 0)), [&] { return steps_ > 0; }))
-        return IoStatus::Timeout;
+      ++step_waiters_;
+      const bool stepped =
+          step_cv_.wait_for(lock, std::chrono::milliseconds(std::max(timeout_ms, 0)), [&] { return steps_ > 0; });
+      --step_waiters_;
+      if (!stepped) return IoStatus::Timeout;
       --steps_;
     }
     last_played_ts_us_ = pending_ts_us_;

@@ -61,6 +61,8 @@ class ReplayBus final : public CanBus {
 
   /// step=1: lets `frames` more frames out (each receive() takes one).
   void step(int frames = 1);
+  /// step=1: a receive() is waiting for a step (a stepping front end's "waiting").
+  bool awaiting_step() const;
   /// Where the replay is: the current pass's share of the file read (0..1)
   /// and the recorded time of the last frame handed out, from the first.
   struct Progress {
@@ -92,6 +94,7 @@ class ReplayBus final : public CanBus {
   std::atomic<uint64_t> sends_dropped_{0};
   std::condition_variable step_cv_;
   int64_t steps_ = 0;          // step=1: frames allowed out (under mutex_)
+  int step_waiters_ = 0;       // step=1: receive() calls waiting for a step (under mutex_)
   int64_t last_played_ts_us_ = 0;
 };
 

@@ -243,12 +243,11 @@ TEST_CASE("replay in step mode hands out one frame per step and reports its prog
   auto p = bus->progress();
   CHECK(p.log_time_s == Approx(1.0).margin(1e-6));
 
-  // A step from another thread wakes a receive that waits for it.
+  // A step from another thread wakes a receive that waits for it: the
+  // stepper steps once receive() below is waiting.
+  CHECK_FALSE(bus->awaiting_step());
   std::thread stepper([&] {
-    // Most likely after receive() below has begun to wait (nothing tells
-    // when it has); the assertions hold either way, a step before the
-    // receive is taken at once.
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    while (!bus->awaiting_step()) std::this_thread::yield();
     bus->step(8);
   });
   std::vector<uint32_t> ids;
@@ -257,6 +256,7 @@ TEST_CASE("replay in step mode hands out one frame per step and reports its prog
     ids.push_back(f.id);
   }
   stepper.join();
+  CHECK_FALSE(bus->awaiting_step());
   CHECK(ids.back() == 0x109);
   p = bus->progress();
   CHECK(p.fraction == Approx(1.0));
